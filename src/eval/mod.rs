@@ -1,0 +1,4 @@
+//! Evaluation: render animated integrands with a mask's samples, filter the error
+//! as a display (TAA) and an eye would, and measure what is left.
+pub mod integrands;
+pub mod perceived;

@@ -1,0 +1,65 @@
+//! Writing a file so that readers see either the old file or the complete new one,
+//! never a half-written one: write a temporary file beside the target, flush it to
+//! disk, rename it over the target.
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// A reserved output: creating it checks that the target's folder is writable
+/// (before any long work); `commit` writes and renames; dropping it uncommitted
+/// removes the temporary file and leaves the target untouched.
+pub struct AtomicFile {
+    target: PathBuf,
+    temp: PathBuf,
+    file: Option<File>,
+}
+
+impl AtomicFile {
+    pub fn create(target: &Path) -> Result<Self> {
+        if target.is_dir() {
+            return Err(Error::invalid(format!("output {} is a directory", target.display())));
+        }
+        let dir = match target.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if !dir.is_dir() {
+            return Err(Error::invalid(format!("output folder {} does not exist", dir.display())));
+        }
+        let name = target
+            .file_name()
+            .ok_or_else(|| Error::invalid(format!("output {} has no file name", target.display())))?;
+        let temp = dir.join(format!(".{}.fsot-{}.tmp", name.to_string_lossy(), std::process::id()));
+        let file = File::create(&temp)
+            .map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
+        Ok(Self { target: target.to_path_buf(), temp, file: Some(file) })
+    }
+
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Writes `bytes` to the temporary file, syncs it, renames it over the target.
+    pub fn commit(mut self, bytes: &[u8]) -> Result<()> {
+        let mut file = self.file.take().expect("file present until commit");
+        let ctx = || format!("writing {}", self.temp.display());
+        file.write_all(bytes).map_err(|e| Error::io(ctx(), e))?;
+        file.sync_all().map_err(|e| Error::io(ctx(), e))?;
+        drop(file);
+        fs::rename(&self.temp, &self.target)
+            .map_err(|e| Error::io(format!("renaming into {}", self.target.display()), e))?;
+        self.temp = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if !self.temp.as_os_str().is_empty() {
+            let _ = fs::remove_file(&self.temp);
+        }
+    }
+}

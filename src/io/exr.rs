@@ -1,0 +1,200 @@
+//! Masks as OpenEXR files.
+//!
+//! One part (layer) per frame, named `frame0000`, `frame0001`, ... in frame order,
+//! each W x H with 32-bit float channels:
+//! - spp = 1 and d <= 4: channels `R`, `G`, `B`, `A` hold dimensions 0..d, so
+//!   viewers and texture loaders read the mask as an ordinary image;
+//! - otherwise: channel `sSS.dK` holds dimension K of sample SS (two digits), e.g.
+//!   `s03.d5`.
+//! Every part carries the provenance as text attributes named `fsot.*` (kernel and
+//! parameters, seed, iterations, fsot's version, method) plus `fsot.spp` and
+//! `fsot.dims`.
+
+use std::collections::HashMap;
+use std::io::Cursor;
+use std::path::Path;
+
+use exr::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::io::atomic::AtomicFile;
+use crate::mask::Mask;
+use crate::problem::Tile;
+
+const RGBA: [&str; 4] = ["R", "G", "B", "A"];
+
+/// Channel name of dimension `k` of sample `s` for a tile.
+pub fn channel_name(tile: &Tile, s: usize, k: usize) -> String {
+    if tile.spp == 1 && tile.dims <= 4 {
+        RGBA[k].to_string()
+    } else {
+        format!("s{s:02}.d{k}")
+    }
+}
+
+/// Encodes a mask as EXR bytes.
+pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
+    let tile = mask.tile;
+    let (w, h) = (tile.width, tile.height);
+    let mut layers = Vec::with_capacity(tile.frames);
+    let mut attributes: HashMap<Text, AttributeValue> = HashMap::new();
+    for (k, v) in &mask.meta {
+        attributes.insert(Text::from(format!("fsot.{k}").as_str()), AttributeValue::Text(Text::from(v.as_str())));
+    }
+    attributes.insert(Text::from("fsot.spp"), AttributeValue::Text(Text::from(tile.spp.to_string().as_str())));
+    attributes.insert(Text::from("fsot.dims"), AttributeValue::Text(Text::from(tile.dims.to_string().as_str())));
+    for t in 0..tile.frames {
+        let mut channels = SmallVec::new();
+        for s in 0..tile.spp {
+            for k in 0..tile.dims {
+                let mut data = Vec::with_capacity(w * h);
+                for y in 0..h {
+                    for x in 0..w {
+                        data.push(mask.sample(x, y, t, s)[k]);
+                    }
+                }
+                channels.push(AnyChannel::new(channel_name(&tile, s, k).as_str(), FlatSamples::F32(data)));
+            }
+        }
+        let mut layer_attributes = LayerAttributes::named(format!("frame{t:04}").as_str());
+        layer_attributes.other = attributes.clone();
+        layers.push(Layer::new((w, h), layer_attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(channels)));
+    }
+    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
+    let mut bytes = Cursor::new(Vec::new());
+    image
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| Error::invalid(format!("EXR encoding failed: {e}")))?;
+    Ok(bytes.into_inner())
+}
+
+/// Writes a mask to `out` atomically.
+pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
+    let bytes = encode(mask)?;
+    out.commit(&bytes)
+}
+
+/// Reads and validates a mask: parts named frame0000.. in order, one size, a
+/// complete channel layout, every value finite and in [0, 1).
+pub fn read(path: &Path) -> Result<Mask> {
+    let bytes = std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
+    decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
+}
+
+/// Decodes EXR bytes into a mask; the error is a reason for the user.
+pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| format!("not a readable EXR file ({e})"))?;
+    let layers = &image.layer_data;
+    if layers.is_empty() {
+        return Err("the file holds no frames".into());
+    }
+    let size = layers[0].size;
+    let (w, h) = (size.0, size.1);
+    // Channel layout from the first frame.
+    let names: Vec<String> = layers[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    let (spp, dims) = layout_of(&names)?;
+    let tile = Tile::new(w, h, layers.len(), spp, dims).map_err(|e| e.to_string())?;
+    let mut samples = vec![0.0f32; tile.values()];
+    for (t, layer) in layers.iter().enumerate() {
+        let expected = format!("frame{t:04}");
+        let name = layer.attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_default();
+        if name != expected {
+            return Err(format!("part {t} is named {name:?}; expected {expected:?} (frames in order)"));
+        }
+        if layer.size != size {
+            return Err(format!("frame {t} is {}x{}, frame 0 is {w}x{h}", layer.size.0, layer.size.1));
+        }
+        let list = &layer.channel_data.list;
+        if list.len() != spp * dims {
+            return Err(format!("frame {t} has {} channels, frame 0 has {}", list.len(), spp * dims));
+        }
+        for s in 0..spp {
+            for k in 0..dims {
+                let want = channel_name(&tile, s, k);
+                let channel = list
+                    .iter()
+                    .find(|c| c.name.to_string() == want)
+                    .ok_or_else(|| format!("frame {t} lacks channel {want}"))?;
+                let values: Vec<f32> = match &channel.sample_data {
+                    FlatSamples::F32(v) => v.clone(),
+                    FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+                    FlatSamples::U32(_) => return Err(format!("channel {want} holds integers, not floats")),
+                };
+                if values.len() != w * h {
+                    return Err(format!("channel {want} of frame {t} has {} values, expected {}", values.len(), w * h));
+                }
+                for (i, &v) in values.iter().enumerate() {
+                    if !(v.is_finite() && (0.0..1.0).contains(&v)) {
+                        return Err(format!(
+                            "frame {t}, pixel ({}, {}), channel {want}: value {v} is outside [0, 1)",
+                            i % w,
+                            i / w
+                        ));
+                    }
+                    let point = tile.pixel_index(i % w, i / w, t) * spp + s;
+                    samples[point * dims + k] = v;
+                }
+            }
+        }
+    }
+    let mut meta: Vec<(String, String)> = layers[0]
+        .attributes
+        .other
+        .iter()
+        .filter_map(|(k, v)| {
+            let key = k.to_string();
+            let key = key.strip_prefix("fsot.")?;
+            if key == "spp" || key == "dims" {
+                return None;
+            }
+            match v {
+                AttributeValue::Text(t) => Some((key.to_string(), t.to_string())),
+                _ => None,
+            }
+        })
+        .collect();
+    meta.sort();
+    Ok(Mask { tile, samples, meta })
+}
+
+/// (spp, dims) from a frame's channel names.
+fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
+    let rgba: Vec<usize> = names.iter().filter_map(|n| RGBA.iter().position(|c| c == n)).collect();
+    if !names.is_empty() && rgba.len() == names.len() {
+        let dims = names.len();
+        for k in 0..dims {
+            if !rgba.contains(&k) {
+                return Err(format!(
+                    "channels {names:?}: with {dims} channels expected {:?}",
+                    &RGBA[..dims]
+                ));
+            }
+        }
+        return Ok((1, dims));
+    }
+    let mut spp = 0;
+    let mut dims = 0;
+    for n in names {
+        let parsed = n
+            .strip_prefix('s')
+            .and_then(|r| r.split_once(".d"))
+            .and_then(|(s, k)| Some((s.parse::<usize>().ok()?, k.parse::<usize>().ok()?)));
+        let (s, k) = parsed.ok_or_else(|| {
+            format!("channel {n:?} is neither R/G/B/A nor sSS.dK (sample SS, dimension K)")
+        })?;
+        spp = spp.max(s + 1);
+        dims = dims.max(k + 1);
+    }
+    if spp * dims != names.len() {
+        return Err(format!("channels {names:?} do not cover {spp} samples x {dims} dimensions"));
+    }
+    Ok((spp, dims))
+}

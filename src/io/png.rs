@@ -1,0 +1,72 @@
+//! Masks as 16-bit PNG slices, one file per frame like the published STBN masks.
+//!
+//! Value v in [0, 1) is stored as floor(v * 65536) (at most 65535); a reader takes
+//! (stored + 0.5) / 65536. With spp = 1 and d <= 4, `frameTTTT.png` holds
+//! dimensions 0..d as grey (d = 1), RGB (d = 2, blue 0; d = 3) or RGBA (d = 4).
+//! Otherwise each frame has one file per sample and group of up to four
+//! dimensions: `frameTTTT_sSS_dA-B.png` (RGBA, unused channels 0).
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::io::atomic::AtomicFile;
+use crate::mask::Mask;
+
+/// Quantises one value to 16 bits.
+pub fn quantize(v: f32) -> u16 {
+    ((v as f64 * 65536.0).floor() as i64).clamp(0, 65535) as u16
+}
+
+/// Writes the slices into `dir` (created if missing). Returns the file names.
+pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(format!("cannot create {}", dir.display()), e))?;
+    let tile = mask.tile;
+    let simple = tile.spp == 1 && tile.dims <= 4;
+    let mut names = Vec::new();
+    for t in 0..tile.frames {
+        for s in 0..tile.spp {
+            for group in (0..tile.dims).step_by(4) {
+                let dims: Vec<usize> = (group..(group + 4).min(tile.dims)).collect();
+                let (color, channels) = if simple {
+                    match tile.dims {
+                        1 => (png::ColorType::Grayscale, 1),
+                        2 | 3 => (png::ColorType::Rgb, 3),
+                        _ => (png::ColorType::Rgba, 4),
+                    }
+                } else {
+                    (png::ColorType::Rgba, 4)
+                };
+                let name = if simple {
+                    format!("frame{t:04}.png")
+                } else {
+                    format!("frame{t:04}_s{s:02}_d{}-{}.png", dims[0], dims[dims.len() - 1])
+                };
+                let mut data = Vec::with_capacity(tile.width * tile.height * channels * 2);
+                for y in 0..tile.height {
+                    for x in 0..tile.width {
+                        let sample = mask.sample(x, y, t, s);
+                        for c in 0..channels {
+                            let v = dims.get(c).map(|&k| quantize(sample[k])).unwrap_or(0);
+                            data.extend_from_slice(&v.to_be_bytes());
+                        }
+                    }
+                }
+                let mut bytes = Vec::new();
+                {
+                    let mut encoder = png::Encoder::new(&mut bytes, tile.width as u32, tile.height as u32);
+                    encoder.set_color(color);
+                    encoder.set_depth(png::BitDepth::Sixteen);
+                    let mut writer = encoder
+                        .write_header()
+                        .map_err(|e| Error::invalid(format!("PNG encoding failed: {e}")))?;
+                    writer
+                        .write_image_data(&data)
+                        .map_err(|e| Error::invalid(format!("PNG encoding failed: {e}")))?;
+                }
+                AtomicFile::create(&dir.join(&name))?.commit(&bytes)?;
+                names.push(name);
+            }
+        }
+    }
+    Ok(names)
+}

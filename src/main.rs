@@ -1,0 +1,271 @@
+//! The `fsot` command line.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use fsot::error::{Error, Result};
+use fsot::io::atomic::AtomicFile;
+use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
+use fsot::mask::Mask;
+use fsot::optimize::{Run, Settings};
+use fsot::problem::Tile;
+use fsot::score::{score, SCORE_SLICES};
+
+#[derive(Parser)]
+#[command(name = "fsot", version, about = "Perceptually optimized spatio-temporal sample masks (filtered sliced optimal transport)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Optimize a mask and write it as EXR (and optionally PNG slices).
+    Optimize(OptimizeArgs),
+    /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
+    /// slices, beside that of white noise of the same shape.
+    Score(ScoreArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum KernelName {
+    /// Frames independent (Salaün et al. 2022 per frame).
+    Spatial,
+    /// Symmetric temporal Gaussian (akin to STBN).
+    Gaussian,
+    /// TAA: exponential moving average with blend weight --alpha.
+    Taa,
+    /// FovVideoVDP temporal response at --fps.
+    Perceptual,
+    /// TAA, then the eye: the paper's full model.
+    PerceptualTaa,
+}
+
+impl KernelName {
+    fn as_str(&self) -> &'static str {
+        match self {
+            KernelName::Spatial => "spatial",
+            KernelName::Gaussian => "gaussian",
+            KernelName::Taa => "taa",
+            KernelName::Perceptual => "perceptual",
+            KernelName::PerceptualTaa => "perceptual-taa",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// Vulkan when a device is there, else the CPU (says which).
+    Auto,
+    /// The multi-threaded CPU path (the reference).
+    Cpu,
+    /// Vulkan compute.
+    Vulkan,
+}
+
+#[derive(Args, Clone)]
+struct KernelArgs {
+    /// Temporal filter of the kernel.
+    #[arg(long, value_enum, default_value = "perceptual-taa")]
+    kernel: KernelName,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels.
+    #[arg(long, default_value_t = DEFAULT_SIGMA, allow_negative_numbers = true)]
+    sigma: f64,
+    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma_t: Option<f64>,
+    /// TAA blend weight of the current frame, in (0, 1].
+    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
+    alpha: f64,
+    /// Frame rate for the perceptual filter.
+    #[arg(long, default_value_t = DEFAULT_FPS, allow_negative_numbers = true)]
+    fps: f64,
+}
+
+impl KernelArgs {
+    fn spec(&self) -> Result<KernelSpec> {
+        KernelSpec::from_name(self.kernel.as_str(), self.sigma, self.sigma_t, self.alpha, self.fps)
+    }
+}
+
+#[derive(Args)]
+struct OptimizeArgs {
+    /// Tile size W x H x T (pixels x pixels x frames) [default: 64x64x16, or the
+    /// --init file's].
+    #[arg(long)]
+    size: Option<String>,
+    /// Dimensions per sample, 1 to 8 [default: 2, or the --init file's].
+    #[arg(long)]
+    dims: Option<usize>,
+    /// Samples per pixel and frame, 1 to 64 [default: 1, or the --init file's].
+    #[arg(long)]
+    spp: Option<usize>,
+    #[command(flatten)]
+    kernel: KernelArgs,
+    /// Iterations of the optimizer.
+    #[arg(long, default_value_t = fsot::optimize::DEFAULT_ITERATIONS)]
+    iterations: u32,
+    /// Slices per iteration [default: enough for each sample to be in 16 classes
+    /// per iteration].
+    #[arg(long)]
+    slices: Option<u32>,
+    /// Random seed: the same seed gives a bit-identical mask.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where to run.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: Backend,
+    /// Worker threads for the CPU path [default: every core].
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Start from this mask (EXR written by fsot or laid out the same way).
+    #[arg(long)]
+    init: Option<PathBuf>,
+    /// Output EXR file.
+    #[arg(long, default_value = "mask.exr")]
+    out: PathBuf,
+    /// Also write 16-bit PNG slices into this folder.
+    #[arg(long)]
+    png: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct ScoreArgs {
+    /// The mask to score (EXR).
+    mask: PathBuf,
+    #[command(flatten)]
+    kernel: KernelArgs,
+    /// Slices in the fixed scoring set.
+    #[arg(long, default_value_t = SCORE_SLICES)]
+    slices: u32,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Optimize(args) => optimize(args),
+        Command::Score(args) => score_command(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(Error::invalid("--threads must be at least 1"));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Error::invalid(format!("cannot start {n} threads: {e}")))?;
+    }
+    Ok(())
+}
+
+fn optimize(args: OptimizeArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    let spec = args.kernel.spec()?;
+    let init = args.init.as_deref().map(fsot::io::exr::read).transpose()?;
+    let (w, h, t) = match (&args.size, &init) {
+        (Some(s), _) => Tile::parse_size(s)?,
+        (None, Some(m)) => (m.tile.width, m.tile.height, m.tile.frames),
+        (None, None) => (64, 64, 16),
+    };
+    let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
+    let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
+    let tile = Tile::new(w, h, t, spp, dims)?;
+    if args.iterations == 0 {
+        return Err(Error::invalid("--iterations must be at least 1"));
+    }
+    // Reserve the outputs before the long work: a bad path fails now.
+    let out = AtomicFile::create(&args.out)?;
+    if let Some(dir) = &args.png {
+        if dir.exists() && !dir.is_dir() {
+            return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
+        }
+    }
+    match args.backend {
+        Backend::Cpu => {}
+        Backend::Auto => eprintln!("backend: cpu (the Vulkan optimizer is not available in this build yet)"),
+        Backend::Vulkan => {
+            return Err(Error::VulkanUnavailable(
+                "the Vulkan optimizer is not available in this build yet; use --backend cpu".into(),
+            ))
+        }
+    }
+    let mut settings = Settings::new(spec, args.seed);
+    settings.iterations = args.iterations;
+    settings.slices = args.slices;
+    let mut run = Run::new(tile, settings, init.as_ref())?;
+    eprintln!(
+        "optimizing {} for kernel {}: {} iterations x {} slices, {} threads",
+        tile.describe(),
+        spec.describe(),
+        args.iterations,
+        run.slices_per_iteration(),
+        rayon::current_num_threads()
+    );
+    let before = score(&Mask { tile, samples: run.samples().to_vec(), meta: vec![] }, spec, SCORE_SLICES);
+    let bar = ProgressBar::new(args.iterations as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let start = Instant::now();
+    while !run.finished() {
+        let cost = run.step();
+        bar.inc(1);
+        if run.iteration() % 10 == 0 {
+            bar.set_message(format!("{cost:.3e}"));
+        }
+    }
+    bar.finish_and_clear();
+    let seconds = start.elapsed().as_secs_f64();
+    let mask = run.mask();
+    let after = score(&mask, spec, SCORE_SLICES);
+    fsot::io::exr::write(&mask, out)?;
+    if let Some(dir) = &args.png {
+        let files = fsot::io::png::write(&mask, dir)?;
+        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    println!(
+        "wrote {}: {}, kernel {}, {} iterations in {seconds:.1} s (cpu); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
+        args.out.display(),
+        tile.describe(),
+        spec.describe(),
+        run.iteration(),
+        before.objective,
+        after.objective,
+        after.ratio()
+    );
+    Ok(())
+}
+
+fn score_command(args: ScoreArgs) -> Result<()> {
+    let spec = args.kernel.spec()?;
+    if args.slices == 0 {
+        return Err(Error::invalid("--slices must be at least 1"));
+    }
+    let mask = fsot::io::exr::read(&args.mask)?;
+    let s = score(&mask, spec, args.slices);
+    println!(
+        "{}: {}, kernel {}: objective {:.4e} (white noise {:.4e}; ratio {:.4})",
+        args.mask.display(),
+        mask.tile.describe(),
+        spec.describe(),
+        s.objective,
+        s.white,
+        s.ratio()
+    );
+    Ok(())
+}

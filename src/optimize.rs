@@ -1,0 +1,146 @@
+//! The fsot optimizer as a resumable run, independent of the command line: a tile,
+//! a kernel, settings, a backend; iterate, observe, stop, take the mask.
+
+use crate::cpu::{self, Accumulator};
+use crate::error::{Error, Result};
+use crate::kernel::{Kernel, KernelSpec};
+use crate::mask::Mask;
+use crate::optimizer::{OptimizerState, StepRule};
+use crate::problem::Tile;
+use crate::rng::seed_key;
+use crate::slice::SliceSampler;
+
+/// Default number of times each sample is in a slice's class per iteration; sets
+/// the default slices per iteration.
+pub const DEFAULT_HITS: f64 = 16.0;
+pub const DEFAULT_ITERATIONS: u32 = 1000;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub kernel: KernelSpec,
+    pub iterations: u32,
+    /// Slices per iteration; `None`: enough for DEFAULT_HITS hits per sample.
+    pub slices: Option<u32>,
+    pub seed: u64,
+    pub rule: StepRule,
+}
+
+impl Settings {
+    pub fn new(kernel: KernelSpec, seed: u64) -> Self {
+        Self { kernel, iterations: DEFAULT_ITERATIONS, slices: None, seed, rule: StepRule::DEFAULT }
+    }
+}
+
+/// An optimization in progress on the CPU.
+pub struct Run {
+    pub tile: Tile,
+    pub settings: Settings,
+    pub kernel: Kernel,
+    sampler: SliceSampler,
+    samples: Vec<f32>,
+    state: OptimizerState,
+    acc: Accumulator,
+    iteration: u32,
+    slices: u32,
+    hits_per_value: f64,
+}
+
+impl Run {
+    /// Starts from `init` (validated by the caller's reader) or from white noise
+    /// drawn from the seed.
+    pub fn new(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<Self> {
+        if settings.iterations == 0 {
+            return Err(Error::invalid("iterations must be at least 1"));
+        }
+        let kernel = Kernel::new(settings.kernel, &tile);
+        let mean_points = kernel.mean_class_len() * tile.spp as f64;
+        let slices = match settings.slices {
+            Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
+            Some(s) => s,
+            None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
+        };
+        let hits_per_value = slices as f64 * mean_points / tile.points() as f64;
+        let samples = match init {
+            Some(mask) => {
+                if mask.tile != tile {
+                    return Err(Error::invalid(format!(
+                        "--init mask is {} but the run asks for {}",
+                        mask.tile.describe(),
+                        tile.describe()
+                    )));
+                }
+                mask.samples.clone()
+            }
+            None => Mask::white(tile, settings.seed).samples,
+        };
+        let key = seed_key(settings.seed);
+        Ok(Self {
+            tile,
+            sampler: SliceSampler::new(key, tile, &kernel),
+            kernel,
+            state: OptimizerState::new(settings.rule, tile.values()),
+            acc: Accumulator::new(tile.values()),
+            samples,
+            settings,
+            iteration: 0,
+            slices,
+            hits_per_value,
+        })
+    }
+
+    pub fn slices_per_iteration(&self) -> u32 {
+        self.slices
+    }
+    pub fn iteration(&self) -> u32 {
+        self.iteration
+    }
+    pub fn finished(&self) -> bool {
+        self.iteration >= self.settings.iterations
+    }
+    pub fn samples(&self) -> &[f32] {
+        &self.samples
+    }
+
+    /// One iteration; returns its objective estimate (measured before its update).
+    pub fn step(&mut self) -> f64 {
+        let cost = cpu::iterate(
+            &mut self.samples,
+            &self.tile,
+            &self.kernel,
+            &self.sampler,
+            &mut self.state,
+            &self.acc,
+            self.iteration,
+            self.settings.iterations,
+            self.slices,
+            self.hits_per_value,
+        );
+        self.iteration += 1;
+        cost
+    }
+
+    /// The mask with its provenance.
+    pub fn mask(&self) -> Mask {
+        let s = &self.settings;
+        let mut meta = vec![
+            ("method".to_string(), "fsot".to_string()),
+            ("kernel".to_string(), s.kernel.describe()),
+            ("seed".to_string(), s.seed.to_string()),
+            ("iterations".to_string(), self.iteration.to_string()),
+            ("slices".to_string(), self.slices.to_string()),
+            ("step".to_string(), format!("{:?}", s.rule)),
+            ("fsot.version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ];
+        meta.sort();
+        Mask { tile: self.tile, samples: self.samples.clone(), meta }
+    }
+}
+
+/// Runs to the end with no observer.
+pub fn optimize(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<Mask> {
+    let mut run = Run::new(tile, settings, init)?;
+    while !run.finished() {
+        run.step();
+    }
+    Ok(run.mask())
+}

@@ -1,0 +1,113 @@
+//! The tile being optimized: W x H pixels x T frames, wrapping in x, y and t, with
+//! `spp` samples of dimension `dims` per pixel and frame.
+//!
+//! Sample layout (everywhere in fsot: memory, files, GPU buffers): sample `s` of the
+//! pixel (x, y) in frame t is point number `((t * H + y) * W + x) * spp + s`, and its
+//! coordinate k is at `point * dims + k`.
+
+use crate::error::{Error, Result};
+
+/// Largest supported dimension per sample.
+pub const MAX_DIMS: usize = 8;
+/// Largest supported samples per pixel.
+pub const MAX_SPP: usize = 64;
+/// Largest number of points in one tile (keeps every index in u32 and memory sane).
+pub const MAX_POINTS: usize = 1 << 28;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tile {
+    pub width: usize,
+    pub height: usize,
+    pub frames: usize,
+    pub spp: usize,
+    pub dims: usize,
+}
+
+impl Tile {
+    /// Checks every parameter; the error says which one is wrong and why.
+    pub fn new(width: usize, height: usize, frames: usize, spp: usize, dims: usize) -> Result<Self> {
+        for (name, v) in [("width", width), ("height", height), ("frames", frames)] {
+            if v == 0 {
+                return Err(Error::invalid(format!("tile {name} must be at least 1, got 0")));
+            }
+        }
+        if dims == 0 || dims > MAX_DIMS {
+            return Err(Error::invalid(format!(
+                "dimensions per sample must be 1 to {MAX_DIMS}, got {dims}"
+            )));
+        }
+        if spp == 0 || spp > MAX_SPP {
+            return Err(Error::invalid(format!(
+                "samples per pixel must be 1 to {MAX_SPP}, got {spp}"
+            )));
+        }
+        let points = width
+            .checked_mul(height)
+            .and_then(|p| p.checked_mul(frames))
+            .and_then(|p| p.checked_mul(spp))
+            .filter(|&p| p <= MAX_POINTS)
+            .ok_or_else(|| {
+                Error::invalid(format!(
+                    "tile {width}x{height}x{frames} with {spp} spp holds more than {MAX_POINTS} points"
+                ))
+            })?;
+        let _ = points;
+        Ok(Self { width, height, frames, spp, dims })
+    }
+
+    /// Parses `WxHxT` (or `WxH`, meaning one frame).
+    pub fn parse_size(text: &str) -> Result<(usize, usize, usize)> {
+        let parts: Vec<&str> = text.split(['x', 'X']).collect();
+        let bad = || Error::invalid(format!("size must look like 64x64x16 (W x H x T), got {text:?}"));
+        if parts.len() < 2 || parts.len() > 3 {
+            return Err(bad());
+        }
+        let mut v = [1usize; 3];
+        for (i, p) in parts.iter().enumerate() {
+            v[i] = p.trim().parse::<usize>().map_err(|_| bad())?;
+        }
+        Ok((v[0], v[1], v[2]))
+    }
+
+    pub fn pixels(&self) -> usize {
+        self.width * self.height * self.frames
+    }
+    pub fn points(&self) -> usize {
+        self.pixels() * self.spp
+    }
+    pub fn values(&self) -> usize {
+        self.points() * self.dims
+    }
+    /// Pixel index of (x, y, t), all already wrapped into the tile.
+    #[inline]
+    pub fn pixel_index(&self, x: usize, y: usize, t: usize) -> usize {
+        (t * self.height + y) * self.width + x
+    }
+    pub fn describe(&self) -> String {
+        format!(
+            "{}x{}x{}, {} spp, d = {}",
+            self.width, self.height, self.frames, self.spp, self.dims
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_parse_and_validate() {
+        assert_eq!(Tile::parse_size("64x32x16").unwrap(), (64, 32, 16));
+        assert_eq!(Tile::parse_size("8x8").unwrap(), (8, 8, 1));
+        assert!(Tile::parse_size("64x").is_err());
+        assert!(Tile::parse_size("-1x2x3").is_err());
+        assert!(Tile::new(0, 4, 4, 1, 2).is_err());
+        assert!(Tile::new(4, 4, 4, 1, 0).is_err());
+        assert!(Tile::new(4, 4, 4, 0, 2).is_err());
+        assert!(Tile::new(4, 4, 4, 1, 9).is_err());
+        assert!(Tile::new(usize::MAX / 2, 4, 4, 1, 2).is_err());
+        let t = Tile::new(3, 2, 5, 4, 2).unwrap();
+        assert_eq!(t.points(), 120);
+        assert_eq!(t.pixel_index(2, 1, 4), (4 * 2 + 1) * 3 + 2);
+    }
+}
