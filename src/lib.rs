@@ -13,5 +13,5 @@ pub mod problem;
 pub mod rng;
 pub mod score;
 pub mod slice;
-pub mod transport;
 pub mod targets;
+pub mod transport;

@@ -16,7 +16,11 @@ use fsot::problem::Tile;
 use fsot::score::{score, SCORE_SLICES};
 
 #[derive(Parser)]
-#[command(name = "fsot", version, about = "Perceptually optimized spatio-temporal sample masks (filtered sliced optimal transport)")]
+#[command(
+    name = "fsot",
+    version,
+    about = "Perceptually optimized spatio-temporal sample masks (filtered sliced optimal transport)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -88,7 +92,13 @@ struct KernelArgs {
 
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
-        KernelSpec::from_name(self.kernel.as_str(), self.sigma, self.sigma_t, self.alpha, self.fps)
+        KernelSpec::from_name(
+            self.kernel.as_str(),
+            self.sigma,
+            self.sigma_t,
+            self.alpha,
+            self.fps,
+        )
     }
 }
 
@@ -99,28 +109,28 @@ struct OptimizeArgs {
     #[arg(long)]
     size: Option<String>,
     /// Dimensions per sample, 1 to 8 [default: 2, or the --init file's].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     dims: Option<usize>,
     /// Samples per pixel and frame, 1 to 64 [default: 1, or the --init file's].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     spp: Option<usize>,
     #[command(flatten)]
     kernel: KernelArgs,
     /// Iterations of the optimizer.
-    #[arg(long, default_value_t = fsot::optimize::DEFAULT_ITERATIONS)]
+    #[arg(long, default_value_t = fsot::optimize::DEFAULT_ITERATIONS, allow_negative_numbers = true)]
     iterations: u32,
     /// Slices per iteration [default: enough for each sample to be in 16 classes
     /// per iteration].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     slices: Option<u32>,
     /// Random seed: the same seed gives a bit-identical mask.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     seed: u64,
     /// Where to run.
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
     /// Worker threads for the CPU path [default: every core].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     threads: Option<usize>,
     /// Start from this mask (EXR written by fsot or laid out the same way).
     #[arg(long)]
@@ -181,7 +191,10 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         (None, Some(m)) => (m.tile.width, m.tile.height, m.tile.frames),
         (None, None) => (64, 64, 16),
     };
-    let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
+    let dims = args
+        .dims
+        .or(init.as_ref().map(|m| m.tile.dims))
+        .unwrap_or(2);
     let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
     let tile = Tile::new(w, h, t, spp, dims)?;
     if args.iterations == 0 {
@@ -191,12 +204,17 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     let out = AtomicFile::create(&args.out)?;
     if let Some(dir) = &args.png {
         if dir.exists() && !dir.is_dir() {
-            return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
+            return Err(Error::invalid(format!(
+                "--png {} exists and is not a folder",
+                dir.display()
+            )));
         }
     }
     match args.backend {
         Backend::Cpu => {}
-        Backend::Auto => eprintln!("backend: cpu (the Vulkan optimizer is not available in this build yet)"),
+        Backend::Auto => {
+            eprintln!("backend: cpu (the Vulkan optimizer is not available in this build yet)")
+        }
         Backend::Vulkan => {
             return Err(Error::VulkanUnavailable(
                 "the Vulkan optimizer is not available in this build yet; use --backend cpu".into(),
@@ -215,11 +233,21 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         run.slices_per_iteration(),
         rayon::current_num_threads()
     );
-    let before = score(&Mask { tile, samples: run.samples().to_vec(), meta: vec![] }, spec, SCORE_SLICES);
+    let before = score(
+        &Mask {
+            tile,
+            samples: run.samples().to_vec(),
+            meta: vec![],
+        },
+        spec,
+        SCORE_SLICES,
+    );
     let bar = ProgressBar::new(args.iterations as u64);
     bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let start = Instant::now();
     while !run.finished() {

@@ -27,7 +27,13 @@ pub struct Settings {
 
 impl Settings {
     pub fn new(kernel: KernelSpec, seed: u64) -> Self {
-        Self { kernel, iterations: DEFAULT_ITERATIONS, slices: None, seed, rule: StepRule::DEFAULT }
+        Self {
+            kernel,
+            iterations: DEFAULT_ITERATIONS,
+            slices: None,
+            seed,
+            rule: StepRule::DEFAULT,
+        }
     }
 }
 
@@ -129,10 +135,17 @@ impl Run {
             ("iterations".to_string(), self.iteration.to_string()),
             ("slices".to_string(), self.slices.to_string()),
             ("step".to_string(), format!("{:?}", s.rule)),
-            ("fsot.version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+            (
+                "fsot.version".to_string(),
+                env!("CARGO_PKG_VERSION").to_string(),
+            ),
         ];
         meta.sort();
-        Mask { tile: self.tile, samples: self.samples.clone(), meta }
+        Mask {
+            tile: self.tile,
+            samples: self.samples.clone(),
+            meta,
+        }
     }
 }
 

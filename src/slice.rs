@@ -86,6 +86,13 @@ impl SliceSampler {
         // Level uniform in (0, max weight]: the class is every tap at least that heavy.
         let z = (1.0 - rng.next_f64()) * self.max_weight;
         let len = self.weights.partition_point(|&w| w >= z) as u32;
-        Slice { theta, shift, cx, cy, ct, len }
+        Slice {
+            theta,
+            shift,
+            cx,
+            cy,
+            ct,
+            len,
+        }
     }
 }

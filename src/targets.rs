@@ -51,7 +51,11 @@ impl ProjectedUniform {
         let mut breaks = Vec::with_capacity(1 << d);
         for mask in 0u32..(1 << d) {
             let b: f64 = (0..d).filter(|k| mask & (1 << k) != 0).map(|k| a[k]).sum();
-            let sign = if mask.count_ones() % 2 == 0 { 1.0 } else { -1.0 };
+            let sign = if mask.count_ones() % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            };
             breaks.push((b, sign));
         }
         breaks.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -88,7 +92,11 @@ impl ProjectedUniform {
             f += sign * xd1 * x;
             int += sign * xd1 * x * x;
         }
-        (f * self.norm_f, dens * self.norm_f * d as f64, int * self.norm_i)
+        (
+            f * self.norm_f,
+            dens * self.norm_f * d as f64,
+            int * self.norm_i,
+        )
     }
 
     /// CDF at `x` on the real line.
@@ -124,7 +132,11 @@ impl ProjectedUniform {
                 hi = s;
             }
             let newton = if dens > 0.0 { s - err / dens } else { f64::NAN };
-            s = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
+            s = if newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
             if hi - lo <= 1e-15 * self.total {
                 break;
             }
@@ -150,7 +162,7 @@ impl ProjectedUniform {
         let half = n / 2;
         let mut q_prev: f64 = 0.0;
         let mut g_prev: f64 = 0.0;
-        for r in 0..half {
+        for (r, slot) in out.iter_mut().enumerate().take(half) {
             // q_(r+1) <= total / 2 because r + 1 <= n / 2.
             let u = (r + 1) as f64 / nf;
             let dens_guess = self.eval(q_prev.max(1e-300)).1;
@@ -161,15 +173,16 @@ impl ProjectedUniform {
             };
             let q = self.local_quantile(u, guess);
             let g = self.partial_moment(q);
-            out[r] = self.offset + nf * (g - g_prev);
+            *slot = self.offset + nf * (g - g_prev);
             q_prev = q;
             g_prev = g;
         }
         if n % 2 == 1 {
             out[half] = self.offset + self.total / 2.0;
         }
-        for r in 0..half {
-            out[n - 1 - r] = 2.0 * self.offset + self.total - out[r];
+        let (low, high) = out.split_at_mut(n - half);
+        for (hi, lo) in high.iter_mut().rev().zip(low.iter()) {
+            *hi = 2.0 * self.offset + self.total - lo;
         }
     }
 }
@@ -203,7 +216,13 @@ mod tests {
         let c = std::f64::consts::FRAC_1_SQRT_2;
         let p = ProjectedUniform::new(&[c, c]);
         let l = 2.0 * c;
-        let cdf = |x: f64| if x < l / 2.0 { 2.0 * x * x / (l * l) } else { 1.0 - 2.0 * (l - x) * (l - x) / (l * l) };
+        let cdf = |x: f64| {
+            if x < l / 2.0 {
+                2.0 * x * x / (l * l)
+            } else {
+                1.0 - 2.0 * (l - x) * (l - x) / (l * l)
+            }
+        };
         for x in [0.1, 0.3, 0.7, 1.0, 1.3] {
             assert!((p.cdf(x) - cdf(x)).abs() < 1e-13);
         }
@@ -224,7 +243,10 @@ mod tests {
                 p.rank_targets(n, &mut out);
                 assert!(out.windows(2).all(|w| w[0] <= w[1]), "{theta:?} {n}");
                 let avg = out.iter().sum::<f64>() / n as f64;
-                assert!((avg - mean).abs() < 1e-9, "{theta:?} n={n}: {avg} vs {mean}");
+                assert!(
+                    (avg - mean).abs() < 1e-9,
+                    "{theta:?} n={n}: {avg} vs {mean}"
+                );
             }
         }
     }

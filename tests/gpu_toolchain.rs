@@ -10,9 +10,14 @@ use fsot::rng::hash2;
 
 #[test]
 fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
     let info = ctx.info().clone();
-    eprintln!("device: {} ({}), subgroup size {}", info.name, info.driver, info.subgroup_size);
+    eprintln!(
+        "device: {} ({}), subgroup size {}",
+        info.name, info.driver, info.subgroup_size
+    );
     assert!(info.subgroup_size >= 1);
 
     let count: u32 = 1000; // not a multiple of the workgroup size: tests the bound check
@@ -48,9 +53,13 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
 
 #[test]
 fn buffers_larger_than_a_binding_are_refused_with_a_clear_error() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
     let limit = ctx.info().max_storage_buffer_range;
-    let err = Buffer::new(&ctx, limit + 4, Location::Device, "too-big").err().expect("must fail");
+    let err = Buffer::new(&ctx, limit + 4, Location::Device, "too-big")
+        .err()
+        .expect("must fail");
     assert!(err.to_string().contains("maxStorageBufferRange"), "{err}");
     common::assert_no_validation_messages(&ctx);
 }
@@ -59,8 +68,12 @@ fn buffers_larger_than_a_binding_are_refused_with_a_clear_error() {
 fn the_validation_layer_is_live_and_its_messages_are_caught() {
     // A buffer with no usage bits breaks a valid-usage rule; the layer must report
     // it, or the other GPU tests' "no messages" would prove nothing.
-    let Some(ctx) = common::gpu_context() else { return };
-    let info = ash::vk::BufferCreateInfo::default().size(16).usage(ash::vk::BufferUsageFlags::empty());
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let info = ash::vk::BufferCreateInfo::default()
+        .size(16)
+        .usage(ash::vk::BufferUsageFlags::empty());
     let made = unsafe { ctx.device().create_buffer(&info, None) };
     if let Ok(buffer) = made {
         unsafe { ctx.device().destroy_buffer(buffer, None) };

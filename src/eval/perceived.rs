@@ -31,13 +31,33 @@ pub struct TestSetup {
 
 impl Default for TestSetup {
     fn default() -> Self {
-        Self { image: 96, frames: 96, warmup: 48, taa_alpha: Some(0.1), eye_sigma: 2.1, fps: 60.0, renders: 3 }
+        Self {
+            image: 96,
+            frames: 96,
+            warmup: 48,
+            taa_alpha: Some(0.1),
+            eye_sigma: 2.1,
+            fps: 60.0,
+            renders: 3,
+        }
     }
 }
 
 /// Mean squared perceived error of one render.
-fn render_error(mask: &Mask, family: Family, variant: u32, shift: [f64; 2], setup: &TestSetup) -> f64 {
-    let Tile { width, height, frames: tf, dims, .. } = mask.tile;
+fn render_error(
+    mask: &Mask,
+    family: Family,
+    variant: u32,
+    shift: [f64; 2],
+    setup: &TestSetup,
+) -> f64 {
+    let Tile {
+        width,
+        height,
+        frames: tf,
+        dims,
+        ..
+    } = mask.tile;
     let n = setup.image;
     let frames = setup.frames;
     // Per-frame error images, after TAA.
@@ -75,7 +95,11 @@ fn render_error(mask: &Mask, family: Family, variant: u32, shift: [f64; 2], setu
     let mut spatial = Vec::new();
     for dy in -r..=r {
         for dx in -r..=r {
-            spatial.push((dx, dy, (-((dx * dx + dy * dy) as f64) / (setup.eye_sigma * setup.eye_sigma)).exp()));
+            spatial.push((
+                dx,
+                dy,
+                (-((dx * dx + dy * dy) as f64) / (setup.eye_sigma * setup.eye_sigma)).exp(),
+            ));
         }
     }
     let total: f64 = spatial.iter().map(|s| s.2).sum();
@@ -113,7 +137,11 @@ fn render_error(mask: &Mask, family: Family, variant: u32, shift: [f64; 2], setu
 /// Perceived error of `mask` averaged over the integrand families that match its
 /// dimension and `setup.renders` renders each; `seed` picks the shifts.
 pub fn perceived_error(mask: &Mask, setup: &TestSetup, seed: u64) -> f64 {
-    let families: &[Family] = if mask.tile.dims >= 2 { &FAMILIES_2D } else { &FAMILIES_1D };
+    let families: &[Family] = if mask.tile.dims >= 2 {
+        &FAMILIES_2D
+    } else {
+        &FAMILIES_1D
+    };
     let mut rng = Stream::new(derive(seed_key(seed), 0xe7a1));
     let mut total = 0.0;
     let mut count = 0;

@@ -46,7 +46,9 @@ impl Buffer {
             .size(size)
             .usage(usage)
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let raw = check("vkCreateBuffer", unsafe { device.create_buffer(&info, None) })?;
+        let raw = check("vkCreateBuffer", unsafe {
+            device.create_buffer(&info, None)
+        })?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let memory_location = match location {
             Location::Device => MemoryLocation::GpuOnly,
@@ -72,14 +74,24 @@ impl Buffer {
                 return Err(e.into());
             }
         };
-        if let Err(result) = unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+        if let Err(result) =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+        {
             if let Ok(mut alloc) = ctx.shared.allocator.lock() {
                 let _ = alloc.free(allocation);
             }
             unsafe { device.destroy_buffer(raw, None) };
-            return Err(Error::Vulkan { call: "vkBindBufferMemory", result });
+            return Err(Error::Vulkan {
+                call: "vkBindBufferMemory",
+                result,
+            });
         }
-        Ok(Self { ctx: ctx.clone(), raw, allocation: Some(allocation), size })
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+        })
     }
 
     /// Copies `bytes` into a host-visible buffer.

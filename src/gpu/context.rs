@@ -90,9 +90,11 @@ impl Context {
             let available = check("vkEnumerateInstanceLayerProperties", unsafe {
                 entry.enumerate_instance_layer_properties()
             })?;
-            let found = available
-                .iter()
-                .any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
+            let found = available.iter().any(|l| {
+                l.layer_name_as_c_str()
+                    .map(|n| n == VALIDATION_LAYER)
+                    .unwrap_or(false)
+            });
             if !found {
                 return Err(Error::VulkanUnavailable(
                     "validation asked for but VK_LAYER_KHRONOS_validation is not installed".into(),
@@ -108,7 +110,9 @@ impl Context {
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
-        let instance = check("vkCreateInstance", unsafe { entry.create_instance(&create, None) })?;
+        let instance = check("vkCreateInstance", unsafe {
+            entry.create_instance(&create, None)
+        })?;
         // From here on, a failure must destroy what was made: build the rest in a
         // helper and clean up the instance if it fails.
         let messages = Box::into_raw(Box::new(Mutex::new(Vec::new())));
@@ -134,7 +138,8 @@ impl Context {
             let loader = ash::ext::debug_utils::Instance::new(&entry, &instance);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
                 )
                 .message_type(
                     vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
@@ -150,11 +155,12 @@ impl Context {
         } else {
             None
         };
-        let destroy_debug = |debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
-            if let Some((loader, m)) = debug {
-                unsafe { loader.destroy_debug_utils_messenger(*m, None) };
-            }
-        };
+        let destroy_debug =
+            |debug: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| {
+                if let Some((loader, m)) = debug {
+                    unsafe { loader.destroy_debug_utils_messenger(*m, None) };
+                }
+            };
         let picked = pick_device(&instance, options);
         let (physical_device, queue_family) = match picked {
             Ok(p) => p,
@@ -181,7 +187,10 @@ impl Context {
             Ok(d) => d,
             Err(result) => {
                 destroy_debug(&debug);
-                return Err(Error::Vulkan { call: "vkCreateDevice", result });
+                return Err(Error::Vulkan {
+                    call: "vkCreateDevice",
+                    result,
+                });
             }
         };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -226,7 +235,10 @@ impl Context {
 
     /// Validation messages collected so far (empty when validation is off).
     pub fn validation_messages(&self) -> Vec<String> {
-        unsafe { &*self.shared.messages }.lock().map(|l| l.clone()).unwrap_or_default()
+        unsafe { &*self.shared.messages }
+            .lock()
+            .map(|l| l.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -246,14 +258,25 @@ impl Drop for Shared {
 }
 
 /// Devices in the order fsot prefers them, with a compute queue family each.
-fn pick_device(instance: &ash::Instance, options: &ContextOptions) -> Result<(vk::PhysicalDevice, u32)> {
-    let devices = check("vkEnumeratePhysicalDevices", unsafe { instance.enumerate_physical_devices() })?;
+fn pick_device(
+    instance: &ash::Instance,
+    options: &ContextOptions,
+) -> Result<(vk::PhysicalDevice, u32)> {
+    let devices = check("vkEnumeratePhysicalDevices", unsafe {
+        instance.enumerate_physical_devices()
+    })?;
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
         let props = unsafe { instance.get_physical_device_properties(pd) };
-        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = props
+            .device_name_as_c_str()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let Some(family) = families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)) else {
+        let Some(family) = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        else {
             continue;
         };
         let rank = match props.device_type {
@@ -265,18 +288,28 @@ fn pick_device(instance: &ash::Instance, options: &ContextOptions) -> Result<(vk
         candidates.push((rank, index, name, pd, family as u32));
     }
     if candidates.is_empty() {
-        return Err(Error::VulkanUnavailable("no Vulkan device with a compute queue".into()));
+        return Err(Error::VulkanUnavailable(
+            "no Vulkan device with a compute queue".into(),
+        ));
     }
-    let wanted = options.device.clone().or_else(|| std::env::var("FSOT_DEVICE").ok());
+    let wanted = options
+        .device
+        .clone()
+        .or_else(|| std::env::var("FSOT_DEVICE").ok());
     if let Some(want) = wanted.filter(|w| !w.is_empty()) {
         let hit = candidates.iter().find(|c| {
-            want.parse::<usize>().map(|i| i == c.1).unwrap_or(false) || c.2.to_lowercase().contains(&want.to_lowercase())
+            want.parse::<usize>().map(|i| i == c.1).unwrap_or(false)
+                || c.2.to_lowercase().contains(&want.to_lowercase())
         });
         return match hit {
             Some(c) => Ok((c.3, c.4)),
             None => Err(Error::VulkanUnavailable(format!(
                 "no device matches {want:?}; devices: {}",
-                candidates.iter().map(|c| format!("{}: {}", c.1, c.2)).collect::<Vec<_>>().join(", ")
+                candidates
+                    .iter()
+                    .map(|c| format!("{}: {}", c.1, c.2))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ))),
         };
     }
@@ -287,21 +320,35 @@ fn pick_device(instance: &ash::Instance, options: &ContextOptions) -> Result<(vk
 fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceInfo {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut driver);
+    let mut props2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut subgroup)
+        .push_next(&mut driver);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
     let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
-    let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let has_atomic_ext = extensions
-        .iter()
-        .any(|e| e.extension_name_as_c_str().map(|n| n == ash::ext::shader_atomic_float::NAME).unwrap_or(false));
+    let extensions =
+        unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let has_atomic_ext = extensions.iter().any(|e| {
+        e.extension_name_as_c_str()
+            .map(|n| n == ash::ext::shader_atomic_float::NAME)
+            .unwrap_or(false)
+    });
     if has_atomic_ext {
         unsafe { instance.get_physical_device_features2(pd, &mut features2) };
     }
-    let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let driver_name = driver.driver_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let driver_info = driver.driver_info_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = props
+        .device_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_name = driver
+        .driver_name_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let driver_info = driver
+        .driver_info_as_c_str()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     DeviceInfo {
         name,
         driver: format!("{driver_name} {driver_info}").trim().to_string(),

@@ -25,7 +25,13 @@ impl ComputePipeline {
     /// `spirv`: the compiled pass; `bindings`: storage buffers it reads or writes;
     /// `push_bytes`: size of its push-constant block; `spec`: values of its
     /// specialization constants 0, 1, ...
-    pub fn new(ctx: &Context, spirv: &[u8], bindings: u32, push_bytes: u32, spec: &[u32]) -> Result<Self> {
+    pub fn new(
+        ctx: &Context,
+        spirv: &[u8],
+        bindings: u32,
+        push_bytes: u32,
+        spec: &[u32],
+    ) -> Result<Self> {
         let device = ctx.device();
         let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
             .map_err(|e| Error::invalid(format!("bad SPIR-V: {e}")))?;
@@ -68,29 +74,51 @@ impl ComputePipeline {
         if push_bytes > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        me.layout = check("vkCreatePipelineLayout", unsafe { device.create_pipeline_layout(&layout_info, None) })?;
+        me.layout = check("vkCreatePipelineLayout", unsafe {
+            device.create_pipeline_layout(&layout_info, None)
+        })?;
         let entries: Vec<_> = (0..spec.len() as u32)
-            .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i)
+                    .offset(4 * i)
+                    .size(4)
+            })
             .collect();
         let data: Vec<u8> = spec.iter().flat_map(|v| v.to_ne_bytes()).collect();
-        let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
+        let spec_info = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(&data);
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main")
             .specialization_info(&spec_info);
-        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(me.layout);
-        me.raw = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
-            .map_err(|(_, result)| Error::Vulkan { call: "vkCreateComputePipelines", result })?[0];
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(me.layout);
+        me.raw =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+                .map_err(|(_, result)| Error::Vulkan {
+                    call: "vkCreateComputePipelines",
+                    result,
+                })?[0];
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(bindings.max(1))];
         me.pool = check("vkCreateDescriptorPool", unsafe {
-            device.create_descriptor_pool(&vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes), None)
+            device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
         })?;
         me.set = check("vkAllocateDescriptorSets", unsafe {
             device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(me.pool).set_layouts(&set_layouts),
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(me.pool)
+                    .set_layouts(&set_layouts),
             )
         })?[0];
         Ok(me)
@@ -99,11 +127,20 @@ impl ComputePipeline {
     /// Points bindings 0..n at `buffers` (whole buffers).
     pub fn bind(&self, buffers: &[&Buffer]) -> Result<()> {
         if buffers.len() as u32 != self.bindings {
-            return Err(Error::invalid(format!("pipeline takes {} buffers, got {}", self.bindings, buffers.len())));
+            return Err(Error::invalid(format!(
+                "pipeline takes {} buffers, got {}",
+                self.bindings,
+                buffers.len()
+            )));
         }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).offset(0).range(vk::WHOLE_SIZE)])
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.raw)
+                    .offset(0)
+                    .range(vk::WHOLE_SIZE)]
+            })
             .collect();
         let writes: Vec<_> = infos
             .iter()
@@ -125,7 +162,14 @@ impl ComputePipeline {
         let device = self.ctx.device();
         unsafe {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-            device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.set],
+                &[],
+            );
             if self.push_bytes > 0 {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
@@ -162,7 +206,9 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
         ctx.device().cmd_pipeline_barrier(
             cmd,
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
+            vk::PipelineStageFlags::COMPUTE_SHADER
+                | vk::PipelineStageFlags::TRANSFER
+                | vk::PipelineStageFlags::HOST,
             vk::DependencyFlags::empty(),
             &[mb],
             &[],
@@ -192,16 +238,27 @@ pub fn submit_and_wait(ctx: &Context, record: impl FnOnce(vk::CommandBuffer)) ->
         check("vkBeginCommandBuffer", unsafe {
             device.begin_command_buffer(
                 cmd,
-                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )
         })?;
         record(cmd);
-        check("vkEndCommandBuffer", unsafe { device.end_command_buffer(cmd) })?;
-        let fence = check("vkCreateFence", unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) })?;
+        check("vkEndCommandBuffer", unsafe {
+            device.end_command_buffer(cmd)
+        })?;
+        let fence = check("vkCreateFence", unsafe {
+            device.create_fence(&vk::FenceCreateInfo::default(), None)
+        })?;
         let cmds = [cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        let waited = check("vkQueueSubmit", unsafe { device.queue_submit(ctx.shared.queue, &submit, fence) })
-            .and_then(|_| check("vkWaitForFences", unsafe { device.wait_for_fences(&[fence], true, u64::MAX) }));
+        let waited = check("vkQueueSubmit", unsafe {
+            device.queue_submit(ctx.shared.queue, &submit, fence)
+        })
+        .and_then(|_| {
+            check("vkWaitForFences", unsafe {
+                device.wait_for_fences(&[fence], true, u64::MAX)
+            })
+        });
         unsafe { device.destroy_fence(fence, None) };
         waited
     })();

@@ -6,6 +6,7 @@
 //!   viewers and texture loaders read the mask as an ordinary image;
 //! - otherwise: channel `sSS.dK` holds dimension K of sample SS (two digits), e.g.
 //!   `s03.d5`.
+//!
 //! Every part carries the provenance as text attributes named `fsot.*` (kernel and
 //! parameters, seed, iterations, fsot's version, method) plus `fsot.spp` and
 //! `fsot.dims`.
@@ -39,10 +40,19 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
     let mut layers = Vec::with_capacity(tile.frames);
     let mut attributes: HashMap<Text, AttributeValue> = HashMap::new();
     for (k, v) in &mask.meta {
-        attributes.insert(Text::from(format!("fsot.{k}").as_str()), AttributeValue::Text(Text::from(v.as_str())));
+        attributes.insert(
+            Text::from(format!("fsot.{k}").as_str()),
+            AttributeValue::Text(Text::from(v.as_str())),
+        );
     }
-    attributes.insert(Text::from("fsot.spp"), AttributeValue::Text(Text::from(tile.spp.to_string().as_str())));
-    attributes.insert(Text::from("fsot.dims"), AttributeValue::Text(Text::from(tile.dims.to_string().as_str())));
+    attributes.insert(
+        Text::from("fsot.spp"),
+        AttributeValue::Text(Text::from(tile.spp.to_string().as_str())),
+    );
+    attributes.insert(
+        Text::from("fsot.dims"),
+        AttributeValue::Text(Text::from(tile.dims.to_string().as_str())),
+    );
     for t in 0..tile.frames {
         let mut channels = SmallVec::new();
         for s in 0..tile.spp {
@@ -53,14 +63,25 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
                         data.push(mask.sample(x, y, t, s)[k]);
                     }
                 }
-                channels.push(AnyChannel::new(channel_name(&tile, s, k).as_str(), FlatSamples::F32(data)));
+                channels.push(AnyChannel::new(
+                    channel_name(&tile, s, k).as_str(),
+                    FlatSamples::F32(data),
+                ));
             }
         }
         let mut layer_attributes = LayerAttributes::named(format!("frame{t:04}").as_str());
         layer_attributes.other = attributes.clone();
-        layers.push(Layer::new((w, h), layer_attributes, Encoding::FAST_LOSSLESS, AnyChannels::sort(channels)));
+        layers.push(Layer::new(
+            (w, h),
+            layer_attributes,
+            Encoding::FAST_LOSSLESS,
+            AnyChannels::sort(channels),
+        ));
     }
-    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
+    let image = Image::from_layers(
+        ImageAttributes::new(IntegerBounds::from_dimensions((w, h))),
+        layers,
+    );
     let mut bytes = Cursor::new(Vec::new());
     image
         .write()
@@ -78,7 +99,8 @@ pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
 /// Reads and validates a mask: parts named frame0000.. in order, one size, a
 /// complete channel layout, every value finite and in [0, 1).
 pub fn read(path: &Path) -> Result<Mask> {
-    let bytes = std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
     decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
 }
 
@@ -99,22 +121,41 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
     let size = layers[0].size;
     let (w, h) = (size.0, size.1);
     // Channel layout from the first frame.
-    let names: Vec<String> = layers[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    let names: Vec<String> = layers[0]
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
     let (spp, dims) = layout_of(&names)?;
     let tile = Tile::new(w, h, layers.len(), spp, dims).map_err(|e| e.to_string())?;
     let mut samples = vec![0.0f32; tile.values()];
     for (t, layer) in layers.iter().enumerate() {
         let expected = format!("frame{t:04}");
-        let name = layer.attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_default();
+        let name = layer
+            .attributes
+            .layer_name
+            .as_ref()
+            .map(|n| n.to_string())
+            .unwrap_or_default();
         if name != expected {
-            return Err(format!("part {t} is named {name:?}; expected {expected:?} (frames in order)"));
+            return Err(format!(
+                "part {t} is named {name:?}; expected {expected:?} (frames in order)"
+            ));
         }
         if layer.size != size {
-            return Err(format!("frame {t} is {}x{}, frame 0 is {w}x{h}", layer.size.0, layer.size.1));
+            return Err(format!(
+                "frame {t} is {}x{}, frame 0 is {w}x{h}",
+                layer.size.0, layer.size.1
+            ));
         }
         let list = &layer.channel_data.list;
         if list.len() != spp * dims {
-            return Err(format!("frame {t} has {} channels, frame 0 has {}", list.len(), spp * dims));
+            return Err(format!(
+                "frame {t} has {} channels, frame 0 has {}",
+                list.len(),
+                spp * dims
+            ));
         }
         for s in 0..spp {
             for k in 0..dims {
@@ -126,10 +167,16 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
                 let values: Vec<f32> = match &channel.sample_data {
                     FlatSamples::F32(v) => v.clone(),
                     FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-                    FlatSamples::U32(_) => return Err(format!("channel {want} holds integers, not floats")),
+                    FlatSamples::U32(_) => {
+                        return Err(format!("channel {want} holds integers, not floats"))
+                    }
                 };
                 if values.len() != w * h {
-                    return Err(format!("channel {want} of frame {t} has {} values, expected {}", values.len(), w * h));
+                    return Err(format!(
+                        "channel {want} of frame {t} has {} values, expected {}",
+                        values.len(),
+                        w * h
+                    ));
                 }
                 for (i, &v) in values.iter().enumerate() {
                     if !(v.is_finite() && (0.0..1.0).contains(&v)) {
@@ -162,12 +209,19 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
         })
         .collect();
     meta.sort();
-    Ok(Mask { tile, samples, meta })
+    Ok(Mask {
+        tile,
+        samples,
+        meta,
+    })
 }
 
 /// (spp, dims) from a frame's channel names.
 fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
-    let rgba: Vec<usize> = names.iter().filter_map(|n| RGBA.iter().position(|c| c == n)).collect();
+    let rgba: Vec<usize> = names
+        .iter()
+        .filter_map(|n| RGBA.iter().position(|c| c == n))
+        .collect();
     if !names.is_empty() && rgba.len() == names.len() {
         let dims = names.len();
         for k in 0..dims {
@@ -194,7 +248,9 @@ fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
         dims = dims.max(k + 1);
     }
     if spp * dims != names.len() {
-        return Err(format!("channels {names:?} do not cover {spp} samples x {dims} dimensions"));
+        return Err(format!(
+            "channels {names:?} do not cover {spp} samples x {dims} dimensions"
+        ));
     }
     Ok((spp, dims))
 }

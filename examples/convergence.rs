@@ -1,0 +1,55 @@
+//! Time to quality of the CPU path: fresh runs of N iterations for several N, each
+//! timed (optimization only) and judged by the independent perceived-error test
+//! under TAA (ratio to white noise) and by `fsot score`'s objective.
+//!
+//! cargo run --release --example convergence -- [kernel] [WxHxT] [rule: momentum|adam] [N...]
+use std::time::Instant;
+
+use fsot::eval::perceived::{ratio_to_white, TestSetup};
+use fsot::kernel::KernelSpec;
+use fsot::optimize::{Run, Settings};
+use fsot::optimizer::StepRule;
+use fsot::problem::Tile;
+use fsot::score::{score, SCORE_SLICES};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let kernel = args.get(1).map(String::as_str).unwrap_or("taa");
+    let (w, h, t) =
+        Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
+    let rule = match args.get(3).map(String::as_str).unwrap_or("momentum") {
+        "adam" => StepRule::DEFAULT_ADAM,
+        _ => StepRule::DEFAULT,
+    };
+    let counts: Vec<u32> = if args.len() > 4 {
+        args[4..].iter().map(|s| s.parse().unwrap()).collect()
+    } else {
+        vec![5, 10, 20, 50, 100, 200, 500, 1000]
+    };
+    let tile = Tile::new(w, h, t, 1, 2).unwrap();
+    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
+    let setup = TestSetup::default();
+    println!(
+        "# {} kernel {} rule {:?}, {} threads",
+        tile.describe(),
+        spec.describe(),
+        rule,
+        rayon::current_num_threads()
+    );
+    println!("iterations,seconds,objective,perceived_taa_ratio");
+    for n in counts {
+        let mut settings = Settings::new(spec, 7);
+        settings.iterations = n;
+        settings.rule = rule;
+        let mut run = Run::new(tile, settings, None).unwrap();
+        let start = Instant::now();
+        while !run.finished() {
+            run.step();
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let mask = run.mask();
+        let objective = score(&mask, spec, SCORE_SLICES).objective;
+        let ratio = ratio_to_white(&mask, &setup, 4);
+        println!("{n},{seconds:.3},{objective:.5e},{ratio:.4}");
+    }
+}

@@ -1,0 +1,179 @@
+//! The command line: a working run, and clear errors (non-zero exit, a message, no
+//! panic) for bad flags and bad files, without touching existing outputs.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn fsot(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn optimize_writes_exr_and_png_and_score_reads_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--size",
+            "8x8x4",
+            "--iterations",
+            "20",
+            "--kernel",
+            "taa",
+            "--seed",
+            "3",
+            "--out",
+            "m.exr",
+            "--png",
+            "slices",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("wrote m.exr") && out.contains("objective"),
+        "{out}"
+    );
+    assert!(dir.path().join("m.exr").is_file());
+    assert_eq!(
+        std::fs::read_dir(dir.path().join("slices"))
+            .unwrap()
+            .count(),
+        4
+    );
+    let s = fsot(&["score", "m.exr", "--kernel", "taa"], dir.path());
+    assert!(s.status.success(), "{}", stderr(&s));
+    assert!(String::from_utf8_lossy(&s.stdout).contains("ratio"));
+    // --init continues from the file, taking its shape.
+    let c = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--init",
+            "m.exr",
+            "--iterations",
+            "5",
+            "--kernel",
+            "taa",
+            "--out",
+            "m2.exr",
+        ],
+        dir.path(),
+    );
+    assert!(c.status.success(), "{}", stderr(&c));
+    assert!(String::from_utf8_lossy(&c.stdout).contains("8x8x4"));
+}
+
+#[test]
+fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    std::fs::write(dir.path().join("garbage.exr"), b"not an exr at all").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--size", "0x8x8"], "width must be at least 1"),
+        (&["--size", "8x8"], ""), // valid: one frame (checked below to succeed)
+        (&["--size", "99999999x99999999x9999"], "more than"),
+        (&["--size", "axb"], "size must look like"),
+        (&["--dims", "0"], "dimensions per sample"),
+        (&["--dims", "9"], "dimensions per sample"),
+        (&["--spp", "0"], "samples per pixel"),
+        (&["--kernel", "box"], "invalid value 'box'"),
+        (&["--kernel", "taa", "--alpha", "1.5"], "alpha"),
+        (&["--kernel", "taa", "--alpha", "NaN"], "alpha"),
+        (&["--sigma", "-2"], "sigma"),
+        (&["--fps", "0"], "fps"),
+        (&["--iterations", "0"], "iterations"),
+        (&["--iterations", "-3"], "invalid value"),
+        (&["--slices", "0"], "slices"),
+        (&["--threads", "0"], "threads"),
+        (&["--init", "missing.exr"], "cannot read"),
+        (&["--init", "garbage.exr"], "not a readable EXR"),
+        (&["--out", "no/such/folder/m.exr"], "does not exist"),
+        (&["--backend", "vulkan"], "Vulkan"),
+    ];
+    for (extra, expect) in cases {
+        // Small defaults, each replaced when the case gives that flag itself.
+        let mut args = vec!["optimize"];
+        for (flag, value) in [
+            ("--size", "4x4x2"),
+            ("--iterations", "3"),
+            ("--out", "existing.exr"),
+        ] {
+            if !extra.contains(&flag) {
+                args.extend_from_slice(&[flag, value]);
+            }
+        }
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!err.contains("panicked"), "{extra:?} panicked: {err}");
+        if expect.is_empty() {
+            assert!(o.status.success(), "{extra:?}: {err}");
+            std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+            continue;
+        }
+        assert!(!o.status.success(), "{extra:?} should fail");
+        assert!(
+            err.contains(expect),
+            "{extra:?}: expected {expect:?} in {err:?}"
+        );
+        assert_eq!(
+            std::fs::read(dir.path().join("existing.exr")).unwrap(),
+            b"keep me",
+            "{extra:?}"
+        );
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    let s = fsot(&["score", "garbage.exr"], dir.path());
+    assert!(!s.status.success() && stderr(&s).contains("not a readable EXR"));
+}
+
+#[test]
+fn every_flag_has_help() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(&["optimize", "--help"], dir.path());
+    assert!(o.status.success());
+    let help = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = help.lines().collect();
+    for flag in [
+        "--size",
+        "--dims",
+        "--spp",
+        "--kernel",
+        "--sigma",
+        "--sigma-t",
+        "--alpha",
+        "--fps",
+        "--iterations",
+        "--slices",
+        "--seed",
+        "--backend",
+        "--threads",
+        "--init",
+        "--out",
+        "--png",
+    ] {
+        let i = lines
+            .iter()
+            .position(|l| l.trim_start().starts_with(&format!("{flag} <")))
+            .unwrap_or_else(|| panic!("{flag} missing from --help"));
+        assert!(!lines[i + 1].trim().is_empty(), "{flag} has no description");
+    }
+}

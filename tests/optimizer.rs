@@ -1,0 +1,141 @@
+//! The optimizer, end to end on small tiles.
+
+use fsot::eval::perceived::{perceived_error, TestSetup};
+use fsot::kernel::KernelSpec;
+use fsot::mask::Mask;
+use fsot::optimize::{optimize, Settings};
+use fsot::problem::Tile;
+use fsot::score::score;
+
+fn spec(name: &str) -> KernelSpec {
+    KernelSpec::from_name(name, 2.1, None, 0.1, 60.0).unwrap()
+}
+
+fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
+    let mut s = Settings::new(spec(kernel), seed);
+    s.iterations = iterations;
+    s
+}
+
+/// A smaller, faster version of the independent perceived-error test.
+fn quick_setup(taa: bool) -> TestSetup {
+    TestSetup {
+        image: 64,
+        frames: 64,
+        warmup: 32,
+        taa_alpha: taa.then_some(0.1),
+        renders: 2,
+        ..TestSetup::default()
+    }
+}
+
+fn mean_white_error(tile: Tile, setup: &TestSetup) -> f64 {
+    (0..3)
+        .map(|s| perceived_error(&Mask::white(tile, 500 + s), setup, 1))
+        .sum::<f64>()
+        / 3.0
+}
+
+#[test]
+fn an_optimized_mask_has_a_lower_objective_than_white_noise() {
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let mask = optimize(tile, settings("perceptual-taa", 150, 1), None).unwrap();
+    let s = score(&mask, spec("perceptual-taa"), 4096);
+    assert!(
+        s.ratio() < 0.7,
+        "objective {} vs white {}",
+        s.objective,
+        s.white
+    );
+    assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+}
+
+#[test]
+fn under_taa_a_taa_mask_beats_a_spatial_mask_and_both_beat_white_noise() {
+    let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
+    let setup = quick_setup(true);
+    let white = mean_white_error(tile, &setup);
+    let taa = perceived_error(
+        &optimize(tile, settings("taa", 200, 7), None).unwrap(),
+        &setup,
+        1,
+    ) / white;
+    let spatial = perceived_error(
+        &optimize(tile, settings("spatial", 200, 7), None).unwrap(),
+        &setup,
+        1,
+    ) / white;
+    eprintln!(
+        "perceived error under TAA, ratio to white noise: taa {taa:.3}, spatial {spatial:.3}"
+    );
+    assert!(taa <= 0.55, "taa mask {taa}");
+    assert!(spatial < 1.0, "spatial mask {spatial}");
+    assert!(
+        taa < 0.8 * spatial,
+        "taa {taa} is not clearly better than spatial {spatial}"
+    );
+}
+
+#[test]
+fn the_same_seed_gives_a_bit_identical_mask_whatever_the_thread_count() {
+    let tile = Tile::new(12, 10, 6, 2, 3).unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| optimize(tile, settings("perceptual-taa", 30, 11), None).unwrap())
+    };
+    let one = run(1);
+    let three = run(3);
+    let five = run(5);
+    assert!(one
+        .samples
+        .iter()
+        .zip(&three.samples)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(one
+        .samples
+        .iter()
+        .zip(&five.samples)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    // A different seed gives a different mask.
+    let other = optimize(tile, settings("perceptual-taa", 30, 12), None).unwrap();
+    assert_ne!(one.samples, other.samples);
+}
+
+#[test]
+fn every_kernel_dimension_and_sample_count_optimizes_below_white_noise() {
+    for (kernel, spp, dims) in [
+        ("spatial", 1, 1),
+        ("gaussian", 1, 4),
+        ("perceptual", 4, 2),
+        ("taa", 16, 1),
+        ("perceptual-taa", 1, 8),
+    ] {
+        let tile = Tile::new(8, 8, 4, spp, dims).unwrap();
+        let mask = optimize(tile, settings(kernel, 40, 3), None).unwrap();
+        assert!(mask
+            .samples
+            .iter()
+            .all(|v| v.is_finite() && (0.0..1.0).contains(v)));
+        let s = score(&mask, spec(kernel), 2048);
+        assert!(
+            s.ratio() < 0.95,
+            "{kernel} spp {spp} d {dims}: ratio {}",
+            s.ratio()
+        );
+    }
+}
+
+#[test]
+fn init_continues_from_a_given_mask() {
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let first = optimize(tile, settings("taa", 20, 5), None).unwrap();
+    let continued = optimize(tile, settings("taa", 20, 5), Some(&first)).unwrap();
+    let s0 = score(&first, spec("taa"), 4096).objective;
+    let s1 = score(&continued, spec("taa"), 4096).objective;
+    assert!(s1 < s0, "continuing should improve: {s0} -> {s1}");
+    let wrong = Tile::new(8, 8, 5, 1, 2).unwrap();
+    assert!(optimize(wrong, settings("taa", 5, 5), Some(&first)).is_err());
+}
