@@ -27,72 +27,100 @@ pub struct Slice {
     pub len: u32,
 }
 
-/// Draws the slices of one run.
+/// Level thresholds of a kernel's taps as 32-bit integers: tap i belongs to the
+/// class of level bits L (uniform over u32) when `threshold[i] > L`, i.e. with
+/// probability weight_i / max weight. Integer comparison makes the class size the
+/// same on every backend.
+pub fn level_thresholds(kernel: &Kernel) -> Vec<u32> {
+    let max = kernel.max_weight();
+    kernel
+        .taps
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            if i == 0 {
+                u32::MAX
+            } else {
+                ((t.weight / max) * 4_294_967_296.0).floor().min(u32::MAX as f64) as u32
+            }
+        })
+        .collect()
+}
+
+/// Integer threshold of `probability` over the u32 range.
+pub const fn probability_bits(probability: f64) -> u32 {
+    (probability * 4_294_967_296.0) as u32
+}
+
+/// Draws the slices of one run. The order and use of the draws is mirrored by
+/// `fsot_draw_slice` in `glsl/common.glsl`: integer decisions (axis, pair,
+/// centre, level) are bit-identical on both backends; angles and Gaussian
+/// directions agree to float32 rounding.
 #[derive(Clone, Debug)]
 pub struct SliceSampler {
     key: u32,
     tile: Tile,
-    max_weight: f64,
-    weights: Vec<f64>,
+    thresholds: Vec<u32>,
 }
 
 impl SliceSampler {
     pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel) -> Self {
-        Self {
-            key: derive(seed_key, 0x51ce),
-            tile,
-            max_weight: kernel.max_weight(),
-            weights: kernel.taps.iter().map(|t| t.weight).collect(),
-        }
+        Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel) }
     }
 
     pub fn draw(&self, iteration: u32, index: u32) -> Slice {
         let d = self.tile.dims;
         let mut rng = Stream::new(hash2(derive(self.key, iteration), index));
         let mut theta = [0.0; MAX_DIMS];
-        let pick = rng.next_f64();
+        let pick = rng.next_u32();
+        let angle = |rng: &mut Stream| std::f64::consts::TAU * rng.next_f32() as f64;
         if d == 1 {
             theta[0] = 1.0;
-        } else if pick < AXIS_PROBABILITY {
+        } else if pick < probability_bits(AXIS_PROBABILITY) {
             theta[rng.below(d as u32) as usize] = 1.0;
-        } else if d >= 3 && pick < AXIS_PROBABILITY + PAIR_PROBABILITY {
+        } else if d >= 3 && pick < probability_bits(AXIS_PROBABILITY + PAIR_PROBABILITY) {
             let p = 2 * rng.below((d / 2) as u32) as usize;
-            let phi = std::f64::consts::TAU * rng.next_f64();
+            let phi = angle(&mut rng);
             theta[p] = phi.cos();
             theta[p + 1] = phi.sin();
         } else if d == 2 {
-            let phi = std::f64::consts::TAU * rng.next_f64();
+            let phi = angle(&mut rng);
             theta[0] = phi.cos();
             theta[1] = phi.sin();
         } else {
-            let mut norm = 0.0;
-            while norm < 1e-12 {
-                norm = 0.0;
+            // Gaussian direction; retried (at most 4 times) in the astronomically
+            // unlikely case of a near-zero vector.
+            for _ in 0..4 {
+                let mut norm = 0.0;
                 for t in theta.iter_mut().take(d) {
-                    *t = rng.normal();
+                    let u1 = 1.0 - rng.next_f32() as f64;
+                    let u2 = rng.next_f32() as f64;
+                    *t = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
                     norm += *t * *t;
                 }
+                if norm > 1e-12 {
+                    let inv = 1.0 / norm.sqrt();
+                    theta.iter_mut().take(d).for_each(|t| *t *= inv);
+                    break;
+                }
+                theta = [0.0; MAX_DIMS];
+                theta[0] = 1.0;
             }
-            let inv = 1.0 / norm.sqrt();
-            theta.iter_mut().take(d).for_each(|t| *t *= inv);
         }
         let mut shift = [0.0; MAX_DIMS];
         for s in shift.iter_mut().take(d) {
-            *s = rng.next_f64();
+            *s = rng.next_f32() as f64;
         }
         let cx = rng.below(self.tile.width as u32);
         let cy = rng.below(self.tile.height as u32);
         let ct = rng.below(self.tile.frames as u32);
-        // Level uniform in (0, max weight]: the class is every tap at least that heavy.
-        let z = (1.0 - rng.next_f64()) * self.max_weight;
-        let len = self.weights.partition_point(|&w| w >= z) as u32;
-        Slice {
-            theta,
-            shift,
-            cx,
-            cy,
-            ct,
-            len,
-        }
+        let level = rng.next_u32();
+        let len = self.thresholds.partition_point(|&q| q > level) as u32;
+        Slice { theta, shift, cx, cy, ct, len }
     }
+}
+
+/// The key of a run's slice stream, from its seed key.
+pub fn slice_key(seed_key: u32) -> u32 {
+    derive(seed_key, 0x51ce)
 }
