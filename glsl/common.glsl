@@ -1,10 +1,15 @@
-// Shared by every fsot compute pass: the counter-based random generator (mirrors
-// src/rng.rs bit for bit) and small helpers. Binding layouts live beside it here
-// so the Rust side (src/gpu/) has one place to mirror.
+// Shared by every fsot compute pass: the counter-based random generator and the
+// slice drawing (mirrors src/rng.rs and src/slice.rs), exact 1-D targets for
+// d <= 2 in closed form, sortable float keys, and the push-constant blocks
+// (mirrored by #[repr(C)] structs in src/gpu/layout.rs).
 #ifndef FSOT_COMMON_GLSL
 #define FSOT_COMMON_GLSL
 
-// 32-bit integer finaliser (lowbias32 constants); identical to rng::mix32.
+#define FSOT_MAX_DIMS 8
+#define FSOT_TAU 6.28318530717958647692
+
+// ---- random numbers (src/rng.rs) ----
+
 uint fsot_mix32(uint x) {
     x ^= x >> 16;
     x *= 0x7feb352du;
@@ -14,14 +19,191 @@ uint fsot_mix32(uint x) {
     return x;
 }
 
-// Counter-based draw: key and counter hashed together; identical to rng::hash2.
 uint fsot_hash2(uint key, uint counter) {
     return fsot_mix32(key ^ fsot_mix32(counter + 0x9e3779b9u));
 }
 
-// Uniform float in [0, 1) from the top 24 bits; identical to rng::unit_f32.
+uint fsot_derive(uint key, uint label) {
+    return fsot_mix32((key * 0x2c1b3c6du) ^ fsot_mix32(label ^ 0x85ebca6bu));
+}
+
 float fsot_unit(uint bits) {
     return float(bits >> 8) * (1.0 / 16777216.0);
+}
+
+struct FsotStream { uint key; uint counter; };
+
+uint fsot_next(inout FsotStream s) {
+    uint v = fsot_hash2(s.key, s.counter);
+    s.counter += 1u;
+    return v;
+}
+
+uint fsot_below(inout FsotStream s, uint n) {
+    uint hi, lo;
+    umulExtended(fsot_next(s), n, hi, lo);
+    return hi;
+}
+
+// ---- push constants ----
+
+// One iteration of the transport pass (src/gpu/layout.rs: TransportPush).
+struct TransportPush {
+    uint slice_key;   // rng::derive(seed key, 0x51ce)
+    uint iteration;
+    uint width;
+    uint height;
+    uint frames;
+    uint spp;
+    uint dims;
+    uint taps;        // entries in the kernel table
+    uint slices;      // slices this iteration
+    uint cost_slot;   // where this iteration's objective goes
+    uint large_capacity; // elements the large-class buffers hold
+    uint pad;
+};
+
+// The update pass (src/gpu/layout.rs: UpdatePush).
+struct UpdatePush {
+    uint values;
+    uint rule;        // 0 momentum, 1 Adam
+    uint step_t;      // 1-based step number
+    float scale;      // schedule factor
+    float inv_hits;   // 1 / expected hits per value
+    float p0;         // momentum: step;  Adam: lr
+    float p1;         // momentum: beta;  Adam: beta1
+    float p2;         // Adam: beta2
+    float p3;         // Adam: eps
+    float bias1;      // Adam: 1 - beta1^t
+    float bias2;      // Adam: 1 - beta2^t
+    uint pad;
+};
+
+// ---- slices (src/slice.rs) ----
+
+#define FSOT_AXIS_BITS 858993459u   // 0.2 * 2^32
+#define FSOT_PAIR_BITS 1717986918u  // 0.4 * 2^32
+
+struct FsotSlice {
+    float theta[FSOT_MAX_DIMS];
+    float shift[FSOT_MAX_DIMS];
+    uint cx, cy, ct;
+    uint level;
+};
+
+FsotSlice fsot_draw_slice(uint slice_key, uint iteration, uint index, uint dims, uint w, uint h, uint t) {
+    FsotSlice s;
+    FsotStream rng;
+    rng.key = fsot_hash2(fsot_derive(slice_key, iteration), index);
+    rng.counter = 0u;
+    for (uint k = 0u; k < FSOT_MAX_DIMS; ++k) { s.theta[k] = 0.0; s.shift[k] = 0.0; }
+    uint pick = fsot_next(rng);
+    if (dims == 1u) {
+        s.theta[0] = 1.0;
+    } else if (pick < FSOT_AXIS_BITS) {
+        s.theta[fsot_below(rng, dims)] = 1.0;
+    } else if (dims >= 3u && pick < FSOT_PAIR_BITS) {
+        uint p = 2u * fsot_below(rng, dims / 2u);
+        float phi = float(FSOT_TAU) * fsot_unit(fsot_next(rng));
+        s.theta[p] = cos(phi);
+        s.theta[p + 1u] = sin(phi);
+    } else if (dims == 2u) {
+        float phi = float(FSOT_TAU) * fsot_unit(fsot_next(rng));
+        s.theta[0] = cos(phi);
+        s.theta[1] = sin(phi);
+    } else {
+        for (uint attempt = 0u; attempt < 4u; ++attempt) {
+            float norm = 0.0;
+            for (uint k = 0u; k < dims; ++k) {
+                float u1 = 1.0 - fsot_unit(fsot_next(rng));
+                float u2 = fsot_unit(fsot_next(rng));
+                s.theta[k] = sqrt(-2.0 * log(u1)) * cos(float(FSOT_TAU) * u2);
+                norm += s.theta[k] * s.theta[k];
+            }
+            if (norm > 1e-12) {
+                float inv = inversesqrt(norm);
+                for (uint k = 0u; k < dims; ++k) { s.theta[k] *= inv; }
+                break;
+            }
+            for (uint k = 0u; k < FSOT_MAX_DIMS; ++k) { s.theta[k] = 0.0; }
+            s.theta[0] = 1.0;
+        }
+    }
+    for (uint k = 0u; k < dims; ++k) { s.shift[k] = fsot_unit(fsot_next(rng)); }
+    s.cx = fsot_below(rng, w);
+    s.cy = fsot_below(rng, h);
+    s.ct = fsot_below(rng, t);
+    s.level = fsot_next(rng);
+    return s;
+}
+
+// ---- exact targets for d <= 2 (src/targets.rs gives the general form) ----
+//
+// theta . U for U uniform on the square is a trapezoid on [0, a1 + a2]
+// (a1 <= a2 the sorted |theta_k|), shifted by the sum of negative components.
+// Its quantile function is sqrt(2 a1 a2 u) below u1 = a1 / (2 a2) and
+// a2 u + a1 / 2 above it (up to 1/2; symmetric beyond). The mean over a rank's
+// interval is computed piece by piece with cancellation-free differences, so
+// float32 keeps its relative precision.
+
+struct FsotTrapezoid { float a1; float a2; float offset; };
+
+FsotTrapezoid fsot_trapezoid(float t0, float t1) {
+    FsotTrapezoid z;
+    float x = abs(t0), y = abs(t1);
+    z.a1 = min(x, y);
+    z.a2 = max(x, y);
+    z.offset = min(t0, 0.0) + min(t1, 0.0);
+    return z;
+}
+
+// n * integral of the quantile over [y, x], 0 <= y < x <= 1/2, local coordinates.
+float fsot_quantile_mean(FsotTrapezoid z, float y, float x) {
+    float u1 = 0.5 * z.a1 / z.a2;
+    float total = 0.0;
+    if (y < u1) {
+        // (2/3) sqrt(2 a1 a2) (x'^1.5 - y^1.5), x' = min(x, u1), as
+        // (x' - y) (x' + sqrt(x' y) + y) / (sqrt x' + sqrt y).
+        float xp = min(x, u1);
+        float sx = sqrt(xp), sy = sqrt(y);
+        total += (2.0 / 3.0) * sqrt(2.0 * z.a1 * z.a2) * (xp - y) * (xp + sx * sy + y) / (sx + sy);
+    }
+    if (x > u1) {
+        float yp = max(y, u1);
+        total += (x - yp) * (0.5 * z.a2 * (x + yp) + 0.5 * z.a1);
+    }
+    return total / (x - y);
+}
+
+// Target of rank r of n on the real line.
+float fsot_rank_target(FsotTrapezoid z, uint r, uint n) {
+    float total = z.a1 + z.a2;
+    uint half_n = n / 2u;
+    if ((n & 1u) == 1u && r == half_n) {
+        return z.offset + 0.5 * total;
+    }
+    bool upper = r >= half_n + (n & 1u);
+    uint q = upper ? n - 1u - r : r;
+    float nf = float(n);
+    float m;
+    if (z.a1 <= 0.0) {
+        m = z.a2 * (float(q) + 0.5) / nf; // one axis: uniform on [0, a2]
+    } else {
+        m = fsot_quantile_mean(z, float(q) / nf, float(q + 1u) / nf);
+    }
+    return upper ? z.offset + total - m : z.offset + m;
+}
+
+// ---- sortable keys ----
+
+// Maps a float to a uint that sorts in the same order (-0.0 before +0.0).
+uint fsot_float_key(float f) {
+    uint b = floatBitsToUint(f);
+    return (b & 0x80000000u) != 0u ? ~b : (b | 0x80000000u);
+}
+
+float fsot_key_float(uint k) {
+    return uintBitsToFloat((k & 0x80000000u) != 0u ? (k & 0x7fffffffu) : ~k);
 }
 
 #endif

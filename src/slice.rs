@@ -41,7 +41,9 @@ pub fn level_thresholds(kernel: &Kernel) -> Vec<u32> {
             if i == 0 {
                 u32::MAX
             } else {
-                ((t.weight / max) * 4_294_967_296.0).floor().min(u32::MAX as f64) as u32
+                ((t.weight / max) * 4_294_967_296.0)
+                    .floor()
+                    .min(u32::MAX as f64) as u32
             }
         })
         .collect()
@@ -65,7 +67,11 @@ pub struct SliceSampler {
 
 impl SliceSampler {
     pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel) -> Self {
-        Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel) }
+        Self {
+            key: slice_key(seed_key),
+            tile,
+            thresholds: level_thresholds(kernel),
+        }
     }
 
     pub fn draw(&self, iteration: u32, index: u32) -> Slice {
@@ -116,7 +122,14 @@ impl SliceSampler {
         let ct = rng.below(self.tile.frames as u32);
         let level = rng.next_u32();
         let len = self.thresholds.partition_point(|&q| q > level) as u32;
-        Slice { theta, shift, cx, cy, ct, len }
+        Slice {
+            theta,
+            shift,
+            cx,
+            cy,
+            ct,
+            len,
+        }
     }
 }
 

@@ -5,7 +5,10 @@
 
 pub mod buffer;
 pub mod context;
+pub mod layout;
 pub mod pipeline;
+pub mod sort;
+pub mod timer;
 pub mod shaders {
     //! SPIR-V of every `glsl/*.comp`, compiled by `build.rs`.
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));

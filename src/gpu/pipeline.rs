@@ -15,7 +15,7 @@ pub struct ComputePipeline {
     set_layout: vk::DescriptorSetLayout,
     layout: vk::PipelineLayout,
     pool: vk::DescriptorPool,
-    set: vk::DescriptorSet,
+    sets: Vec<vk::DescriptorSet>,
     pub raw: vk::Pipeline,
     bindings: u32,
     push_bytes: u32,
@@ -32,6 +32,19 @@ impl ComputePipeline {
         push_bytes: u32,
         spec: &[u32],
     ) -> Result<Self> {
+        Self::with_sets(ctx, spirv, bindings, push_bytes, spec, 1)
+    }
+
+    /// As `new`, with `sets` descriptor sets, each bound to its own buffers and
+    /// chosen at dispatch (e.g. the ping-pong passes of a sort).
+    pub fn with_sets(
+        ctx: &Context,
+        spirv: &[u8],
+        bindings: u32,
+        push_bytes: u32,
+        spec: &[u32],
+        sets: u32,
+    ) -> Result<Self> {
         let device = ctx.device();
         let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
             .map_err(|e| Error::invalid(format!("bad SPIR-V: {e}")))?;
@@ -44,7 +57,7 @@ impl ComputePipeline {
             set_layout: vk::DescriptorSetLayout::null(),
             layout: vk::PipelineLayout::null(),
             pool: vk::DescriptorPool::null(),
-            set: vk::DescriptorSet::null(),
+            sets: Vec::new(),
             raw: vk::Pipeline::null(),
             bindings,
             push_bytes,
@@ -105,27 +118,37 @@ impl ComputePipeline {
                 })?[0];
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(bindings.max(1))];
+            .descriptor_count(bindings.max(1) * sets)];
         me.pool = check("vkCreateDescriptorPool", unsafe {
             device.create_descriptor_pool(
                 &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(1)
+                    .max_sets(sets)
                     .pool_sizes(&sizes),
                 None,
             )
         })?;
-        me.set = check("vkAllocateDescriptorSets", unsafe {
+        let layouts = vec![me.set_layout; sets as usize];
+        me.sets = check("vkAllocateDescriptorSets", unsafe {
             device.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default()
                     .descriptor_pool(me.pool)
-                    .set_layouts(&set_layouts),
+                    .set_layouts(&layouts),
             )
-        })?[0];
+        })?;
         Ok(me)
     }
 
-    /// Points bindings 0..n at `buffers` (whole buffers).
+    /// Points bindings 0..n of set 0 at `buffers` (whole buffers).
     pub fn bind(&self, buffers: &[&Buffer]) -> Result<()> {
+        self.bind_set(0, buffers)
+    }
+
+    /// Points bindings 0..n of descriptor set `set` at `buffers`.
+    pub fn bind_set(&self, set: usize, buffers: &[&Buffer]) -> Result<()> {
+        let target = *self
+            .sets
+            .get(set)
+            .ok_or_else(|| Error::invalid(format!("pipeline has no descriptor set {set}")))?;
         if buffers.len() as u32 != self.bindings {
             return Err(Error::invalid(format!(
                 "pipeline takes {} buffers, got {}",
@@ -147,7 +170,7 @@ impl ComputePipeline {
             .enumerate()
             .map(|(i, info)| {
                 vk::WriteDescriptorSet::default()
-                    .dst_set(self.set)
+                    .dst_set(target)
                     .dst_binding(i as u32)
                     .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                     .buffer_info(info)
@@ -159,6 +182,11 @@ impl ComputePipeline {
 
     /// Records a dispatch of `groups` workgroups with push constants `push`.
     pub fn dispatch(&self, cmd: vk::CommandBuffer, groups: [u32; 3], push: &[u8]) {
+        self.dispatch_set(cmd, 0, groups, push)
+    }
+
+    /// Records a dispatch using descriptor set `set`.
+    pub fn dispatch_set(&self, cmd: vk::CommandBuffer, set: usize, groups: [u32; 3], push: &[u8]) {
         let device = self.ctx.device();
         unsafe {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
@@ -167,7 +195,7 @@ impl ComputePipeline {
                 vk::PipelineBindPoint::COMPUTE,
                 self.layout,
                 0,
-                &[self.set],
+                &[self.sets[set]],
                 &[],
             );
             if self.push_bytes > 0 {

@@ -1,0 +1,24 @@
+#version 450
+// Radix pass 1 of 3: per-block digit counts.
+#include "radix_common.glsl"
+
+layout(std430, set = 0, binding = 1) readonly buffer Keys { uint keys[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Hist { uint hist[]; };
+
+shared uint s_hist[256];
+
+void main() {
+    uint tid = gl_LocalInvocationID.x;
+    uint block = gl_WorkGroupID.x;
+    for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) { s_hist[d] = 0u; }
+    barrier();
+    uint base = block * block_size();
+    for (uint it = 0u; it < ITEMS && base < count; ++it) {
+        uint i = base + it * gl_WorkGroupSize.x + tid;
+        if (i < count) {
+            atomicAdd(s_hist[(keys[i] >> pc.shift) & 255u], 1u);
+        }
+    }
+    barrier();
+    for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) { hist[d * pc.blocks + block] = s_hist[d]; }
+}

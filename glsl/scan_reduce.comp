@@ -1,0 +1,20 @@
+#version 450
+// Scan level 1: each workgroup sums its chunk of the histogram.
+#include "scan_common.glsl"
+
+layout(std430, set = 0, binding = 1) readonly buffer Data { uint data[]; };
+layout(std430, set = 0, binding = 2) writeonly buffer Partials { uint partials[]; };
+
+void main() {
+    uint tid = gl_LocalInvocationID.x;
+    uint n = 256u * pc.blocks;
+    uint base = gl_WorkGroupID.x * block_size() + tid * ITEMS;
+    uint sum = 0u;
+    for (uint it = 0u; it < ITEMS; ++it) {
+        uint i = base + it;
+        if (i < n) { sum += data[i]; }
+    }
+    uint total;
+    workgroup_exclusive(sum, total);
+    if (tid == 0u) { partials[gl_WorkGroupID.x] = total; }
+}

@@ -1,0 +1,279 @@
+//! Global LSD radix sort of 32-bit keys with 32-bit payloads on the GPU.
+//!
+//! 8 bits per pass; each pass is histogram -> three-level exclusive scan ->
+//! stable scatter (`glsl/radix_*.comp`, `glsl/scan_*.comp`): reduce-then-scan, so
+//! no workgroup ever waits on another (correct on lavapipe, which does not
+//! guarantee forward progress between workgroups). Equal keys keep their input
+//! order (stable), so a sort by several keys is a sequence of sorts, least
+//! significant first. The element count is read from a buffer at run time.
+
+use ash::vk;
+
+use super::buffer::{Buffer, Location};
+use super::context::Context;
+use super::layout::{Pod, RadixPush};
+use super::pipeline::{barrier, copy, submit_and_wait, ComputePipeline};
+use super::shaders;
+use crate::error::{Error, Result};
+
+/// Elements per block (workgroup x items per invocation).
+pub const BLOCK: u32 = 2048;
+
+/// Launch shape chosen from the device's limits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SortShape {
+    pub workgroup: u32,
+    pub items: u32,
+    pub subgroups: u32,
+}
+
+impl SortShape {
+    /// The largest workgroup (256 or 128) whose per-subgroup counters fit in
+    /// shared memory; the subgroup size is the device's, never assumed.
+    pub fn for_device(ctx: &Context) -> Result<Self> {
+        let info = ctx.info();
+        let sub = info.subgroup_size.max(1);
+        for wg in [256u32, 128, 64] {
+            let subgroups = wg.div_ceil(sub);
+            let shared = subgroups * 256 * 4 + 2 * 256 * 4;
+            if wg <= info.max_workgroup_invocations
+                && shared <= info.max_shared_memory
+                && BLOCK / wg <= 32
+            {
+                return Ok(Self {
+                    workgroup: wg,
+                    items: BLOCK / wg,
+                    subgroups,
+                });
+            }
+        }
+        Err(Error::VulkanUnavailable(format!(
+            "the radix sort does not fit this device's limits (subgroup {sub}, shared memory {} bytes)",
+            info.max_shared_memory
+        )))
+    }
+}
+
+pub struct RadixSort {
+    pub capacity: u32,
+    shape: SortShape,
+    blocks: u32,
+    /// Element count (first u32), host-writable, unless an external one is bound.
+    pub info: Option<Buffer>,
+    /// Ping-pong key and payload buffers; input and result are in index 0.
+    pub keys: [Buffer; 2],
+    pub vals: [Buffer; 2],
+    // Owned here, used through the descriptor sets.
+    _hist: Buffer,
+    _partials: Buffer,
+    histogram: ComputePipeline,
+    scan_reduce: ComputePipeline,
+    scan_partials: ComputePipeline,
+    scan_apply: ComputePipeline,
+    scatter: ComputePipeline,
+    ctx: Context,
+}
+
+impl RadixSort {
+    /// Largest capacity: the scan's two levels cover 2048 x 2048 histogram entries.
+    pub fn max_capacity(ctx: &Context) -> u32 {
+        let by_scan = (BLOCK as u64 * BLOCK as u64 / 256) * BLOCK as u64;
+        let by_binding = ctx.info().max_storage_buffer_range / 4;
+        by_scan.min(by_binding).min(u32::MAX as u64) as u32
+    }
+
+    /// A sort for up to `capacity` pairs. `count`: a buffer whose first u32 the
+    /// GPU sets to the element count; None: an own host-written one (`set_count`).
+    pub fn new(ctx: &Context, capacity: u32, count: Option<&Buffer>) -> Result<Self> {
+        let max = Self::max_capacity(ctx);
+        if capacity > max {
+            return Err(Error::invalid(format!(
+                "cannot sort {capacity} pairs on {}: at most {max} (binding or scan limit)",
+                ctx.info().name
+            )));
+        }
+        let capacity = capacity.max(1);
+        let shape = SortShape::for_device(ctx)?;
+        let blocks = capacity.div_ceil(BLOCK);
+        let chunks = (256 * blocks).div_ceil(BLOCK);
+        let bytes = capacity as u64 * 4;
+        let own_info = match count {
+            Some(_) => None,
+            None => Some(Buffer::new(ctx, 16, Location::Upload, "sort-count")?),
+        };
+        let keys = [
+            Buffer::new(ctx, bytes, Location::Device, "sort-keys-0")?,
+            Buffer::new(ctx, bytes, Location::Device, "sort-keys-1")?,
+        ];
+        let vals = [
+            Buffer::new(ctx, bytes, Location::Device, "sort-vals-0")?,
+            Buffer::new(ctx, bytes, Location::Device, "sort-vals-1")?,
+        ];
+        let hist = Buffer::new(ctx, 256 * blocks as u64 * 4, Location::Device, "sort-hist")?;
+        let partials = Buffer::new(ctx, chunks as u64 * 4, Location::Device, "sort-partials")?;
+        let spec = [shape.workgroup, shape.items, shape.subgroups];
+        let push = std::mem::size_of::<RadixPush>() as u32;
+        let histogram =
+            ComputePipeline::with_sets(ctx, shaders::RADIX_HISTOGRAM, 3, push, &spec, 2)?;
+        let scan_reduce = ComputePipeline::new(ctx, shaders::SCAN_REDUCE, 3, push, &spec)?;
+        let scan_partials = ComputePipeline::new(ctx, shaders::SCAN_PARTIALS, 2, push, &spec)?;
+        let scan_apply = ComputePipeline::new(ctx, shaders::SCAN_APPLY, 3, push, &spec)?;
+        let scatter = ComputePipeline::with_sets(ctx, shaders::RADIX_SCATTER, 6, push, &spec, 2)?;
+        let info_buf: &Buffer = match (count, &own_info) {
+            (Some(c), _) => c,
+            (None, Some(o)) => o,
+            (None, None) => unreachable!("own count buffer made above"),
+        };
+        for s in 0..2 {
+            histogram.bind_set(s, &[info_buf, &keys[s], &hist])?;
+            scatter.bind_set(
+                s,
+                &[
+                    info_buf,
+                    &keys[s],
+                    &vals[s],
+                    &keys[1 - s],
+                    &vals[1 - s],
+                    &hist,
+                ],
+            )?;
+        }
+        scan_reduce.bind(&[info_buf, &hist, &partials])?;
+        scan_partials.bind(&[info_buf, &partials])?;
+        scan_apply.bind(&[info_buf, &hist, &partials])?;
+        Ok(Self {
+            capacity,
+            shape,
+            blocks,
+            info: own_info,
+            keys,
+            vals,
+            _hist: hist,
+            _partials: partials,
+            histogram,
+            scan_reduce,
+            scan_partials,
+            scan_apply,
+            scatter,
+            ctx: ctx.clone(),
+        })
+    }
+
+    pub fn shape(&self) -> SortShape {
+        self.shape
+    }
+
+    /// Sets the element count in the sort's own count buffer.
+    pub fn set_count(&mut self, n: u32) -> Result<()> {
+        if n > self.capacity {
+            return Err(Error::invalid(format!(
+                "{n} pairs exceed the sort's capacity {}",
+                self.capacity
+            )));
+        }
+        let info = self
+            .info
+            .as_mut()
+            .ok_or_else(|| Error::invalid("this sort reads its count from another buffer"))?;
+        info.write(&n.to_ne_bytes())
+    }
+
+    /// Records a sort of `keys[0]`/`vals[0]` by their low `bits` bits (1 to 32);
+    /// the result is in `keys[0]`/`vals[0]`. Barriers included before and after.
+    /// `known`: the element count when the host knows it (smaller dispatches);
+    /// None: the count is only in the count buffer, the dispatch covers capacity.
+    pub fn record(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>) {
+        let passes = bits.clamp(1, 32).div_ceil(8);
+        let blocks = match known {
+            Some(n) => n.div_ceil(BLOCK).clamp(1, self.blocks),
+            None => self.blocks,
+        };
+        let chunks = (256 * blocks).div_ceil(BLOCK);
+        barrier(&self.ctx, cmd);
+        for pass in 0..passes {
+            let src = (pass % 2) as usize;
+            let push = RadixPush {
+                shift: 8 * pass,
+                blocks,
+                chunks,
+                pad: 0,
+            };
+            let p = push.bytes();
+            self.histogram.dispatch_set(cmd, src, [blocks, 1, 1], p);
+            barrier(&self.ctx, cmd);
+            self.scan_reduce.dispatch(cmd, [chunks, 1, 1], p);
+            barrier(&self.ctx, cmd);
+            self.scan_partials.dispatch(cmd, [1, 1, 1], p);
+            barrier(&self.ctx, cmd);
+            self.scan_apply.dispatch(cmd, [chunks, 1, 1], p);
+            barrier(&self.ctx, cmd);
+            self.scatter.dispatch_set(cmd, src, [blocks, 1, 1], p);
+            barrier(&self.ctx, cmd);
+        }
+        if passes % 2 == 1 {
+            copy(&self.ctx, cmd, &self.keys[1], &self.keys[0]);
+            copy(&self.ctx, cmd, &self.vals[1], &self.vals[0]);
+            barrier(&self.ctx, cmd);
+        }
+    }
+
+    /// Uploads pairs, sorts them by all 32 bits, reads them back (tests, bench).
+    pub fn sort_pairs(&mut self, keys: &[u32], vals: &[u32]) -> Result<(Vec<u32>, Vec<u32>)> {
+        assert_eq!(keys.len(), vals.len());
+        let n = keys.len() as u32;
+        self.set_count(n)?;
+        if n == 0 {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let bytes = n as u64 * 4;
+        let mut up_k = Buffer::new(&self.ctx, bytes, Location::Upload, "sort-upload-keys")?;
+        let mut up_v = Buffer::new(&self.ctx, bytes, Location::Upload, "sort-upload-vals")?;
+        up_k.write(as_bytes(keys))?;
+        up_v.write(as_bytes(vals))?;
+        let down_k = Buffer::new(&self.ctx, bytes, Location::Readback, "sort-readback-keys")?;
+        let down_v = Buffer::new(&self.ctx, bytes, Location::Readback, "sort-readback-vals")?;
+        submit_and_wait(&self.ctx, |cmd| {
+            copy_range(&self.ctx, cmd, &up_k, &self.keys[0], bytes);
+            copy_range(&self.ctx, cmd, &up_v, &self.vals[0], bytes);
+            self.record(cmd, 32, Some(n));
+            copy_range(&self.ctx, cmd, &self.keys[0], &down_k, bytes);
+            copy_range(&self.ctx, cmd, &self.vals[0], &down_v, bytes);
+            barrier(&self.ctx, cmd);
+        })?;
+        Ok((from_bytes(down_k.read()?), from_bytes(down_v.read()?)))
+    }
+}
+
+/// Copies the first `bytes` bytes of `src` into `dst`.
+pub fn copy_range(ctx: &Context, cmd: vk::CommandBuffer, src: &Buffer, dst: &Buffer, bytes: u64) {
+    let region = [vk::BufferCopy::default().size(bytes)];
+    unsafe { ctx.device().cmd_copy_buffer(cmd, src.raw, dst.raw, &region) };
+}
+
+pub fn as_bytes<T: Copy>(v: &[T]) -> &[u8] {
+    unsafe { std::slice::from_raw_parts(v.as_ptr() as *const u8, std::mem::size_of_val(v)) }
+}
+
+pub fn from_bytes<T: Copy + Default>(b: &[u8]) -> Vec<T> {
+    let n = b.len() / std::mem::size_of::<T>();
+    let mut out = vec![T::default(); n];
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            b.as_ptr(),
+            out.as_mut_ptr() as *mut u8,
+            n * std::mem::size_of::<T>(),
+        )
+    };
+    out
+}
+
+/// The key order the GPU uses for floats (`fsot_float_key` in common.glsl):
+/// -0.0 sorts just before +0.0; NaNs sort beyond the infinities by sign.
+pub fn float_key(f: f32) -> u32 {
+    let b = f.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}

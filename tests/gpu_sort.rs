@@ -1,0 +1,124 @@
+//! The GPU radix sort against the CPU's stable sort: random keys, duplicates,
+//! signed zeros, extremes, and awkward sizes. Equal keys keep their input order.
+
+mod common;
+
+use fsot::gpu::sort::{float_key, RadixSort};
+use fsot::rng::{derive, Stream};
+
+fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
+    let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
+    pairs.sort_by_key(|p| p.0); // stable
+    pairs.into_iter().unzip()
+}
+
+fn check(sort: &mut RadixSort, keys: Vec<u32>, what: &str) {
+    let vals: Vec<u32> = (0..keys.len() as u32).collect();
+    let (gk, gv) = sort.sort_pairs(&keys, &vals).unwrap();
+    let (ck, cv) = cpu_sort(&keys, &vals);
+    assert_eq!(gk.len(), ck.len(), "{what}");
+    if let Some(i) = (0..ck.len()).find(|&i| gk[i] != ck[i] || gv[i] != cv[i]) {
+        panic!(
+            "{what} (n = {}): first difference at {i}: gpu ({}, {}) cpu ({}, {})",
+            keys.len(),
+            gk[i],
+            gv[i],
+            ck[i],
+            cv[i]
+        );
+    }
+}
+
+#[test]
+fn sorts_like_the_cpu_at_awkward_sizes() {
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut sort = RadixSort::new(&ctx, (1 << 22) + 1, None).unwrap();
+    let mut rng = Stream::new(derive(5, 5));
+    let mut sizes = vec![
+        0usize, 1, 2, 3, 7, 255, 256, 257, 2047, 2048, 2049, 4095, 65537,
+    ];
+    for k in [12u32, 16, 20, 22] {
+        sizes.push((1 << k) - 1);
+        sizes.push((1 << k) + 1);
+    }
+    sizes.retain(|&n| n <= (1 << 22) + 1);
+    for n in sizes {
+        let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+        check(&mut sort, keys, "random keys");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut sort = RadixSort::new(&ctx, 100_000, None).unwrap();
+    let mut rng = Stream::new(derive(6, 6));
+    // Heavy duplicates: 5 distinct keys.
+    let dup: Vec<u32> = (0..100_000)
+        .map(|_| [0, 7, 0x8000_0000, u32::MAX, 12345][rng.below(5) as usize])
+        .collect();
+    check(&mut sort, dup, "duplicates");
+    // All equal.
+    check(&mut sort, vec![42; 5000], "all equal");
+    // Already sorted and reversed.
+    check(&mut sort, (0..70_000).collect(), "sorted");
+    check(&mut sort, (0..70_000).rev().collect(), "reversed");
+    // Float keys: signed zeros, extremes, infinities, subnormals.
+    let floats = [
+        0.0f32,
+        -0.0,
+        1.0,
+        -1.0,
+        f32::MAX,
+        f32::MIN,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        1e-45,
+        -1e-45,
+        0.5,
+        -0.5,
+    ];
+    let mut keys = Vec::new();
+    for i in 0..3000 {
+        keys.push(float_key(floats[i % floats.len()]));
+    }
+    check(&mut sort, keys.clone(), "float keys");
+    let vals: Vec<u32> = (0..keys.len() as u32).collect();
+    let (sorted, _) = sort.sort_pairs(&keys, &vals).unwrap();
+    // Decoded, the keys come out in float order, -0.0 before +0.0.
+    let decoded: Vec<f32> = sorted
+        .iter()
+        .map(|&k| {
+            f32::from_bits(if k & 0x8000_0000 != 0 {
+                k & 0x7fff_ffff
+            } else {
+                !k
+            })
+        })
+        .collect();
+    assert!(decoded.windows(2).all(|w| w[0] <= w[1]));
+    let first_pos_zero = decoded
+        .iter()
+        .position(|v| *v == 0.0 && v.is_sign_positive())
+        .unwrap();
+    assert!(decoded[first_pos_zero - 1].is_sign_negative());
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn refuses_more_pairs_than_it_can_hold() {
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut sort = RadixSort::new(&ctx, 1000, None).unwrap();
+    assert!(sort.set_count(1001).is_err());
+    assert!(RadixSort::new(&ctx, u32::MAX, None).is_err());
+    common::assert_no_validation_messages(&ctx);
+}
