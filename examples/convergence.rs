@@ -15,8 +15,7 @@ use fsot::score::{score, SCORE_SLICES};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let kernel = args.get(1).map(String::as_str).unwrap_or("taa");
-    let (w, h, t) =
-        Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
+    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
     let rule = match args.get(3).map(String::as_str).unwrap_or("momentum") {
         "adam" => StepRule::DEFAULT_ADAM,
         _ => StepRule::DEFAULT,

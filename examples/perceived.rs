@@ -21,14 +21,7 @@ fn main() {
             }
         };
         let taa = ratio_to_white(&mask, &TestSetup::default(), 4);
-        let plain = ratio_to_white(
-            &mask,
-            &TestSetup {
-                taa_alpha: None,
-                ..TestSetup::default()
-            },
-            4,
-        );
+        let plain = ratio_to_white(&mask, &TestSetup { taa_alpha: None, ..TestSetup::default() }, 4);
         println!("{path},{},{taa:.4},{plain:.4}", mask.tile.describe());
     }
 }

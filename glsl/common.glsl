@@ -81,6 +81,27 @@ struct UpdatePush {
 
 // ---- slices (src/slice.rs) ----
 
+// cos and sin of an angle given in turns (u in [0, 1)), to float32 rounding on
+// every device (hardware sin/cos may be off by 1e-6): exact quadrant reduction,
+// then Taylor polynomials on |z| <= pi/4. Mirrors slice::turn_cos_sin.
+vec2 fsot_turn_cos_sin(float u) {
+    float x = 4.0 * u;
+    float q = floor(x);
+    float z = (x - q - 0.5) * 1.57079632679489662; // angle minus pi/4, |z| <= pi/4
+    float z2 = z * z;
+    float s = z * (1.0 + z2 * (-1.0 / 6.0 + z2 * (1.0 / 120.0 + z2 * (-1.0 / 5040.0 + z2 * (1.0 / 362880.0 + z2 * (-1.0 / 39916800.0 + z2 * (1.0 / 6227020800.0)))))));
+    float c = 1.0 + z2 * (-0.5 + z2 * (1.0 / 24.0 + z2 * (-1.0 / 720.0 + z2 * (1.0 / 40320.0 + z2 * (-1.0 / 3628800.0 + z2 * (1.0 / 479001600.0))))));
+    float h = 0.70710678118654752;
+    // angle within the quadrant is pi/4 + z
+    float cq = h * (c - s);
+    float sq = h * (c + s);
+    uint qi = uint(q) & 3u;
+    if (qi == 0u) return vec2(cq, sq);
+    if (qi == 1u) return vec2(-sq, cq);
+    if (qi == 2u) return vec2(-cq, -sq);
+    return vec2(sq, -cq);
+}
+
 #define FSOT_AXIS_BITS 858993459u   // 0.2 * 2^32
 #define FSOT_PAIR_BITS 1717986918u  // 0.4 * 2^32
 
@@ -104,13 +125,13 @@ FsotSlice fsot_draw_slice(uint slice_key, uint iteration, uint index, uint dims,
         s.theta[fsot_below(rng, dims)] = 1.0;
     } else if (dims >= 3u && pick < FSOT_PAIR_BITS) {
         uint p = 2u * fsot_below(rng, dims / 2u);
-        float phi = float(FSOT_TAU) * fsot_unit(fsot_next(rng));
-        s.theta[p] = cos(phi);
-        s.theta[p + 1u] = sin(phi);
+        vec2 cs = fsot_turn_cos_sin(fsot_unit(fsot_next(rng)));
+        s.theta[p] = cs.x;
+        s.theta[p + 1u] = cs.y;
     } else if (dims == 2u) {
-        float phi = float(FSOT_TAU) * fsot_unit(fsot_next(rng));
-        s.theta[0] = cos(phi);
-        s.theta[1] = sin(phi);
+        vec2 cs = fsot_turn_cos_sin(fsot_unit(fsot_next(rng)));
+        s.theta[0] = cs.x;
+        s.theta[1] = cs.y;
     } else {
         for (uint attempt = 0u; attempt < 4u; ++attempt) {
             float norm = 0.0;

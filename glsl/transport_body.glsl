@@ -7,8 +7,14 @@
 // accumulators, deterministic) and transport_float.comp (float atomics).
 #include "common.glsl"
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 
 layout(local_size_x_id = 0) in;
+// Slices handled one after another by each workgroup (amortises launch costs on
+// CPU implementations), and whether the workgroup is exactly one subgroup (then a
+// subgroup barrier synchronises it, which CPU implementations make nearly free).
+layout(constant_id = 1) const uint SLICES_PER_GROUP = 1u;
+layout(constant_id = 2) const bool ONE_SUBGROUP = false;
 #define FSOT_LOCAL_MAX 2048u
 
 layout(std430, set = 0, binding = 0) readonly buffer Samples { float samples[]; };
@@ -20,11 +26,23 @@ layout(std430, set = 0, binding = 2) buffer Acc { int64_t acc[]; };
 #endif
 layout(std430, set = 0, binding = 3) buffer Costs { int64_t costs[]; }; // per slot: squared (2^32 fixed), count
 layout(std430, set = 0, binding = 4) buffer LargeMeta { uint large_count; uint large_segments; uint large_overflow; uint large_pad; uvec4 segments[]; };
+// Large classes, element e: sort key and payload (the radix sort's input), point,
+// projection, and the segment (its first element) it belongs to.
 layout(std430, set = 0, binding = 5) writeonly buffer LargeKeys { uint large_keys[]; };
-layout(std430, set = 0, binding = 6) writeonly buffer LargePoints { uint large_points[]; };
-layout(std430, set = 0, binding = 7) writeonly buffer LargeSeg { uint large_seg[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer LargeVals { uint large_vals[]; };
+layout(std430, set = 0, binding = 7) writeonly buffer LargePoints { uint large_points[]; };
+layout(std430, set = 0, binding = 8) writeonly buffer LargeProj { float large_proj[]; };
+layout(std430, set = 0, binding = 9) writeonly buffer LargeSeg { uint large_seg[]; };
 
 layout(push_constant) uniform Push { TransportPush pc; };
+
+void sync() {
+    if (ONE_SUBGROUP) {
+        subgroupBarrier();
+    } else {
+        barrier();
+    }
+}
 
 shared float s_key[FSOT_LOCAL_MAX];
 shared uint s_val[FSOT_LOCAL_MAX];
@@ -58,13 +76,9 @@ bool before(float ka, uint va, float kb, uint vb) {
     return ka < kb || (ka == kb && va < vb);
 }
 
-void main() {
-    uint slice = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+void process_slice(uint slice) {
     uint tid = gl_LocalInvocationID.x;
     uint wg = gl_WorkGroupSize.x;
-    if (slice >= pc.slices) {
-        return;
-    }
     if (tid == 0u) {
         FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
         for (uint k = 0u; k < FSOT_MAX_DIMS; ++k) { s_theta[k] = s.theta[k]; s_shift[k] = s.shift[k]; }
@@ -89,7 +103,7 @@ void main() {
             }
         }
     }
-    barrier();
+    sync();
     uint n = s_n;
     if (n < 2u) {
         return;
@@ -99,41 +113,47 @@ void main() {
         if (off >= 0) {
             for (uint i = tid; i < n; i += wg) {
                 uint point = class_point(i);
-                large_keys[uint(off) + i] = fsot_float_key(project(point));
-                large_points[uint(off) + i] = point;
-                large_seg[uint(off) + i] = uint(off);
+                uint e = uint(off) + i;
+                float proj = project(point);
+                large_keys[e] = fsot_float_key(proj);
+                large_vals[e] = e;
+                large_points[e] = point;
+                large_proj[e] = proj;
+                large_seg[e] = uint(off);
             }
         }
         return;
     }
-    uint p2 = 2u;
-    while (p2 < n) { p2 <<= 1; }
-    for (uint i = tid; i < p2; i += wg) {
-        if (i < n) {
-            uint point = class_point(i);
-            s_key[i] = project(point);
-            s_val[i] = point;
-        } else {
-            s_key[i] = uintBitsToFloat(0x7f800000u); // +inf pads sort last
-            s_val[i] = 0xffffffffu;
+    {
+        uint p2 = 2u;
+        while (p2 < n) { p2 <<= 1; }
+        for (uint i = tid; i < p2; i += wg) {
+            if (i < n) {
+                uint point = class_point(i);
+                s_key[i] = project(point);
+                s_val[i] = point;
+            } else {
+                s_key[i] = uintBitsToFloat(0x7f800000u); // +inf pads sort last
+                s_val[i] = 0xffffffffu;
+            }
         }
-    }
-    barrier();
-    for (uint k = 2u; k <= p2; k <<= 1) {
-        for (uint j = k >> 1; j > 0u; j >>= 1) {
-            for (uint i = tid; i < p2; i += wg) {
-                uint l = i ^ j;
-                if (l > i) {
-                    bool ascending = (i & k) == 0u;
-                    float ka = s_key[i], kb = s_key[l];
-                    uint va = s_val[i], vb = s_val[l];
-                    if (before(kb, vb, ka, va) == ascending) {
-                        s_key[i] = kb; s_key[l] = ka;
-                        s_val[i] = vb; s_val[l] = va;
+        sync();
+        for (uint k = 2u; k <= p2; k <<= 1) {
+            for (uint j = k >> 1; j > 0u; j >>= 1) {
+                for (uint i = tid; i < p2; i += wg) {
+                    uint l = i ^ j;
+                    if (l > i) {
+                        bool ascending = (i & k) == 0u;
+                        float ka = s_key[i], kb = s_key[l];
+                        uint va = s_val[i], vb = s_val[l];
+                        if (before(kb, vb, ka, va) == ascending) {
+                            s_key[i] = kb; s_key[l] = ka;
+                            s_val[i] = vb; s_val[l] = va;
+                        }
                     }
                 }
+                sync();
             }
-            barrier();
         }
     }
     // Only d <= 2 reaches the GPU path (the host checks): two components.
@@ -155,13 +175,25 @@ void main() {
         }
     }
     s_part[tid] = local_cost;
-    barrier();
+    sync();
     for (uint stride = wg / 2u; stride > 0u; stride >>= 1) {
         if (tid < stride) { s_part[tid] += s_part[tid + stride]; }
-        barrier();
+        sync();
     }
     if (tid == 0u) {
         atomicAdd(costs[2u * pc.cost_slot], int64_t(round(s_part[0] * COST_SCALE)));
         atomicAdd(costs[2u * pc.cost_slot + 1u], int64_t(n));
+    }
+}
+
+void main() {
+    uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    for (uint k = 0u; k < SLICES_PER_GROUP; ++k) {
+        uint slice = group * SLICES_PER_GROUP + k;
+        if (slice >= pc.slices) {
+            return;
+        }
+        process_slice(slice);
+        sync(); // shared memory is reused by the next slice
     }
 }

@@ -25,9 +25,7 @@ pub struct Accumulator {
 
 impl Accumulator {
     pub fn new(len: usize) -> Self {
-        Self {
-            values: (0..len).map(|_| AtomicI64::new(0)).collect(),
-        }
+        Self { values: (0..len).map(|_| AtomicI64::new(0)).collect() }
     }
     #[inline]
     pub fn add(&self, index: usize, value: f64) {
@@ -91,12 +89,7 @@ pub fn iterate(
         let base = c * CHUNK;
         match vs {
             Some(vs) => {
-                for (i, ((x, m), v)) in xs
-                    .iter_mut()
-                    .zip(ms.iter_mut())
-                    .zip(vs.iter_mut())
-                    .enumerate()
-                {
+                for (i, ((x, m), v)) in xs.iter_mut().zip(ms.iter_mut()).zip(vs.iter_mut()).enumerate() {
                     let g = (acc.take(base + i) * inv_hits) as f32;
                     *x = step_value(rule, *x, g, scale, t, m, Some(v));
                 }

@@ -20,10 +20,7 @@ pub enum Error {
     },
     /// A Vulkan call failed; `call` names it.
     #[error("Vulkan: {call} failed: {result}")]
-    Vulkan {
-        call: &'static str,
-        result: ash::vk::Result,
-    },
+    Vulkan { call: &'static str, result: ash::vk::Result },
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
@@ -38,15 +35,9 @@ impl Error {
         Error::Invalid(msg.into())
     }
     pub fn bad_file(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
-        Error::BadFile {
-            path: path.into(),
-            reason: reason.into(),
-        }
+        Error::BadFile { path: path.into(), reason: reason.into() }
     }
     pub fn io(context: impl Into<String>, source: std::io::Error) -> Self {
-        Error::Io {
-            context: context.into(),
-            source,
-        }
+        Error::Io { context: context.into(), source }
     }
 }

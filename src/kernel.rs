@@ -51,17 +51,9 @@ pub const KERNEL_NAMES: [&str; 5] = ["spatial", "gaussian", "taa", "perceptual",
 
 impl KernelSpec {
     /// Builds a spec from a kernel name and its parameters, validating each.
-    pub fn from_name(
-        name: &str,
-        sigma: f64,
-        sigma_t: Option<f64>,
-        alpha: f64,
-        fps: f64,
-    ) -> Result<Self> {
+    pub fn from_name(name: &str, sigma: f64, sigma_t: Option<f64>, alpha: f64, fps: f64) -> Result<Self> {
         if !(sigma.is_finite() && sigma > 0.0 && sigma <= 64.0) {
-            return Err(Error::invalid(format!(
-                "sigma must be in (0, 64], got {sigma}"
-            )));
+            return Err(Error::invalid(format!("sigma must be in (0, 64], got {sigma}")));
         }
         let check_alpha = || -> Result<()> {
             if !(alpha.is_finite() && alpha > 0.0 && alpha <= 1.0) {
@@ -73,9 +65,7 @@ impl KernelSpec {
         };
         let check_fps = || -> Result<()> {
             if !(fps.is_finite() && (8.0..=1000.0).contains(&fps)) {
-                return Err(Error::invalid(format!(
-                    "fps must be in [8, 1000], got {fps}"
-                )));
+                return Err(Error::invalid(format!("fps must be in [8, 1000], got {fps}")));
             }
             Ok(())
         };
@@ -84,9 +74,7 @@ impl KernelSpec {
             "gaussian" => {
                 let sigma_t = sigma_t.unwrap_or(sigma);
                 if !(sigma_t.is_finite() && sigma_t > 0.0 && sigma_t <= 64.0) {
-                    return Err(Error::invalid(format!(
-                        "temporal sigma must be in (0, 64], got {sigma_t}"
-                    )));
+                    return Err(Error::invalid(format!("temporal sigma must be in (0, 64], got {sigma_t}")));
                 }
                 Temporal::Gaussian { sigma_t }
             }
@@ -110,11 +98,7 @@ impl KernelSpec {
                 )))
             }
         };
-        Ok(Self {
-            sigma,
-            temporal,
-            tolerance: DEFAULT_TOLERANCE,
-        })
+        Ok(Self { sigma, temporal, tolerance: DEFAULT_TOLERANCE })
     }
 
     pub fn name(&self) -> &'static str {
@@ -156,20 +140,10 @@ pub fn perceptual_taps(fps: f64) -> Vec<f64> {
     let total: f64 = sustained.iter().sum();
     let sustained: Vec<f64> = sustained.iter().map(|v| v / total).collect();
     let transient: Vec<f64> = (0..n)
-        .map(|k| {
-            if k + 1 < n {
-                0.062170507756932 * (sustained[k + 1] - sustained[k]) / dt
-            } else {
-                0.0
-            }
-        })
+        .map(|k| if k + 1 < n { 0.062170507756932 * (sustained[k + 1] - sustained[k]) / dt } else { 0.0 })
         .collect();
     let sum: f64 = sustained.iter().zip(&transient).map(|(s, t)| s + t).sum();
-    sustained
-        .iter()
-        .zip(&transient)
-        .map(|(s, t)| (s + t) / sum)
-        .collect()
+    sustained.iter().zip(&transient).map(|(s, t)| (s + t) / sum).collect()
 }
 
 /// A temporal response as weights over lags `first_lag, first_lag + 1, ...`, and
@@ -184,32 +158,16 @@ pub struct TemporalResponse {
 impl TemporalResponse {
     pub fn of(temporal: Temporal) -> Self {
         match temporal {
-            Temporal::Spatial => Self {
-                first_lag: 0,
-                taps: vec![1.0],
-                tail_ratio: 0.0,
-            },
+            Temporal::Spatial => Self { first_lag: 0, taps: vec![1.0], tail_ratio: 0.0 },
             Temporal::Gaussian { sigma_t } => {
                 let r = (sigma_t * (1.0f64 / 1e-6).ln().sqrt()).ceil() as i64;
-                let taps = (-r..=r)
-                    .map(|k| (-((k * k) as f64) / (sigma_t * sigma_t)).exp())
-                    .collect();
-                Self {
-                    first_lag: -r,
-                    taps,
-                    tail_ratio: 0.0,
-                }
+                let taps = (-r..=r).map(|k| (-((k * k) as f64) / (sigma_t * sigma_t)).exp()).collect();
+                Self { first_lag: -r, taps, tail_ratio: 0.0 }
             }
-            Temporal::Taa { alpha } => Self {
-                first_lag: 0,
-                taps: vec![alpha],
-                tail_ratio: 1.0 - alpha,
-            },
-            Temporal::Perceptual { fps } => Self {
-                first_lag: 0,
-                taps: perceptual_taps(fps),
-                tail_ratio: 0.0,
-            },
+            Temporal::Taa { alpha } => Self { first_lag: 0, taps: vec![alpha], tail_ratio: 1.0 - alpha },
+            Temporal::Perceptual { fps } => {
+                Self { first_lag: 0, taps: perceptual_taps(fps), tail_ratio: 0.0 }
+            }
             Temporal::PerceptualTaa { fps, alpha } => {
                 // (h * e)(k) = sum_m h(m) alpha (1 - alpha)^(k - m); past the last
                 // perceptual tap it decays by (1 - alpha) per frame.
@@ -218,11 +176,7 @@ impl TemporalResponse {
                 let taps = (0..h.len())
                     .map(|k| (0..=k).map(|m| h[m] * alpha * r.powi((k - m) as i32)).sum())
                     .collect();
-                Self {
-                    first_lag: 0,
-                    taps,
-                    tail_ratio: r,
-                }
+                Self { first_lag: 0, taps, tail_ratio: r }
             }
         }
     }
@@ -259,11 +213,7 @@ impl TemporalResponse {
             let cycle = 1.0 - rt;
             for m in 1..=t {
                 // lags last_lag + m + n*T, n >= 0: weight last * ratio^m * rt^n.
-                let w = if cycle > 0.0 {
-                    last * self.tail_ratio.powi(m as i32) / cycle
-                } else {
-                    0.0
-                };
+                let w = if cycle > 0.0 { last * self.tail_ratio.powi(m as i32) / cycle } else { 0.0 };
                 out[(last_lag + m).rem_euclid(t) as usize] += w;
             }
         }
@@ -342,17 +292,9 @@ impl Kernel {
             t.weight /= total;
         }
         // Decreasing weight; ties broken by position so the order is reproducible.
-        taps.sort_by(|a, b| {
-            b.weight
-                .total_cmp(&a.weight)
-                .then((a.dt, a.dy, a.dx).cmp(&(b.dt, b.dy, b.dx)))
-        });
+        taps.sort_by(|a, b| b.weight.total_cmp(&a.weight).then((a.dt, a.dy, a.dx).cmp(&(b.dt, b.dy, b.dx))));
         let positive: f64 = temporal.iter().sum();
-        Self {
-            spec,
-            taps,
-            dropped_negative: negative / positive,
-        }
+        Self { spec, taps, dropped_negative: negative / positive }
     }
 
     pub fn max_weight(&self) -> f64 {
@@ -382,8 +324,8 @@ mod tests {
     #[test]
     fn perceptual_taps_at_60_fps_match_the_published_values() {
         let expected = [
-            0.03956, 0.39841, 0.40469, 0.17788, 0.04191, -0.00678, -0.01701, -0.01501, -0.01069,
-            -0.00698, -0.00435, -0.00265, -0.00159, -0.00094, 0.00354,
+            0.03956, 0.39841, 0.40469, 0.17788, 0.04191, -0.00678, -0.01701, -0.01501, -0.01069, -0.00698,
+            -0.00435, -0.00265, -0.00159, -0.00094, 0.00354,
         ];
         let taps = perceptual_taps(60.0);
         assert_eq!(taps.len(), 15);
@@ -430,13 +372,7 @@ mod tests {
         let centre = k.taps[0];
         assert_eq!((centre.dx, centre.dy), (0, 0));
         // Neighbour at distance 1 and at (2, 1), against exp(-r^2 / sigma^2).
-        let find = |dx: u32, dy: u32| {
-            k.taps
-                .iter()
-                .find(|t| t.dx == dx && t.dy == dy)
-                .unwrap()
-                .weight
-        };
+        let find = |dx: u32, dy: u32| k.taps.iter().find(|t| t.dx == dx && t.dy == dy).unwrap().weight;
         assert!((find(1, 0) / centre.weight - (-1.0f64 / 4.41).exp()).abs() < 1e-12);
         assert!((find(2, 63) / centre.weight - (-5.0f64 / 4.41).exp()).abs() < 1e-12);
         // Mean class size is 1 / max weight: about pi sigma^2 pixels.
@@ -455,11 +391,7 @@ mod tests {
     fn negative_perceptual_taps_are_dropped_and_reported() {
         let spec = KernelSpec::from_name("perceptual", 2.1, None, 0.1, 60.0).unwrap();
         let k = Kernel::new(spec, &tile(16, 16, 30));
-        assert!(
-            k.dropped_negative > 0.05 && k.dropped_negative < 0.1,
-            "{}",
-            k.dropped_negative
-        );
+        assert!(k.dropped_negative > 0.05 && k.dropped_negative < 0.1, "{}", k.dropped_negative);
         assert!(k.taps.iter().all(|t| t.weight > 0.0));
         let spec = KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0).unwrap();
         assert_eq!(Kernel::new(spec, &tile(16, 16, 30)).dropped_negative, 0.0);

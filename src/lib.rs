@@ -1,6 +1,8 @@
 //! fsot: perceptually optimized spatio-temporal sample masks by filtered sliced
 //! optimal transport.
+pub mod bench;
 pub mod cpu;
+pub mod engine;
 pub mod error;
 pub mod eval;
 pub mod gpu;

@@ -11,7 +11,9 @@ use fsot::error::{Error, Result};
 use fsot::io::atomic::AtomicFile;
 use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
 use fsot::mask::Mask;
-use fsot::optimize::{Run, Settings};
+use fsot::engine::{BackendChoice, Engine, Started};
+use fsot::gpu::optimizer::GpuOptions;
+use fsot::optimize::Settings;
 use fsot::problem::Tile;
 use fsot::score::{score, SCORE_SLICES};
 
@@ -33,6 +35,31 @@ enum Command {
     /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
     /// slices, beside that of white noise of the same shape.
     Score(ScoreArgs),
+    /// Benchmarks that print figures.
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(subcommand)]
+    suite: BenchSuite,
+}
+
+#[derive(Subcommand)]
+enum BenchSuite {
+    /// Pairs per second of the Vulkan radix sort and of the CPU sort, same keys.
+    Sort {
+        /// Pairs to sort (32-bit keys, 32-bit payloads).
+        #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
+        n: u32,
+        /// Timed runs (median reported), after two warm-up runs.
+        #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
+        repeats: u32,
+        /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
+        /// the first discrete GPU].
+        #[arg(long)]
+        device: Option<String>,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -92,13 +119,7 @@ struct KernelArgs {
 
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
-        KernelSpec::from_name(
-            self.kernel.as_str(),
-            self.sigma,
-            self.sigma_t,
-            self.alpha,
-            self.fps,
-        )
+        KernelSpec::from_name(self.kernel.as_str(), self.sigma, self.sigma_t, self.alpha, self.fps)
     }
 }
 
@@ -129,6 +150,17 @@ struct OptimizeArgs {
     /// Where to run.
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else the
+    /// first discrete GPU].
+    #[arg(long)]
+    device: Option<String>,
+    /// Vulkan: accumulate in 64-bit fixed point, bit-identical run to run (the
+    /// CPU path always is).
+    #[arg(long)]
+    deterministic: bool,
+    /// Vulkan: print the time per pass (timestamp queries).
+    #[arg(long)]
+    profile: bool,
     /// Worker threads for the CPU path [default: every core].
     #[arg(long, allow_negative_numbers = true)]
     threads: Option<usize>,
@@ -159,6 +191,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Optimize(args) => optimize(args),
         Command::Score(args) => score_command(args),
+        Command::Bench(args) => bench_command(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -191,10 +224,7 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         (None, Some(m)) => (m.tile.width, m.tile.height, m.tile.frames),
         (None, None) => (64, 64, 16),
     };
-    let dims = args
-        .dims
-        .or(init.as_ref().map(|m| m.tile.dims))
-        .unwrap_or(2);
+    let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
     let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
     let tile = Tile::new(w, h, t, spp, dims)?;
     if args.iterations == 0 {
@@ -204,78 +234,89 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     let out = AtomicFile::create(&args.out)?;
     if let Some(dir) = &args.png {
         if dir.exists() && !dir.is_dir() {
-            return Err(Error::invalid(format!(
-                "--png {} exists and is not a folder",
-                dir.display()
-            )));
+            return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
         }
     }
-    match args.backend {
-        Backend::Cpu => {}
-        Backend::Auto => {
-            eprintln!("backend: cpu (the Vulkan optimizer is not available in this build yet)")
-        }
-        Backend::Vulkan => {
-            return Err(Error::VulkanUnavailable(
-                "the Vulkan optimizer is not available in this build yet; use --backend cpu".into(),
-            ))
-        }
-    }
+    let choice = match args.backend {
+        Backend::Auto => BackendChoice::Auto,
+        Backend::Cpu => BackendChoice::Cpu,
+        Backend::Vulkan => BackendChoice::Vulkan,
+    };
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = args.iterations;
     settings.slices = args.slices;
-    let mut run = Run::new(tile, settings, init.as_ref())?;
+    let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile };
+    let Started { mut engine, note } = Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
+    eprintln!("{note}");
     eprintln!(
-        "optimizing {} for kernel {}: {} iterations x {} slices, {} threads",
+        "optimizing {} for kernel {}: {} iterations x {} slices",
         tile.describe(),
         spec.describe(),
         args.iterations,
-        run.slices_per_iteration(),
-        rayon::current_num_threads()
+        engine.slices_per_iteration()
     );
-    let before = score(
-        &Mask {
-            tile,
-            samples: run.samples().to_vec(),
-            meta: vec![],
-        },
-        spec,
-        SCORE_SLICES,
-    );
+    let start_samples = match &init {
+        Some(m) => m.samples.clone(),
+        None => Mask::white(tile, args.seed).samples,
+    };
+    let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
     let bar = ProgressBar::new(args.iterations as u64);
     bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let start = Instant::now();
-    while !run.finished() {
-        let cost = run.step();
-        bar.inc(1);
-        if run.iteration() % 10 == 0 {
-            bar.set_message(format!("{cost:.3e}"));
+    while !engine.finished() {
+        let costs = engine.step()?;
+        bar.inc(costs.len() as u64);
+        if let Some(c) = costs.last() {
+            bar.set_message(format!("{c:.3e}"));
         }
     }
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    let mask = run.mask();
+    let mask = engine.mask()?;
     let after = score(&mask, spec, SCORE_SLICES);
     fsot::io::exr::write(&mask, out)?;
     if let Some(dir) = &args.png {
         let files = fsot::io::png::write(&mask, dir)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
+    let backend = if engine.is_gpu() { "vulkan" } else { "cpu" };
     println!(
-        "wrote {}: {}, kernel {}, {} iterations in {seconds:.1} s (cpu); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
+        "wrote {}: {}, kernel {}, {} iterations in {seconds:.1} s ({backend}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
         spec.describe(),
-        run.iteration(),
+        engine.iteration(),
         before.objective,
         after.objective,
         after.ratio()
     );
+    if let Engine::Gpu(run) = &engine {
+        if run.overflowed() > 0 {
+            eprintln!("warning: {} large classes did not fit their buffer and were skipped", run.overflowed());
+        }
+        if args.profile {
+            let p = &run.profile;
+            let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
+            println!(
+                "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
+                p.iterations,
+                per(p.transport_ns),
+                per(p.large_ns),
+                per(p.update_ns)
+            );
+        }
+        let messages = run.validation_messages();
+        if !messages.is_empty() {
+            eprintln!("{} validation messages:", messages.len());
+            for m in messages.iter().take(10) {
+                eprintln!("  {m}");
+            }
+            return Err(Error::invalid("the Vulkan validation layer reported errors"));
+        }
+    }
     Ok(())
 }
 
@@ -296,4 +337,25 @@ fn score_command(args: ScoreArgs) -> Result<()> {
         s.ratio()
     );
     Ok(())
+}
+
+fn bench_command(args: BenchArgs) -> Result<()> {
+    match args.suite {
+        BenchSuite::Sort { n, repeats, device } => {
+            let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
+            let ctx = fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
+            let b = fsot::bench::bench_sort(&ctx, n, repeats)?;
+            println!(
+                "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",
+                b.n,
+                b.gpu_seconds * 1e3,
+                b.gpu_pairs_per_second() * 1e-9,
+                b.device,
+                b.cpu_seconds * 1e3,
+                b.cpu_pairs_per_second() * 1e-9,
+                b.cpu_threads
+            );
+            Ok(())
+        }
+    }
 }

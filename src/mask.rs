@@ -20,10 +20,7 @@ impl Mask {
         Self {
             tile,
             samples,
-            meta: vec![
-                ("method".into(), "white".into()),
-                ("seed".into(), seed.to_string()),
-            ],
+            meta: vec![("method".into(), "white".into()), ("seed".into(), seed.to_string())],
         }
     }
 
@@ -34,10 +31,7 @@ impl Mask {
     }
 
     pub fn meta(&self, key: &str) -> Option<&str> {
-        self.meta
-            .iter()
-            .find(|(k, _)| k == key)
-            .map(|(_, v)| v.as_str())
+        self.meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
     pub fn set_meta(&mut self, key: &str, value: impl Into<String>) {

@@ -27,13 +27,7 @@ pub struct Settings {
 
 impl Settings {
     pub fn new(kernel: KernelSpec, seed: u64) -> Self {
-        Self {
-            kernel,
-            iterations: DEFAULT_ITERATIONS,
-            slices: None,
-            seed,
-            rule: StepRule::DEFAULT,
-        }
+        Self { kernel, iterations: DEFAULT_ITERATIONS, slices: None, seed, rule: StepRule::DEFAULT }
     }
 }
 
@@ -59,13 +53,7 @@ impl Run {
             return Err(Error::invalid("iterations must be at least 1"));
         }
         let kernel = Kernel::new(settings.kernel, &tile);
-        let mean_points = kernel.mean_class_len() * tile.spp as f64;
-        let slices = match settings.slices {
-            Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
-            Some(s) => s,
-            None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
-        };
-        let hits_per_value = slices as f64 * mean_points / tile.points() as f64;
+        let (slices, hits_per_value) = slices_and_hits(&tile, &kernel, &settings)?;
         let samples = match init {
             Some(mask) => {
                 if mask.tile != tile {
@@ -127,26 +115,38 @@ impl Run {
 
     /// The mask with its provenance.
     pub fn mask(&self) -> Mask {
-        let s = &self.settings;
-        let mut meta = vec![
-            ("method".to_string(), "fsot".to_string()),
-            ("kernel".to_string(), s.kernel.describe()),
-            ("seed".to_string(), s.seed.to_string()),
-            ("iterations".to_string(), self.iteration.to_string()),
-            ("slices".to_string(), self.slices.to_string()),
-            ("step".to_string(), format!("{:?}", s.rule)),
-            (
-                "fsot.version".to_string(),
-                env!("CARGO_PKG_VERSION").to_string(),
-            ),
-        ];
-        meta.sort();
-        Mask {
-            tile: self.tile,
-            samples: self.samples.clone(),
-            meta,
-        }
+        let mut mask =
+            run_mask(&self.tile, &self.settings, self.iteration, self.slices, self.samples.clone());
+        mask.set_meta("backend", "cpu");
+        mask
     }
+}
+
+/// Slices per iteration (the setting, or enough for DEFAULT_HITS class
+/// memberships per sample) and the resulting expected hits per sample.
+pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Result<(u32, f64)> {
+    let mean_points = kernel.mean_class_len() * tile.spp as f64;
+    let slices = match settings.slices {
+        Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
+        Some(s) => s,
+        None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
+    };
+    Ok((slices, slices as f64 * mean_points / tile.points() as f64))
+}
+
+/// A mask with the provenance of a run.
+pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples: Vec<f32>) -> Mask {
+    let mut meta = vec![
+        ("method".to_string(), "fsot".to_string()),
+        ("kernel".to_string(), s.kernel.describe()),
+        ("seed".to_string(), s.seed.to_string()),
+        ("iterations".to_string(), iterations.to_string()),
+        ("slices".to_string(), slices.to_string()),
+        ("step".to_string(), format!("{:?}", s.rule)),
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+    ];
+    meta.sort();
+    Mask { tile: *tile, samples, meta }
 }
 
 /// Runs to the end with no observer.

@@ -8,26 +8,13 @@ pub enum StepRule {
     /// Momentum on the mean displacement: m = beta m + (1 - beta) g; x += step m.
     Momentum { step: f32, beta: f32 },
     /// Adam with bias correction; `lr` is a distance per iteration.
-    Adam {
-        lr: f32,
-        beta1: f32,
-        beta2: f32,
-        eps: f32,
-    },
+    Adam { lr: f32, beta1: f32, beta2: f32, eps: f32 },
 }
 
 impl StepRule {
     /// The default rule (chosen by measurement, see BENCHMARKS.md).
-    pub const DEFAULT: StepRule = StepRule::Momentum {
-        step: 2.0,
-        beta: 0.8,
-    };
-    pub const DEFAULT_ADAM: StepRule = StepRule::Adam {
-        lr: 1e-2,
-        beta1: 0.9,
-        beta2: 0.99,
-        eps: 1e-8,
-    };
+    pub const DEFAULT: StepRule = StepRule::Momentum { step: 2.0, beta: 0.8 };
+    pub const DEFAULT_ADAM: StepRule = StepRule::Adam { lr: 1e-2, beta1: 0.9, beta2: 0.99, eps: 1e-8 };
 
     pub fn name(&self) -> &'static str {
         match self {
@@ -66,12 +53,7 @@ impl OptimizerState {
             StepRule::Adam { .. } => vec![0.0; values],
             StepRule::Momentum { .. } => Vec::new(),
         };
-        Self {
-            rule,
-            first: vec![0.0; values],
-            second,
-            steps: 0,
-        }
+        Self { rule, first: vec![0.0; values], second, steps: 0 }
     }
 }
 
@@ -103,12 +85,7 @@ pub fn step_value(
             *first = beta * *first + (1.0 - beta) * g;
             wrap01(x + step * scale * *first)
         }
-        StepRule::Adam {
-            lr,
-            beta1,
-            beta2,
-            eps,
-        } => {
+        StepRule::Adam { lr, beta1, beta2, eps } => {
             let v = second.expect("Adam keeps a second moment");
             *first = beta1 * *first + (1.0 - beta1) * g;
             *v = beta2 * *v + (1.0 - beta2) * g * g;
@@ -140,10 +117,7 @@ mod tests {
 
     #[test]
     fn momentum_converges_to_a_fixed_displacement() {
-        let rule = StepRule::Momentum {
-            step: 1.0,
-            beta: 0.5,
-        };
+        let rule = StepRule::Momentum { step: 1.0, beta: 0.5 };
         let (mut x, mut m) = (0.2f32, 0.0f32);
         // A constant pull of 0.1 towards 0.3 each step, recomputed from x.
         for t in 1..100 {

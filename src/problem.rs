@@ -25,29 +25,17 @@ pub struct Tile {
 
 impl Tile {
     /// Checks every parameter; the error says which one is wrong and why.
-    pub fn new(
-        width: usize,
-        height: usize,
-        frames: usize,
-        spp: usize,
-        dims: usize,
-    ) -> Result<Self> {
+    pub fn new(width: usize, height: usize, frames: usize, spp: usize, dims: usize) -> Result<Self> {
         for (name, v) in [("width", width), ("height", height), ("frames", frames)] {
             if v == 0 {
-                return Err(Error::invalid(format!(
-                    "tile {name} must be at least 1, got 0"
-                )));
+                return Err(Error::invalid(format!("tile {name} must be at least 1, got 0")));
             }
         }
         if dims == 0 || dims > MAX_DIMS {
-            return Err(Error::invalid(format!(
-                "dimensions per sample must be 1 to {MAX_DIMS}, got {dims}"
-            )));
+            return Err(Error::invalid(format!("dimensions per sample must be 1 to {MAX_DIMS}, got {dims}")));
         }
         if spp == 0 || spp > MAX_SPP {
-            return Err(Error::invalid(format!(
-                "samples per pixel must be 1 to {MAX_SPP}, got {spp}"
-            )));
+            return Err(Error::invalid(format!("samples per pixel must be 1 to {MAX_SPP}, got {spp}")));
         }
         let points = width
             .checked_mul(height)
@@ -60,23 +48,13 @@ impl Tile {
                 ))
             })?;
         let _ = points;
-        Ok(Self {
-            width,
-            height,
-            frames,
-            spp,
-            dims,
-        })
+        Ok(Self { width, height, frames, spp, dims })
     }
 
     /// Parses `WxHxT` (or `WxH`, meaning one frame).
     pub fn parse_size(text: &str) -> Result<(usize, usize, usize)> {
         let parts: Vec<&str> = text.split(['x', 'X']).collect();
-        let bad = || {
-            Error::invalid(format!(
-                "size must look like 64x64x16 (W x H x T), got {text:?}"
-            ))
-        };
+        let bad = || Error::invalid(format!("size must look like 64x64x16 (W x H x T), got {text:?}"));
         if parts.len() < 2 || parts.len() > 3 {
             return Err(bad());
         }
@@ -102,10 +80,7 @@ impl Tile {
         (t * self.height + y) * self.width + x
     }
     pub fn describe(&self) -> String {
-        format!(
-            "{}x{}x{}, {} spp, d = {}",
-            self.width, self.height, self.frames, self.spp, self.dims
-        )
+        format!("{}x{}x{}, {} spp, d = {}", self.width, self.height, self.frames, self.spp, self.dims)
     }
 }
 

@@ -113,10 +113,7 @@ mod tests {
             }
         }
         let expect = n as f64 / 16.0;
-        let chi2: f64 = buckets
-            .iter()
-            .map(|&c| (c as f64 - expect).powi(2) / expect)
-            .sum();
+        let chi2: f64 = buckets.iter().map(|&c| (c as f64 - expect).powi(2) / expect).sum();
         assert!(chi2 < 40.0, "chi2 {chi2}"); // 15 dof, p ~ 5e-4
         assert!(same < 3);
     }

@@ -17,10 +17,7 @@ const SCORE_SEED: u64 = 0x5c0e_5c0e;
 /// The fixed slices for a tile and kernel.
 pub fn score_slices(kernel: &Kernel, tile: &crate::problem::Tile, count: u32) -> Vec<Slice> {
     let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel);
-    (0..count)
-        .into_par_iter()
-        .map(|i| sampler.draw(u32::MAX, i))
-        .collect()
+    (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,18 +39,8 @@ pub fn score(mask: &Mask, spec: KernelSpec, count: u32) -> Score {
     let slices = score_slices(&kernel, &mask.tile, count);
     let own = objective(&mask.samples, &mask.tile, &kernel, &slices);
     let white = (0..4u64)
-        .map(|s| {
-            objective(
-                &Mask::white(mask.tile, 0xa11ce + s).samples,
-                &mask.tile,
-                &kernel,
-                &slices,
-            )
-        })
+        .map(|s| objective(&Mask::white(mask.tile, 0xa11ce + s).samples, &mask.tile, &kernel, &slices))
         .sum::<f64>()
         / 4.0;
-    Score {
-        objective: own,
-        white,
-    }
+    Score { objective: own, white }
 }

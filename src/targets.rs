@@ -51,11 +51,7 @@ impl ProjectedUniform {
         let mut breaks = Vec::with_capacity(1 << d);
         for mask in 0u32..(1 << d) {
             let b: f64 = (0..d).filter(|k| mask & (1 << k) != 0).map(|k| a[k]).sum();
-            let sign = if mask.count_ones() % 2 == 0 {
-                1.0
-            } else {
-                -1.0
-            };
+            let sign = if mask.count_ones() % 2 == 0 { 1.0 } else { -1.0 };
             breaks.push((b, sign));
         }
         breaks.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -92,11 +88,7 @@ impl ProjectedUniform {
             f += sign * xd1 * x;
             int += sign * xd1 * x * x;
         }
-        (
-            f * self.norm_f,
-            dens * self.norm_f * d as f64,
-            int * self.norm_i,
-        )
+        (f * self.norm_f, dens * self.norm_f * d as f64, int * self.norm_i)
     }
 
     /// CDF at `x` on the real line.
@@ -132,11 +124,7 @@ impl ProjectedUniform {
                 hi = s;
             }
             let newton = if dens > 0.0 { s - err / dens } else { f64::NAN };
-            s = if newton > lo && newton < hi {
-                newton
-            } else {
-                0.5 * (lo + hi)
-            };
+            s = if newton > lo && newton < hi { newton } else { 0.5 * (lo + hi) };
             if hi - lo <= 1e-15 * self.total {
                 break;
             }
@@ -166,11 +154,7 @@ impl ProjectedUniform {
             // q_(r+1) <= total / 2 because r + 1 <= n / 2.
             let u = (r + 1) as f64 / nf;
             let dens_guess = self.eval(q_prev.max(1e-300)).1;
-            let guess = if dens_guess > 0.0 {
-                q_prev + (1.0 / nf) / dens_guess
-            } else {
-                q_prev
-            };
+            let guess = if dens_guess > 0.0 { q_prev + (1.0 / nf) / dens_guess } else { q_prev };
             let q = self.local_quantile(u, guess);
             let g = self.partial_moment(q);
             *slot = self.offset + nf * (g - g_prev);
@@ -243,10 +227,7 @@ mod tests {
                 p.rank_targets(n, &mut out);
                 assert!(out.windows(2).all(|w| w[0] <= w[1]), "{theta:?} {n}");
                 let avg = out.iter().sum::<f64>() / n as f64;
-                assert!(
-                    (avg - mean).abs() < 1e-9,
-                    "{theta:?} n={n}: {avg} vs {mean}"
-                );
+                assert!((avg - mean).abs() < 1e-9, "{theta:?} n={n}: {avg} vs {mean}");
             }
         }
     }

@@ -75,9 +75,7 @@ pub fn transport_slice(
         scratch.order.push((project(&samples[i..i + d], slice), p));
     }
     // Ties (equal projections) ordered by point index: deterministic.
-    scratch
-        .order
-        .sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    scratch.order.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     scratch.targets.resize(n, 0.0);
     ProjectedUniform::new(&slice.theta[..d]).rank_targets(n, &mut scratch.targets);
     let mut squared = 0.0;

@@ -5,11 +5,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn fsot(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_fsot"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap()
+    Command::new(env!("CARGO_BIN_EXE_fsot")).args(args).current_dir(dir).output().unwrap()
 }
 
 fn stderr(o: &Output) -> String {
@@ -41,17 +37,9 @@ fn optimize_writes_exr_and_png_and_score_reads_it() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        out.contains("wrote m.exr") && out.contains("objective"),
-        "{out}"
-    );
+    assert!(out.contains("wrote m.exr") && out.contains("objective"), "{out}");
     assert!(dir.path().join("m.exr").is_file());
-    assert_eq!(
-        std::fs::read_dir(dir.path().join("slices"))
-            .unwrap()
-            .count(),
-        4
-    );
+    assert_eq!(std::fs::read_dir(dir.path().join("slices")).unwrap().count(), 4);
     let s = fsot(&["score", "m.exr", "--kernel", "taa"], dir.path());
     assert!(s.status.success(), "{}", stderr(&s));
     assert!(String::from_utf8_lossy(&s.stdout).contains("ratio"));
@@ -106,11 +94,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.
         let mut args = vec!["optimize"];
-        for (flag, value) in [
-            ("--size", "4x4x2"),
-            ("--iterations", "3"),
-            ("--out", "existing.exr"),
-        ] {
+        for (flag, value) in [("--size", "4x4x2"), ("--iterations", "3"), ("--out", "existing.exr")] {
             if !extra.contains(&flag) {
                 args.extend_from_slice(&[flag, value]);
             }
@@ -125,15 +109,8 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
             continue;
         }
         assert!(!o.status.success(), "{extra:?} should fail");
-        assert!(
-            err.contains(expect),
-            "{extra:?}: expected {expect:?} in {err:?}"
-        );
-        assert_eq!(
-            std::fs::read(dir.path().join("existing.exr")).unwrap(),
-            b"keep me",
-            "{extra:?}"
-        );
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{extra:?}");
     }
     let leftovers: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()

@@ -8,16 +8,7 @@ use fsot::problem::Tile;
 #[test]
 fn exr_round_trips_every_layout_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
-    for (spp, dims) in [
-        (1, 1),
-        (1, 2),
-        (1, 3),
-        (1, 4),
-        (1, 5),
-        (2, 2),
-        (3, 8),
-        (16, 1),
-    ] {
+    for (spp, dims) in [(1, 1), (1, 2), (1, 3), (1, 4), (1, 5), (2, 2), (3, 8), (16, 1)] {
         let tile = Tile::new(5, 3, 4, spp, dims).unwrap();
         let mut mask = Mask::white(tile, 99);
         mask.set_meta("kernel", "taa (sigma = 2.1, alpha = 0.1)");
@@ -26,11 +17,7 @@ fn exr_round_trips_every_layout_bit_for_bit() {
         exr::write(&mask, AtomicFile::create(&path).unwrap()).unwrap();
         let back = exr::read(&path).unwrap();
         assert_eq!(back.tile, tile);
-        assert!(back
-            .samples
-            .iter()
-            .zip(&mask.samples)
-            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(back.samples.iter().zip(&mask.samples).all(|(a, b)| a.to_bits() == b.to_bits()));
         assert_eq!(back.meta("kernel"), Some("taa (sigma = 2.1, alpha = 0.1)"));
         assert_eq!(back.meta("iterations"), Some("12"));
     }
@@ -41,25 +28,15 @@ fn exr_frames_are_parts_named_in_order_with_rgba_channels() {
     let tile = Tile::new(4, 4, 3, 1, 2).unwrap();
     let mask = Mask::white(tile, 1);
     let bytes = exr::encode(&mask).unwrap();
-    let meta =
-        ::exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(&bytes), false).unwrap();
-    let names: Vec<String> = meta
-        .headers
-        .iter()
-        .map(|h| h.own_attributes.layer_name.as_ref().unwrap().to_string())
-        .collect();
+    let meta = ::exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(&bytes), false).unwrap();
+    let names: Vec<String> =
+        meta.headers.iter().map(|h| h.own_attributes.layer_name.as_ref().unwrap().to_string()).collect();
     assert_eq!(names, ["frame0000", "frame0001", "frame0002"]);
     for h in &meta.headers {
         let channels: Vec<String> = h.channels.list.iter().map(|c| c.name.to_string()).collect();
         assert_eq!(channels, ["G", "R"]); // EXR stores channels sorted
-        assert_eq!(
-            h.channels.list[0].sample_type,
-            ::exr::meta::attribute::SampleType::F32
-        );
-        assert!(h
-            .own_attributes
-            .other
-            .contains_key(&::exr::meta::attribute::Text::from("fsot.seed")));
+        assert_eq!(h.channels.list[0].sample_type, ::exr::meta::attribute::SampleType::F32);
+        assert!(h.own_attributes.other.contains_key(&::exr::meta::attribute::Text::from("fsot.seed")));
     }
 }
 
@@ -70,8 +47,7 @@ fn png_slices_hold_16_bit_quantised_values() {
     let mask = Mask::white(tile, 4);
     let files = png_io::write(&mask, dir.path()).unwrap();
     assert_eq!(files, ["frame0000.png", "frame0001.png"]);
-    let decoder =
-        ::png::Decoder::new(std::fs::File::open(dir.path().join("frame0001.png")).unwrap());
+    let decoder = ::png::Decoder::new(std::fs::File::open(dir.path().join("frame0001.png")).unwrap());
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
@@ -85,10 +61,7 @@ fn png_slices_hold_16_bit_quantised_values() {
             let g = u16::from_be_bytes([buf[i + 2], buf[i + 3]]);
             let b = u16::from_be_bytes([buf[i + 4], buf[i + 5]]);
             let s = mask.sample(x, y, 1, 0);
-            assert_eq!(
-                (r, g, b),
-                (png_io::quantize(s[0]), png_io::quantize(s[1]), 0)
-            );
+            assert_eq!((r, g, b), (png_io::quantize(s[0]), png_io::quantize(s[1]), 0));
             assert!(((r as f32 + 0.5) / 65536.0 - s[0]).abs() <= 0.5 / 65536.0 + 1e-7);
         }
     }
@@ -112,28 +85,18 @@ fn reading_rejects_bad_masks_with_reasons() {
     let tile = Tile::new(4, 4, 2, 1, 2).unwrap();
     let good = exr::encode(&Mask::white(tile, 3)).unwrap();
 
-    let missing = exr::read(&dir.path().join("nope.exr"))
-        .unwrap_err()
-        .to_string();
+    let missing = exr::read(&dir.path().join("nope.exr")).unwrap_err().to_string();
     assert!(missing.contains("cannot read"), "{missing}");
     let garbage = exr::decode(b"this is not an exr file").unwrap_err();
     assert!(garbage.contains("not a readable EXR"), "{garbage}");
     let truncated = exr::decode(&good[..good.len() / 2]).unwrap_err();
     assert!(truncated.contains("not a readable EXR"), "{truncated}");
 
-    for (bad, what) in [
-        (f32::NAN, "NaN"),
-        (1.0, "1"),
-        (-0.25, "-0.25"),
-        (f32::INFINITY, "inf"),
-    ] {
+    for (bad, what) in [(f32::NAN, "NaN"), (1.0, "1"), (-0.25, "-0.25"), (f32::INFINITY, "inf")] {
         let mut mask = Mask::white(tile, 3);
         mask.samples[5] = bad;
         let err = exr::decode(&exr::encode(&mask).unwrap()).unwrap_err();
-        assert!(
-            err.contains("outside [0, 1)") && err.contains(what),
-            "{err}"
-        );
+        assert!(err.contains("outside [0, 1)") && err.contains(what), "{err}");
     }
 }
 
@@ -147,10 +110,6 @@ fn an_uncommitted_output_leaves_the_existing_file_untouched() {
         // dropped without commit, as when a run fails
     }
     assert_eq!(std::fs::read(&path).unwrap(), b"precious");
-    assert_eq!(
-        std::fs::read_dir(dir.path()).unwrap().count(),
-        1,
-        "no temporary file left behind"
-    );
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file left behind");
     assert!(AtomicFile::create(&dir.path().join("no/such/dir/m.exr")).is_err());
 }

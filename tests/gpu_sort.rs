@@ -36,9 +36,7 @@ fn sorts_like_the_cpu_at_awkward_sizes() {
     };
     let mut sort = RadixSort::new(&ctx, (1 << 22) + 1, None).unwrap();
     let mut rng = Stream::new(derive(5, 5));
-    let mut sizes = vec![
-        0usize, 1, 2, 3, 7, 255, 256, 257, 2047, 2048, 2049, 4095, 65537,
-    ];
+    let mut sizes = vec![0usize, 1, 2, 3, 7, 255, 256, 257, 2047, 2048, 2049, 4095, 65537];
     for k in [12u32, 16, 20, 22] {
         sizes.push((1 << k) - 1);
         sizes.push((1 << k) + 1);
@@ -59,9 +57,8 @@ fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
     let mut sort = RadixSort::new(&ctx, 100_000, None).unwrap();
     let mut rng = Stream::new(derive(6, 6));
     // Heavy duplicates: 5 distinct keys.
-    let dup: Vec<u32> = (0..100_000)
-        .map(|_| [0, 7, 0x8000_0000, u32::MAX, 12345][rng.below(5) as usize])
-        .collect();
+    let dup: Vec<u32> =
+        (0..100_000).map(|_| [0, 7, 0x8000_0000, u32::MAX, 12345][rng.below(5) as usize]).collect();
     check(&mut sort, dup, "duplicates");
     // All equal.
     check(&mut sort, vec![42; 5000], "all equal");
@@ -95,19 +92,10 @@ fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
     // Decoded, the keys come out in float order, -0.0 before +0.0.
     let decoded: Vec<f32> = sorted
         .iter()
-        .map(|&k| {
-            f32::from_bits(if k & 0x8000_0000 != 0 {
-                k & 0x7fff_ffff
-            } else {
-                !k
-            })
-        })
+        .map(|&k| f32::from_bits(if k & 0x8000_0000 != 0 { k & 0x7fff_ffff } else { !k }))
         .collect();
     assert!(decoded.windows(2).all(|w| w[0] <= w[1]));
-    let first_pos_zero = decoded
-        .iter()
-        .position(|v| *v == 0.0 && v.is_sign_positive())
-        .unwrap();
+    let first_pos_zero = decoded.iter().position(|v| *v == 0.0 && v.is_sign_positive()).unwrap();
     assert!(decoded[first_pos_zero - 1].is_sign_negative());
     common::assert_no_validation_messages(&ctx);
 }

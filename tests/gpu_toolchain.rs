@@ -14,10 +14,7 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         return;
     };
     let info = ctx.info().clone();
-    eprintln!(
-        "device: {} ({}), subgroup size {}",
-        info.name, info.driver, info.subgroup_size
-    );
+    eprintln!("device: {} ({}), subgroup size {}", info.name, info.driver, info.subgroup_size);
     assert!(info.subgroup_size >= 1);
 
     let count: u32 = 1000; // not a multiple of the workgroup size: tests the bound check
@@ -36,12 +33,8 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         barrier(&ctx, cmd);
     })
     .unwrap();
-    let got: Vec<u32> = readback
-        .read()
-        .unwrap()
-        .chunks_exact(4)
-        .map(|c| u32::from_ne_bytes(c.try_into().unwrap()))
-        .collect();
+    let got: Vec<u32> =
+        readback.read().unwrap().chunks_exact(4).map(|c| u32::from_ne_bytes(c.try_into().unwrap())).collect();
     for (i, &v) in got.iter().enumerate() {
         assert_eq!(v, hash2(key, i as u32), "value {i}");
     }
@@ -57,9 +50,7 @@ fn buffers_larger_than_a_binding_are_refused_with_a_clear_error() {
         return;
     };
     let limit = ctx.info().max_storage_buffer_range;
-    let err = Buffer::new(&ctx, limit + 4, Location::Device, "too-big")
-        .err()
-        .expect("must fail");
+    let err = Buffer::new(&ctx, limit + 4, Location::Device, "too-big").err().expect("must fail");
     assert!(err.to_string().contains("maxStorageBufferRange"), "{err}");
     common::assert_no_validation_messages(&ctx);
 }
@@ -71,9 +62,7 @@ fn the_validation_layer_is_live_and_its_messages_are_caught() {
     let Some(ctx) = common::gpu_context() else {
         return;
     };
-    let info = ash::vk::BufferCreateInfo::default()
-        .size(16)
-        .usage(ash::vk::BufferUsageFlags::empty());
+    let info = ash::vk::BufferCreateInfo::default().size(16).usage(ash::vk::BufferUsageFlags::empty());
     let made = unsafe { ctx.device().create_buffer(&info, None) };
     if let Ok(buffer) = made {
         unsafe { ctx.device().destroy_buffer(buffer, None) };

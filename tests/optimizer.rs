@@ -30,10 +30,7 @@ fn quick_setup(taa: bool) -> TestSetup {
 }
 
 fn mean_white_error(tile: Tile, setup: &TestSetup) -> f64 {
-    (0..3)
-        .map(|s| perceived_error(&Mask::white(tile, 500 + s), setup, 1))
-        .sum::<f64>()
-        / 3.0
+    (0..3).map(|s| perceived_error(&Mask::white(tile, 500 + s), setup, 1)).sum::<f64>() / 3.0
 }
 
 #[test]
@@ -41,12 +38,7 @@ fn an_optimized_mask_has_a_lower_objective_than_white_noise() {
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let mask = optimize(tile, settings("perceptual-taa", 150, 1), None).unwrap();
     let s = score(&mask, spec("perceptual-taa"), 4096);
-    assert!(
-        s.ratio() < 0.7,
-        "objective {} vs white {}",
-        s.objective,
-        s.white
-    );
+    assert!(s.ratio() < 0.7, "objective {} vs white {}", s.objective, s.white);
     assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
 }
 
@@ -55,50 +47,27 @@ fn under_taa_a_taa_mask_beats_a_spatial_mask_and_both_beat_white_noise() {
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
     let setup = quick_setup(true);
     let white = mean_white_error(tile, &setup);
-    let taa = perceived_error(
-        &optimize(tile, settings("taa", 200, 7), None).unwrap(),
-        &setup,
-        1,
-    ) / white;
-    let spatial = perceived_error(
-        &optimize(tile, settings("spatial", 200, 7), None).unwrap(),
-        &setup,
-        1,
-    ) / white;
-    eprintln!(
-        "perceived error under TAA, ratio to white noise: taa {taa:.3}, spatial {spatial:.3}"
-    );
+    let taa = perceived_error(&optimize(tile, settings("taa", 200, 7), None).unwrap(), &setup, 1) / white;
+    let spatial =
+        perceived_error(&optimize(tile, settings("spatial", 200, 7), None).unwrap(), &setup, 1) / white;
+    eprintln!("perceived error under TAA, ratio to white noise: taa {taa:.3}, spatial {spatial:.3}");
     assert!(taa <= 0.55, "taa mask {taa}");
     assert!(spatial < 1.0, "spatial mask {spatial}");
-    assert!(
-        taa < 0.8 * spatial,
-        "taa {taa} is not clearly better than spatial {spatial}"
-    );
+    assert!(taa < 0.8 * spatial, "taa {taa} is not clearly better than spatial {spatial}");
 }
 
 #[test]
 fn the_same_seed_gives_a_bit_identical_mask_whatever_the_thread_count() {
     let tile = Tile::new(12, 10, 6, 2, 3).unwrap();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| optimize(tile, settings("perceptual-taa", 30, 11), None).unwrap())
     };
     let one = run(1);
     let three = run(3);
     let five = run(5);
-    assert!(one
-        .samples
-        .iter()
-        .zip(&three.samples)
-        .all(|(a, b)| a.to_bits() == b.to_bits()));
-    assert!(one
-        .samples
-        .iter()
-        .zip(&five.samples)
-        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(one.samples.iter().zip(&three.samples).all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(one.samples.iter().zip(&five.samples).all(|(a, b)| a.to_bits() == b.to_bits()));
     // A different seed gives a different mask.
     let other = optimize(tile, settings("perceptual-taa", 30, 12), None).unwrap();
     assert_ne!(one.samples, other.samples);
@@ -115,16 +84,9 @@ fn every_kernel_dimension_and_sample_count_optimizes_below_white_noise() {
     ] {
         let tile = Tile::new(8, 8, 4, spp, dims).unwrap();
         let mask = optimize(tile, settings(kernel, 40, 3), None).unwrap();
-        assert!(mask
-            .samples
-            .iter()
-            .all(|v| v.is_finite() && (0.0..1.0).contains(v)));
+        assert!(mask.samples.iter().all(|v| v.is_finite() && (0.0..1.0).contains(v)));
         let s = score(&mask, spec(kernel), 2048);
-        assert!(
-            s.ratio() < 0.95,
-            "{kernel} spp {spp} d {dims}: ratio {}",
-            s.ratio()
-        );
+        assert!(s.ratio() < 0.95, "{kernel} spp {spp} d {dims}: ratio {}", s.ratio());
     }
 }
 

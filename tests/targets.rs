@@ -6,9 +6,7 @@ use fsot::targets::ProjectedUniform;
 /// Projects `count` uniform points of [0,1)^d on theta and sorts them.
 fn projected_points(theta: &[f64], count: usize, key: u32) -> Vec<f64> {
     let mut rng = Stream::new(key);
-    let mut p: Vec<f64> = (0..count)
-        .map(|_| theta.iter().map(|t| t * rng.next_f64()).sum())
-        .collect();
+    let mut p: Vec<f64> = (0..count).map(|_| theta.iter().map(|t| t * rng.next_f64()).sum()).collect();
     p.sort_by(|a, b| a.total_cmp(b));
     p
 }
@@ -65,11 +63,7 @@ fn cdf_matches_the_fraction_of_projected_points() {
         for q in [0.01, 0.1, 0.25, 0.5, 0.75, 0.9, 0.99] {
             let x = lo + q * (hi - lo);
             let brute = points.partition_point(|&p| p <= x) as f64 / count as f64;
-            assert!(
-                (dist.cdf(x) - brute).abs() < 3e-3,
-                "theta {theta:?} at {x}: {} vs {brute}",
-                dist.cdf(x)
-            );
+            assert!((dist.cdf(x) - brute).abs() < 3e-3, "theta {theta:?} at {x}: {} vs {brute}", dist.cdf(x));
         }
     }
 }

@@ -43,9 +43,8 @@ impl Family {
         let ph = 1.7 * v;
         let (cx, cy) = (x - 0.4 * f, y + 0.25 * f);
         let angle = ph + TAU * (cx / 97.0 + cy / 131.0) + 0.8 * (TAU * (cx + cy) / 61.0 + v).sin();
-        let level = 0.5
-            * (TAU * (cx / 53.0 - cy / 71.0) + 2.3 * v).sin()
-            * (0.6 + 0.4 * (TAU * f / 90.0).cos());
+        let level =
+            0.5 * (TAU * (cx / 53.0 - cy / 71.0) + 2.3 * v).sin() * (0.6 + 0.4 * (TAU * f / 90.0).cos());
         Params { angle, level }
     }
 
@@ -106,10 +105,7 @@ impl Family {
 }
 
 fn ripple_frequencies(p: Params) -> (f64, f64) {
-    (
-        0.6 + 0.5 * p.angle.cos().abs(),
-        0.5 + 0.6 * p.angle.sin().abs(),
-    )
+    (0.6 + 0.5 * p.angle.cos().abs(), 0.5 + 0.6 * p.angle.sin().abs())
 }
 
 fn ramp_exponent(p: Params) -> f64 {
@@ -171,10 +167,7 @@ mod tests {
                 let exact = family.reference(p);
                 let k = if family.dims() == 1 { 1_000_000 } else { 1000 };
                 let brute = grid_mean(|u| family.eval(p, u), family.dims(), k);
-                assert!(
-                    (exact - brute).abs() < 3e-3,
-                    "{family:?} {exact} vs {brute}"
-                );
+                assert!((exact - brute).abs() < 3e-3, "{family:?} {exact} vs {brute}");
             }
         }
     }

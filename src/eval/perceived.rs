@@ -44,20 +44,8 @@ impl Default for TestSetup {
 }
 
 /// Mean squared perceived error of one render.
-fn render_error(
-    mask: &Mask,
-    family: Family,
-    variant: u32,
-    shift: [f64; 2],
-    setup: &TestSetup,
-) -> f64 {
-    let Tile {
-        width,
-        height,
-        frames: tf,
-        dims,
-        ..
-    } = mask.tile;
+fn render_error(mask: &Mask, family: Family, variant: u32, shift: [f64; 2], setup: &TestSetup) -> f64 {
+    let Tile { width, height, frames: tf, dims, .. } = mask.tile;
     let n = setup.image;
     let frames = setup.frames;
     // Per-frame error images, after TAA.
@@ -137,11 +125,7 @@ fn render_error(
 /// Perceived error of `mask` averaged over the integrand families that match its
 /// dimension and `setup.renders` renders each; `seed` picks the shifts.
 pub fn perceived_error(mask: &Mask, setup: &TestSetup, seed: u64) -> f64 {
-    let families: &[Family] = if mask.tile.dims >= 2 {
-        &FAMILIES_2D
-    } else {
-        &FAMILIES_1D
-    };
+    let families: &[Family] = if mask.tile.dims >= 2 { &FAMILIES_2D } else { &FAMILIES_1D };
     let mut rng = Stream::new(derive(seed_key(seed), 0xe7a1));
     let mut total = 0.0;
     let mut count = 0;

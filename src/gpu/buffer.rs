@@ -42,31 +42,25 @@ impl Buffer {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
-        let info = vk::BufferCreateInfo::default()
-            .size(size)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
-        let raw = check("vkCreateBuffer", unsafe {
-            device.create_buffer(&info, None)
-        })?;
+        let info =
+            vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let raw = check("vkCreateBuffer", unsafe { device.create_buffer(&info, None) })?;
         let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
         let memory_location = match location {
             Location::Device => MemoryLocation::GpuOnly,
             Location::Upload => MemoryLocation::CpuToGpu,
             Location::Readback => MemoryLocation::GpuToCpu,
         };
-        let allocation = ctx
-            .shared
-            .allocator
-            .lock()
-            .map_err(|_| Error::invalid("allocator lock poisoned"))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: memory_location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
+        let allocation =
+            ctx.shared.allocator.lock().map_err(|_| Error::invalid("allocator lock poisoned"))?.allocate(
+                &AllocationCreateDesc {
+                    name,
+                    requirements,
+                    location: memory_location,
+                    linear: true,
+                    allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+                },
+            );
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {
@@ -81,17 +75,9 @@ impl Buffer {
                 let _ = alloc.free(allocation);
             }
             unsafe { device.destroy_buffer(raw, None) };
-            return Err(Error::Vulkan {
-                call: "vkBindBufferMemory",
-                result,
-            });
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result });
         }
-        Ok(Self {
-            ctx: ctx.clone(),
-            raw,
-            allocation: Some(allocation),
-            size,
-        })
+        Ok(Self { ctx: ctx.clone(), raw, allocation: Some(allocation), size })
     }
 
     /// Copies `bytes` into a host-visible buffer.

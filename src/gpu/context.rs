@@ -36,6 +36,10 @@ pub struct DeviceInfo {
     pub max_shared_memory: u32,
     pub timestamp_period_ns: f32,
     pub float_atomic_add: bool,
+    /// shaderInt64 and shaderBufferInt64Atomics (fixed-point accumulators).
+    pub int64_atomics: bool,
+    /// Subgroup ballot operations in compute shaders (the radix sort needs them).
+    pub subgroup_ballot: bool,
 }
 
 /// Everything that owns Vulkan objects, dropped in the right order.
@@ -90,11 +94,9 @@ impl Context {
             let available = check("vkEnumerateInstanceLayerProperties", unsafe {
                 entry.enumerate_instance_layer_properties()
             })?;
-            let found = available.iter().any(|l| {
-                l.layer_name_as_c_str()
-                    .map(|n| n == VALIDATION_LAYER)
-                    .unwrap_or(false)
-            });
+            let found = available
+                .iter()
+                .any(|l| l.layer_name_as_c_str().map(|n| n == VALIDATION_LAYER).unwrap_or(false));
             if !found {
                 return Err(Error::VulkanUnavailable(
                     "validation asked for but VK_LAYER_KHRONOS_validation is not installed".into(),
@@ -103,16 +105,12 @@ impl Context {
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         }
-        let app = vk::ApplicationInfo::default()
-            .application_name(c"fsot")
-            .api_version(vk::API_VERSION_1_2);
+        let app = vk::ApplicationInfo::default().application_name(c"fsot").api_version(vk::API_VERSION_1_2);
         let create = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)
             .enabled_extension_names(&extensions);
-        let instance = check("vkCreateInstance", unsafe {
-            entry.create_instance(&create, None)
-        })?;
+        let instance = check("vkCreateInstance", unsafe { entry.create_instance(&create, None) })?;
         // From here on, a failure must destroy what was made: build the rest in a
         // helper and clean up the instance if it fails.
         let messages = Box::into_raw(Box::new(Mutex::new(Vec::new())));
@@ -177,7 +175,13 @@ impl Context {
         let mut float_atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomic_add(info.float_atomic_add);
         let mut extensions: Vec<*const i8> = Vec::new();
-        let mut create = vk::DeviceCreateInfo::default().queue_create_infos(&queues);
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(info.int64_atomics);
+        let mut features12 =
+            vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(info.int64_atomics);
+        let mut create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_features(&features)
+            .push_next(&mut features12);
         if info.float_atomic_add {
             extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
             create = create.push_next(&mut float_atomics);
@@ -187,10 +191,7 @@ impl Context {
             Ok(d) => d,
             Err(result) => {
                 destroy_debug(&debug);
-                return Err(Error::Vulkan {
-                    call: "vkCreateDevice",
-                    result,
-                });
+                return Err(Error::Vulkan { call: "vkCreateDevice", result });
             }
         };
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -235,10 +236,7 @@ impl Context {
 
     /// Validation messages collected so far (empty when validation is off).
     pub fn validation_messages(&self) -> Vec<String> {
-        unsafe { &*self.shared.messages }
-            .lock()
-            .map(|l| l.clone())
-            .unwrap_or_default()
+        unsafe { &*self.shared.messages }.lock().map(|l| l.clone()).unwrap_or_default()
     }
 }
 
@@ -258,24 +256,14 @@ impl Drop for Shared {
 }
 
 /// Devices in the order fsot prefers them, with a compute queue family each.
-fn pick_device(
-    instance: &ash::Instance,
-    options: &ContextOptions,
-) -> Result<(vk::PhysicalDevice, u32)> {
-    let devices = check("vkEnumeratePhysicalDevices", unsafe {
-        instance.enumerate_physical_devices()
-    })?;
+fn pick_device(instance: &ash::Instance, options: &ContextOptions) -> Result<(vk::PhysicalDevice, u32)> {
+    let devices = check("vkEnumeratePhysicalDevices", unsafe { instance.enumerate_physical_devices() })?;
     let mut candidates = Vec::new();
     for (index, &pd) in devices.iter().enumerate() {
         let props = unsafe { instance.get_physical_device_properties(pd) };
-        let name = props
-            .device_name_as_c_str()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let Some(family) = families
-            .iter()
-            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        let Some(family) = families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
         else {
             continue;
         };
@@ -288,14 +276,9 @@ fn pick_device(
         candidates.push((rank, index, name, pd, family as u32));
     }
     if candidates.is_empty() {
-        return Err(Error::VulkanUnavailable(
-            "no Vulkan device with a compute queue".into(),
-        ));
+        return Err(Error::VulkanUnavailable("no Vulkan device with a compute queue".into()));
     }
-    let wanted = options
-        .device
-        .clone()
-        .or_else(|| std::env::var("FSOT_DEVICE").ok());
+    let wanted = options.device.clone().or_else(|| std::env::var("FSOT_DEVICE").ok());
     if let Some(want) = wanted.filter(|w| !w.is_empty()) {
         let hit = candidates.iter().find(|c| {
             want.parse::<usize>().map(|i| i == c.1).unwrap_or(false)
@@ -305,11 +288,7 @@ fn pick_device(
             Some(c) => Ok((c.3, c.4)),
             None => Err(Error::VulkanUnavailable(format!(
                 "no device matches {want:?}; devices: {}",
-                candidates
-                    .iter()
-                    .map(|c| format!("{}: {}", c.1, c.2))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                candidates.iter().map(|c| format!("{}: {}", c.1, c.2)).collect::<Vec<_>>().join(", ")
             ))),
         };
     }
@@ -320,35 +299,28 @@ fn pick_device(
 fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceInfo {
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default()
-        .push_next(&mut subgroup)
-        .push_next(&mut driver);
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut driver);
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
     let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut plain2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
+    unsafe { instance.get_physical_device_features2(pd, &mut plain2) };
+    let int64_atomics =
+        plain2.features.shader_int64 == vk::TRUE && features12.shader_buffer_int64_atomics == vk::TRUE;
     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
-    let extensions =
-        unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has_atomic_ext = extensions.iter().any(|e| {
-        e.extension_name_as_c_str()
-            .map(|n| n == ash::ext::shader_atomic_float::NAME)
-            .unwrap_or(false)
+        e.extension_name_as_c_str().map(|n| n == ash::ext::shader_atomic_float::NAME).unwrap_or(false)
     });
     if has_atomic_ext {
         unsafe { instance.get_physical_device_features2(pd, &mut features2) };
     }
-    let name = props
-        .device_name_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let driver_name = driver
-        .driver_name_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let driver_info = driver
-        .driver_info_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_name =
+        driver.driver_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_info =
+        driver.driver_info_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     DeviceInfo {
         name,
         driver: format!("{driver_name} {driver_info}").trim().to_string(),
@@ -359,6 +331,9 @@ fn device_info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceInfo {
         max_shared_memory: props.limits.max_compute_shared_memory_size,
         timestamp_period_ns: props.limits.timestamp_period,
         float_atomic_add: has_atomic_ext && atomics.shader_buffer_float32_atomic_add == vk::TRUE,
+        int64_atomics,
+        subgroup_ballot: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT),
     }
 }
 

@@ -6,12 +6,7 @@
 pub trait Pod: Copy {
     fn bytes(&self) -> &[u8] {
         // Safe for the #[repr(C)] structs below: u32/f32 fields only, no padding.
-        unsafe {
-            std::slice::from_raw_parts(
-                self as *const Self as *const u8,
-                std::mem::size_of::<Self>(),
-            )
-        }
+        unsafe { std::slice::from_raw_parts(self as *const Self as *const u8, std::mem::size_of::<Self>()) }
     }
 }
 

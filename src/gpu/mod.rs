@@ -6,6 +6,7 @@
 pub mod buffer;
 pub mod context;
 pub mod layout;
+pub mod optimizer;
 pub mod pipeline;
 pub mod sort;
 pub mod timer;

@@ -25,13 +25,7 @@ impl ComputePipeline {
     /// `spirv`: the compiled pass; `bindings`: storage buffers it reads or writes;
     /// `push_bytes`: size of its push-constant block; `spec`: values of its
     /// specialization constants 0, 1, ...
-    pub fn new(
-        ctx: &Context,
-        spirv: &[u8],
-        bindings: u32,
-        push_bytes: u32,
-        spec: &[u32],
-    ) -> Result<Self> {
+    pub fn new(ctx: &Context, spirv: &[u8], bindings: u32, push_bytes: u32, spec: &[u32]) -> Result<Self> {
         Self::with_sets(ctx, spirv, bindings, push_bytes, spec, 1)
     }
 
@@ -87,52 +81,34 @@ impl ComputePipeline {
         if push_bytes > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        me.layout = check("vkCreatePipelineLayout", unsafe {
-            device.create_pipeline_layout(&layout_info, None)
-        })?;
+        me.layout =
+            check("vkCreatePipelineLayout", unsafe { device.create_pipeline_layout(&layout_info, None) })?;
         let entries: Vec<_> = (0..spec.len() as u32)
-            .map(|i| {
-                vk::SpecializationMapEntry::default()
-                    .constant_id(i)
-                    .offset(4 * i)
-                    .size(4)
-            })
+            .map(|i| vk::SpecializationMapEntry::default().constant_id(i).offset(4 * i).size(4))
             .collect();
         let data: Vec<u8> = spec.iter().flat_map(|v| v.to_ne_bytes()).collect();
-        let spec_info = vk::SpecializationInfo::default()
-            .map_entries(&entries)
-            .data(&data);
+        let spec_info = vk::SpecializationInfo::default().map_entries(&entries).data(&data);
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main")
             .specialization_info(&spec_info);
-        let info = vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(me.layout);
-        me.raw =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
-                .map_err(|(_, result)| Error::Vulkan {
-                    call: "vkCreateComputePipelines",
-                    result,
-                })?[0];
+        let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(me.layout);
+        me.raw = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
+            .map_err(|(_, result)| Error::Vulkan { call: "vkCreateComputePipelines", result })?[0];
         let sizes = [vk::DescriptorPoolSize::default()
             .ty(vk::DescriptorType::STORAGE_BUFFER)
             .descriptor_count(bindings.max(1) * sets)];
         me.pool = check("vkCreateDescriptorPool", unsafe {
             device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(sets)
-                    .pool_sizes(&sizes),
+                &vk::DescriptorPoolCreateInfo::default().max_sets(sets).pool_sizes(&sizes),
                 None,
             )
         })?;
         let layouts = vec![me.set_layout; sets as usize];
         me.sets = check("vkAllocateDescriptorSets", unsafe {
             device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(me.pool)
-                    .set_layouts(&layouts),
+                &vk::DescriptorSetAllocateInfo::default().descriptor_pool(me.pool).set_layouts(&layouts),
             )
         })?;
         Ok(me)
@@ -158,12 +134,7 @@ impl ComputePipeline {
         }
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|b| {
-                [vk::DescriptorBufferInfo::default()
-                    .buffer(b.raw)
-                    .offset(0)
-                    .range(vk::WHOLE_SIZE)]
-            })
+            .map(|b| [vk::DescriptorBufferInfo::default().buffer(b.raw).offset(0).range(vk::WHOLE_SIZE)])
             .collect();
         let writes: Vec<_> = infos
             .iter()
@@ -266,27 +237,19 @@ pub fn submit_and_wait(ctx: &Context, record: impl FnOnce(vk::CommandBuffer)) ->
         check("vkBeginCommandBuffer", unsafe {
             device.begin_command_buffer(
                 cmd,
-                &vk::CommandBufferBeginInfo::default()
-                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
             )
         })?;
         record(cmd);
-        check("vkEndCommandBuffer", unsafe {
-            device.end_command_buffer(cmd)
-        })?;
-        let fence = check("vkCreateFence", unsafe {
-            device.create_fence(&vk::FenceCreateInfo::default(), None)
-        })?;
+        check("vkEndCommandBuffer", unsafe { device.end_command_buffer(cmd) })?;
+        let fence =
+            check("vkCreateFence", unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) })?;
         let cmds = [cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        let waited = check("vkQueueSubmit", unsafe {
-            device.queue_submit(ctx.shared.queue, &submit, fence)
-        })
-        .and_then(|_| {
-            check("vkWaitForFences", unsafe {
-                device.wait_for_fences(&[fence], true, u64::MAX)
-            })
-        });
+        let waited = check("vkQueueSubmit", unsafe { device.queue_submit(ctx.shared.queue, &submit, fence) })
+            .and_then(|_| {
+                check("vkWaitForFences", unsafe { device.wait_for_fences(&[fence], true, u64::MAX) })
+            });
         unsafe { device.destroy_fence(fence, None) };
         waited
     })();

@@ -36,15 +36,8 @@ impl SortShape {
         for wg in [256u32, 128, 64] {
             let subgroups = wg.div_ceil(sub);
             let shared = subgroups * 256 * 4 + 2 * 256 * 4;
-            if wg <= info.max_workgroup_invocations
-                && shared <= info.max_shared_memory
-                && BLOCK / wg <= 32
-            {
-                return Ok(Self {
-                    workgroup: wg,
-                    items: BLOCK / wg,
-                    subgroups,
-                });
+            if wg <= info.max_workgroup_invocations && shared <= info.max_shared_memory && BLOCK / wg <= 32 {
+                return Ok(Self { workgroup: wg, items: BLOCK / wg, subgroups });
             }
         }
         Err(Error::VulkanUnavailable(format!(
@@ -113,8 +106,7 @@ impl RadixSort {
         let partials = Buffer::new(ctx, chunks as u64 * 4, Location::Device, "sort-partials")?;
         let spec = [shape.workgroup, shape.items, shape.subgroups];
         let push = std::mem::size_of::<RadixPush>() as u32;
-        let histogram =
-            ComputePipeline::with_sets(ctx, shaders::RADIX_HISTOGRAM, 3, push, &spec, 2)?;
+        let histogram = ComputePipeline::with_sets(ctx, shaders::RADIX_HISTOGRAM, 3, push, &spec, 2)?;
         let scan_reduce = ComputePipeline::new(ctx, shaders::SCAN_REDUCE, 3, push, &spec)?;
         let scan_partials = ComputePipeline::new(ctx, shaders::SCAN_PARTIALS, 2, push, &spec)?;
         let scan_apply = ComputePipeline::new(ctx, shaders::SCAN_APPLY, 3, push, &spec)?;
@@ -126,17 +118,7 @@ impl RadixSort {
         };
         for s in 0..2 {
             histogram.bind_set(s, &[info_buf, &keys[s], &hist])?;
-            scatter.bind_set(
-                s,
-                &[
-                    info_buf,
-                    &keys[s],
-                    &vals[s],
-                    &keys[1 - s],
-                    &vals[1 - s],
-                    &hist,
-                ],
-            )?;
+            scatter.bind_set(s, &[info_buf, &keys[s], &vals[s], &keys[1 - s], &vals[1 - s], &hist])?;
         }
         scan_reduce.bind(&[info_buf, &hist, &partials])?;
         scan_partials.bind(&[info_buf, &partials])?;
@@ -166,10 +148,7 @@ impl RadixSort {
     /// Sets the element count in the sort's own count buffer.
     pub fn set_count(&mut self, n: u32) -> Result<()> {
         if n > self.capacity {
-            return Err(Error::invalid(format!(
-                "{n} pairs exceed the sort's capacity {}",
-                self.capacity
-            )));
+            return Err(Error::invalid(format!("{n} pairs exceed the sort's capacity {}", self.capacity)));
         }
         let info = self
             .info
@@ -192,12 +171,7 @@ impl RadixSort {
         barrier(&self.ctx, cmd);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
-            let push = RadixPush {
-                shift: 8 * pass,
-                blocks,
-                chunks,
-                pad: 0,
-            };
+            let push = RadixPush { shift: 8 * pass, blocks, chunks, pad: 0 };
             let p = push.bytes();
             self.histogram.dispatch_set(cmd, src, [blocks, 1, 1], p);
             barrier(&self.ctx, cmd);
@@ -258,11 +232,7 @@ pub fn from_bytes<T: Copy + Default>(b: &[u8]) -> Vec<T> {
     let n = b.len() / std::mem::size_of::<T>();
     let mut out = vec![T::default(); n];
     unsafe {
-        std::ptr::copy_nonoverlapping(
-            b.as_ptr(),
-            out.as_mut_ptr() as *mut u8,
-            n * std::mem::size_of::<T>(),
-        )
+        std::ptr::copy_nonoverlapping(b.as_ptr(), out.as_mut_ptr() as *mut u8, n * std::mem::size_of::<T>())
     };
     out
 }

@@ -14,26 +14,14 @@ pub struct Timer {
 
 impl Timer {
     pub fn new(ctx: &Context, count: u32) -> Result<Self> {
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(count);
-        let pool = check("vkCreateQueryPool", unsafe {
-            ctx.device().create_query_pool(&info, None)
-        })?;
-        Ok(Self {
-            ctx: ctx.clone(),
-            pool,
-            count,
-        })
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(count);
+        let pool = check("vkCreateQueryPool", unsafe { ctx.device().create_query_pool(&info, None) })?;
+        Ok(Self { ctx: ctx.clone(), pool, count })
     }
 
     /// Resets every query; record before the first `stamp`.
     pub fn reset(&self, cmd: vk::CommandBuffer) {
-        unsafe {
-            self.ctx
-                .device()
-                .cmd_reset_query_pool(cmd, self.pool, 0, self.count)
-        };
+        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.count) };
     }
 
     /// Writes timestamp `index` once all earlier commands have finished.

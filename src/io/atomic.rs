@@ -20,36 +20,22 @@ pub struct AtomicFile {
 impl AtomicFile {
     pub fn create(target: &Path) -> Result<Self> {
         if target.is_dir() {
-            return Err(Error::invalid(format!(
-                "output {} is a directory",
-                target.display()
-            )));
+            return Err(Error::invalid(format!("output {} is a directory", target.display())));
         }
         let dir = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
         if !dir.is_dir() {
-            return Err(Error::invalid(format!(
-                "output folder {} does not exist",
-                dir.display()
-            )));
+            return Err(Error::invalid(format!("output folder {} does not exist", dir.display())));
         }
-        let name = target.file_name().ok_or_else(|| {
-            Error::invalid(format!("output {} has no file name", target.display()))
-        })?;
-        let temp = dir.join(format!(
-            ".{}.fsot-{}.tmp",
-            name.to_string_lossy(),
-            std::process::id()
-        ));
-        let file = File::create(&temp)
-            .map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
-        Ok(Self {
-            target: target.to_path_buf(),
-            temp,
-            file: Some(file),
-        })
+        let name = target
+            .file_name()
+            .ok_or_else(|| Error::invalid(format!("output {} has no file name", target.display())))?;
+        let temp = dir.join(format!(".{}.fsot-{}.tmp", name.to_string_lossy(), std::process::id()));
+        let file =
+            File::create(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
+        Ok(Self { target: target.to_path_buf(), temp, file: Some(file) })
     }
 
     pub fn target(&self) -> &Path {

@@ -40,19 +40,13 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
     let mut layers = Vec::with_capacity(tile.frames);
     let mut attributes: HashMap<Text, AttributeValue> = HashMap::new();
     for (k, v) in &mask.meta {
-        attributes.insert(
-            Text::from(format!("fsot.{k}").as_str()),
-            AttributeValue::Text(Text::from(v.as_str())),
-        );
+        attributes
+            .insert(Text::from(format!("fsot.{k}").as_str()), AttributeValue::Text(Text::from(v.as_str())));
     }
-    attributes.insert(
-        Text::from("fsot.spp"),
-        AttributeValue::Text(Text::from(tile.spp.to_string().as_str())),
-    );
-    attributes.insert(
-        Text::from("fsot.dims"),
-        AttributeValue::Text(Text::from(tile.dims.to_string().as_str())),
-    );
+    attributes
+        .insert(Text::from("fsot.spp"), AttributeValue::Text(Text::from(tile.spp.to_string().as_str())));
+    attributes
+        .insert(Text::from("fsot.dims"), AttributeValue::Text(Text::from(tile.dims.to_string().as_str())));
     for t in 0..tile.frames {
         let mut channels = SmallVec::new();
         for s in 0..tile.spp {
@@ -63,10 +57,7 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
                         data.push(mask.sample(x, y, t, s)[k]);
                     }
                 }
-                channels.push(AnyChannel::new(
-                    channel_name(&tile, s, k).as_str(),
-                    FlatSamples::F32(data),
-                ));
+                channels.push(AnyChannel::new(channel_name(&tile, s, k).as_str(), FlatSamples::F32(data)));
             }
         }
         let mut layer_attributes = LayerAttributes::named(format!("frame{t:04}").as_str());
@@ -78,15 +69,9 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
             AnyChannels::sort(channels),
         ));
     }
-    let image = Image::from_layers(
-        ImageAttributes::new(IntegerBounds::from_dimensions((w, h))),
-        layers,
-    );
+    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
     let mut bytes = Cursor::new(Vec::new());
-    image
-        .write()
-        .to_buffered(&mut bytes)
-        .map_err(|e| Error::invalid(format!("EXR encoding failed: {e}")))?;
+    image.write().to_buffered(&mut bytes).map_err(|e| Error::invalid(format!("EXR encoding failed: {e}")))?;
     Ok(bytes.into_inner())
 }
 
@@ -99,8 +84,7 @@ pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
 /// Reads and validates a mask: parts named frame0000.. in order, one size, a
 /// complete channel layout, every value finite and in [0, 1).
 pub fn read(path: &Path) -> Result<Mask> {
-    let bytes =
-        std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
     decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
 }
 
@@ -121,41 +105,22 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
     let size = layers[0].size;
     let (w, h) = (size.0, size.1);
     // Channel layout from the first frame.
-    let names: Vec<String> = layers[0]
-        .channel_data
-        .list
-        .iter()
-        .map(|c| c.name.to_string())
-        .collect();
+    let names: Vec<String> = layers[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
     let (spp, dims) = layout_of(&names)?;
     let tile = Tile::new(w, h, layers.len(), spp, dims).map_err(|e| e.to_string())?;
     let mut samples = vec![0.0f32; tile.values()];
     for (t, layer) in layers.iter().enumerate() {
         let expected = format!("frame{t:04}");
-        let name = layer
-            .attributes
-            .layer_name
-            .as_ref()
-            .map(|n| n.to_string())
-            .unwrap_or_default();
+        let name = layer.attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_default();
         if name != expected {
-            return Err(format!(
-                "part {t} is named {name:?}; expected {expected:?} (frames in order)"
-            ));
+            return Err(format!("part {t} is named {name:?}; expected {expected:?} (frames in order)"));
         }
         if layer.size != size {
-            return Err(format!(
-                "frame {t} is {}x{}, frame 0 is {w}x{h}",
-                layer.size.0, layer.size.1
-            ));
+            return Err(format!("frame {t} is {}x{}, frame 0 is {w}x{h}", layer.size.0, layer.size.1));
         }
         let list = &layer.channel_data.list;
         if list.len() != spp * dims {
-            return Err(format!(
-                "frame {t} has {} channels, frame 0 has {}",
-                list.len(),
-                spp * dims
-            ));
+            return Err(format!("frame {t} has {} channels, frame 0 has {}", list.len(), spp * dims));
         }
         for s in 0..spp {
             for k in 0..dims {
@@ -167,9 +132,7 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
                 let values: Vec<f32> = match &channel.sample_data {
                     FlatSamples::F32(v) => v.clone(),
                     FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-                    FlatSamples::U32(_) => {
-                        return Err(format!("channel {want} holds integers, not floats"))
-                    }
+                    FlatSamples::U32(_) => return Err(format!("channel {want} holds integers, not floats")),
                 };
                 if values.len() != w * h {
                     return Err(format!(
@@ -209,27 +172,17 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
         })
         .collect();
     meta.sort();
-    Ok(Mask {
-        tile,
-        samples,
-        meta,
-    })
+    Ok(Mask { tile, samples, meta })
 }
 
 /// (spp, dims) from a frame's channel names.
 fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
-    let rgba: Vec<usize> = names
-        .iter()
-        .filter_map(|n| RGBA.iter().position(|c| c == n))
-        .collect();
+    let rgba: Vec<usize> = names.iter().filter_map(|n| RGBA.iter().position(|c| c == n)).collect();
     if !names.is_empty() && rgba.len() == names.len() {
         let dims = names.len();
         for k in 0..dims {
             if !rgba.contains(&k) {
-                return Err(format!(
-                    "channels {names:?}: with {dims} channels expected {:?}",
-                    &RGBA[..dims]
-                ));
+                return Err(format!("channels {names:?}: with {dims} channels expected {:?}", &RGBA[..dims]));
             }
         }
         return Ok((1, dims));
@@ -241,16 +194,13 @@ fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
             .strip_prefix('s')
             .and_then(|r| r.split_once(".d"))
             .and_then(|(s, k)| Some((s.parse::<usize>().ok()?, k.parse::<usize>().ok()?)));
-        let (s, k) = parsed.ok_or_else(|| {
-            format!("channel {n:?} is neither R/G/B/A nor sSS.dK (sample SS, dimension K)")
-        })?;
+        let (s, k) = parsed
+            .ok_or_else(|| format!("channel {n:?} is neither R/G/B/A nor sSS.dK (sample SS, dimension K)"))?;
         spp = spp.max(s + 1);
         dims = dims.max(k + 1);
     }
     if spp * dims != names.len() {
-        return Err(format!(
-            "channels {names:?} do not cover {spp} samples x {dims} dimensions"
-        ));
+        return Err(format!("channels {names:?} do not cover {spp} samples x {dims} dimensions"));
     }
     Ok((spp, dims))
 }

@@ -19,8 +19,7 @@ pub fn quantize(v: f32) -> u16 {
 
 /// Writes the slices into `dir` (created if missing). Returns the file names.
 pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| Error::io(format!("cannot create {}", dir.display()), e))?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(format!("cannot create {}", dir.display()), e))?;
     let tile = mask.tile;
     let simple = tile.spp == 1 && tile.dims <= 4;
     let mut names = Vec::new();
@@ -40,11 +39,7 @@ pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
                 let name = if simple {
                     format!("frame{t:04}.png")
                 } else {
-                    format!(
-                        "frame{t:04}_s{s:02}_d{}-{}.png",
-                        dims[0],
-                        dims[dims.len() - 1]
-                    )
+                    format!("frame{t:04}_s{s:02}_d{}-{}.png", dims[0], dims[dims.len() - 1])
                 };
                 let mut data = Vec::with_capacity(tile.width * tile.height * channels * 2);
                 for y in 0..tile.height {
@@ -58,8 +53,7 @@ pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
                 }
                 let mut bytes = Vec::new();
                 {
-                    let mut encoder =
-                        png::Encoder::new(&mut bytes, tile.width as u32, tile.height as u32);
+                    let mut encoder = png::Encoder::new(&mut bytes, tile.width as u32, tile.height as u32);
                     encoder.set_color(color);
                     encoder.set_depth(png::BitDepth::Sixteen);
                     let mut writer = encoder

@@ -1,0 +1,105 @@
+//! Benchmarks that print figures (run time, throughput); results are recorded in
+//! BENCHMARKS.md with the commands that produced them.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::gpu::buffer::{Buffer, Location};
+use crate::gpu::context::Context;
+use crate::gpu::pipeline::{barrier, submit_and_wait};
+use crate::gpu::sort::{as_bytes, copy_range, from_bytes, RadixSort};
+use crate::gpu::timer::Timer;
+use crate::rng::{derive, Stream};
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SortBench {
+    pub n: u32,
+    pub device: String,
+    /// Median GPU time of one sort (timestamp queries), seconds.
+    pub gpu_seconds: f64,
+    /// Median CPU time (rayon's parallel stable sort, all cores), seconds.
+    pub cpu_seconds: f64,
+    pub cpu_threads: usize,
+}
+
+impl SortBench {
+    pub fn gpu_pairs_per_second(&self) -> f64 {
+        self.n as f64 / self.gpu_seconds
+    }
+    pub fn cpu_pairs_per_second(&self) -> f64 {
+        self.n as f64 / self.cpu_seconds
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Sorts `n` random 32-bit keys with 32-bit payloads `repeats` times on the GPU
+/// (after a warm-up, the same input restored before each run) and on the CPU;
+/// checks the GPU result against the CPU's.
+pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
+    if n == 0 || repeats == 0 {
+        return Err(Error::invalid("--n and --repeats must be at least 1"));
+    }
+    let mut rng = Stream::new(derive(0xbe7c, n));
+    let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+    let vals: Vec<u32> = (0..n).collect();
+    let sort = RadixSort::new(ctx, n, None)?;
+    let mut sort = sort;
+    sort.set_count(n)?;
+    let bytes = n as u64 * 4;
+    let pristine_k = Buffer::new(ctx, bytes, Location::Device, "bench-keys")?;
+    let pristine_v = Buffer::new(ctx, bytes, Location::Device, "bench-vals")?;
+    {
+        let mut up = Buffer::new(ctx, bytes, Location::Upload, "bench-upload")?;
+        up.write(as_bytes(&keys))?;
+        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &pristine_k, bytes))?;
+        up.write(as_bytes(&vals))?;
+        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &pristine_v, bytes))?;
+    }
+    let runs = repeats + 2;
+    let timer = Timer::new(ctx, 2 * runs)?;
+    submit_and_wait(ctx, |cmd| {
+        timer.reset(cmd);
+        for r in 0..runs {
+            copy_range(ctx, cmd, &pristine_k, &sort.keys[0], bytes);
+            copy_range(ctx, cmd, &pristine_v, &sort.vals[0], bytes);
+            barrier(ctx, cmd);
+            timer.stamp(cmd, 2 * r);
+            sort.record(cmd, 32, Some(n));
+            timer.stamp(cmd, 2 * r + 1);
+        }
+    })?;
+    let ns = timer.read_ns(2 * runs)?;
+    let gpu_seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
+    // Check the last run against the CPU.
+    let down = Buffer::new(ctx, bytes, Location::Readback, "bench-readback")?;
+    submit_and_wait(ctx, |cmd| {
+        copy_range(ctx, cmd, &sort.vals[0], &down, bytes);
+        barrier(ctx, cmd);
+    })?;
+    let gpu_vals: Vec<u32> = from_bytes(down.read()?);
+    let input: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
+    let mut pairs = Vec::new();
+    let mut cpu_times = Vec::new();
+    for _ in 0..3 {
+        pairs = input.clone();
+        let start = Instant::now();
+        pairs.par_sort_by_key(|x| x.0);
+        cpu_times.push(start.elapsed().as_secs_f64());
+    }
+    if pairs.iter().zip(&gpu_vals).any(|(c, &g)| c.1 != g) {
+        return Err(Error::invalid("the GPU sort disagreed with the CPU sort"));
+    }
+    Ok(SortBench {
+        n,
+        device: format!("{} ({})", ctx.info().name, ctx.info().driver),
+        gpu_seconds,
+        cpu_seconds: median(cpu_times),
+        cpu_threads: rayon::current_num_threads(),
+    })
+}

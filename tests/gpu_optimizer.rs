@@ -1,0 +1,189 @@
+//! The Vulkan optimizer against the CPU path (lavapipe in CI, validation on).
+
+mod common;
+
+use fsot::gpu::optimizer::{GpuOptions, GpuRun};
+use fsot::kernel::{Kernel, KernelSpec};
+use fsot::mask::Mask;
+use fsot::optimize::{optimize, Settings};
+use fsot::problem::Tile;
+use fsot::rng::seed_key;
+use fsot::score::score;
+use fsot::slice::SliceSampler;
+use fsot::transport::{transport_slice, Scratch};
+
+fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
+    let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
+    s.iterations = iterations;
+    s
+}
+
+/// The CPU path's summed displacement per coordinate for one iteration's slices.
+fn cpu_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
+    let tile = mask.tile;
+    let kernel = Kernel::new(s.kernel, &tile);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let mut out = vec![0.0f64; tile.values()];
+    let mut scratch = Scratch::default();
+    for i in 0..slices {
+        let slice = sampler.draw(iteration, i);
+        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut scratch, |p, delta| {
+            for k in 0..tile.dims {
+                out[p as usize * tile.dims + k] += delta * slice.theta[k];
+            }
+        });
+    }
+    out
+}
+
+fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
+    let Some(ctx) = common::gpu_context() else { return };
+    let mut s = settings(kernel, 10, 21);
+    s.slices = Some(300);
+    let mask = Mask::white(tile, 21);
+    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic, profile: false }).unwrap();
+    for iteration in [0u32, 5] {
+        let g = gpu.displacements(iteration).unwrap();
+        let c = cpu_displacements(&mask, &s, 300, iteration);
+        let worst = g.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let moved = c.iter().filter(|v| **v != 0.0).count();
+        assert!(moved > tile.values() / 4, "too few coordinates moved: {moved}");
+        assert!(worst < 1e-5, "{kernel} {tile:?}: largest difference {worst}");
+    }
+    assert_eq!(gpu.overflowed(), 0);
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn one_iteration_gives_the_cpu_displacements_small_classes() {
+    compare_one_iteration(Tile::new(16, 16, 8, 1, 2).unwrap(), "taa", true);
+}
+
+#[test]
+fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
+    compare_one_iteration(Tile::new(16, 16, 8, 1, 1).unwrap(), "perceptual-taa", true);
+}
+
+#[test]
+fn large_classes_sorted_globally_give_the_cpu_displacements() {
+    // 4 spp makes the largest classes exceed shared memory: the radix sort path.
+    // One slice per iteration, so each read-back is one class. In classes of
+    // thousands of points some projections lie within float32 rounding of each
+    // other and may rank the other way round on the GPU; such a point must then
+    // get exactly its neighbour's target.
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
+    let mut s = settings("taa", 400, 5);
+    s.slices = Some(1);
+    let kernel = Kernel::new(s.kernel, &tile);
+    assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
+    let mask = Mask::white(tile, 5);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic: true, profile: false }).unwrap();
+    assert!(gpu.large_capacity() > 2048);
+    let (mut checked, mut ties) = (0, 0);
+    for iteration in 0..400 {
+        let slice = sampler.draw(iteration, 0);
+        if slice.len as usize * 4 <= 2048 {
+            continue;
+        }
+        let g = gpu.displacements(iteration).unwrap();
+        // CPU: projection, rank target and displacement of each class member.
+        let mut members = Vec::new();
+        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut Scratch::default(), |p, delta| members.push((p, delta)));
+        let mut order: Vec<(f64, u32, f64)> = members
+            .iter()
+            .map(|&(p, delta)| {
+                let i = p as usize * 2;
+                (fsot::transport::project(&mask.samples[i..i + 2], &slice), p, delta)
+            })
+            .collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for (r, &(proj, p, delta)) in order.iter().enumerate() {
+            let i = p as usize * 2;
+            let along = g[i] * slice.theta[0] + g[i + 1] * slice.theta[1];
+            if (along - delta).abs() < 1e-5 {
+                continue;
+            }
+            // Must be a near-tie (within float32 rounding of the projections,
+            // 2e-6) that took a neighbour's rank.
+            let neighbour = [r.wrapping_sub(1), r + 1].into_iter().filter(|&q| q < order.len()).find(|&q| {
+                let (pq, _, dq) = order[q];
+                (pq - proj).abs() < 2e-6 && (along - (dq + pq - proj)).abs() < 1e-5
+            });
+            assert!(neighbour.is_some(), "iteration {iteration}, rank {r}: gpu {along}, cpu {delta}");
+            ties += 1;
+        }
+        checked += 1;
+        if checked == 6 {
+            break;
+        }
+    }
+    eprintln!("checked {checked} large classes, {ties} near-tie rank swaps");
+    assert!(checked >= 3, "too few large classes drawn");
+    assert_eq!(gpu.overflowed(), 0);
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn float_atomics_agree_with_the_cpu_too() {
+    let Some(ctx) = common::gpu_context() else { return };
+    if !ctx.info().float_atomic_add {
+        eprintln!("no float atomics on {}: nothing to test", ctx.info().name);
+        return;
+    }
+    drop(ctx);
+    compare_one_iteration(Tile::new(16, 16, 8, 1, 2).unwrap(), "perceptual-taa", false);
+}
+
+#[test]
+fn deterministic_mode_is_bit_identical_run_to_run() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
+    let run = || {
+        let mut g = GpuRun::new(&ctx, tile, settings("taa", 40, 3), None, GpuOptions { deterministic: true, profile: false })
+            .unwrap();
+        while !g.finished() {
+            g.step_batch(u32::MAX).unwrap();
+        }
+        g.samples().unwrap()
+    };
+    let a = run();
+    let b = run();
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
+    assert!(a.iter().all(|v| (0.0..1.0).contains(v)));
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
+    let s = settings("taa", 150, 7);
+    let cpu = optimize(tile, s, None).unwrap();
+    let mut gpu = GpuRun::new(&ctx, tile, s, None, GpuOptions::default()).unwrap();
+    let mut last = Vec::new();
+    while !gpu.finished() {
+        last = gpu.step_batch(u32::MAX).unwrap();
+    }
+    assert!(last.iter().all(|c| c.is_finite() && *c > 0.0));
+    let g = gpu.mask().unwrap();
+    let (sc, sg) = (score(&cpu, s.kernel, 8192).objective, score(&g, s.kernel, 8192).objective);
+    eprintln!("objective: cpu {sc:.4e}, vulkan {sg:.4e}");
+    assert!((sg - sc).abs() / sc < 0.05, "cpu {sc} vulkan {sg}");
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let err = GpuRun::new(&ctx, Tile::new(8, 8, 4, 1, 3).unwrap(), settings("taa", 5, 1), None, GpuOptions::default())
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("d <= 2"), "{err}");
+    common::assert_no_validation_messages(&ctx);
+}
+
