@@ -178,22 +178,34 @@ FsotTrapezoid fsot_trapezoid(float t0, float t1) {
     return z;
 }
 
-// n * integral of the quantile over [y, x], 0 <= y < x <= 1/2, local coordinates.
-float fsot_quantile_mean(FsotTrapezoid z, float y, float x) {
+// Mean of the quantile over [y, x], 0 <= y < x <= 1/2, local coordinates, where
+// x - y is one rank's width 1/n. No division by the (small) width: a bin wholly
+// in one piece has a closed-form mean, and only the bin that straddles u1 mixes
+// the two by its exact fraction; so float32 keeps its relative precision also
+// where a device's division is approximate.
+float fsot_piece_mean_low(FsotTrapezoid z, float y, float x) {
+    // (2/3) sqrt(2 a1 a2) (x^1.5 - y^1.5) / (x - y)
+    float sx = sqrt(x), sy = sqrt(y);
+    return (2.0 / 3.0) * sqrt(2.0 * z.a1 * z.a2) * (x + sx * sy + y) / (sx + sy);
+}
+
+float fsot_piece_mean_mid(FsotTrapezoid z, float y, float x) {
+    return 0.5 * z.a2 * (x + y) + 0.5 * z.a1;
+}
+
+float fsot_quantile_mean(FsotTrapezoid z, uint q, uint n) {
+    float nf = float(n);
+    float y = float(q) / nf, x = float(q + 1u) / nf;
     float u1 = 0.5 * z.a1 / z.a2;
-    float total = 0.0;
-    if (y < u1) {
-        // (2/3) sqrt(2 a1 a2) (x'^1.5 - y^1.5), x' = min(x, u1), as
-        // (x' - y) (x' + sqrt(x' y) + y) / (sqrt x' + sqrt y).
-        float xp = min(x, u1);
-        float sx = sqrt(xp), sy = sqrt(y);
-        total += (2.0 / 3.0) * sqrt(2.0 * z.a1 * z.a2) * (xp - y) * (xp + sx * sy + y) / (sx + sy);
+    float u1n = u1 * nf; // u1 in units of the width
+    if (float(q + 1u) <= u1n) {
+        return fsot_piece_mean_low(z, y, x);
     }
-    if (x > u1) {
-        float yp = max(y, u1);
-        total += (x - yp) * (0.5 * z.a2 * (x + yp) + 0.5 * z.a1);
+    if (float(q) >= u1n) {
+        return fsot_piece_mean_mid(z, y, x);
     }
-    return total / (x - y);
+    float low = u1n - float(q); // fraction of the bin below u1
+    return low * fsot_piece_mean_low(z, y, u1) + (1.0 - low) * fsot_piece_mean_mid(z, u1, x);
 }
 
 // Target of rank r of n on the real line.
@@ -205,12 +217,11 @@ float fsot_rank_target(FsotTrapezoid z, uint r, uint n) {
     }
     bool upper = r >= half_n + (n & 1u);
     uint q = upper ? n - 1u - r : r;
-    float nf = float(n);
     float m;
     if (z.a1 <= 0.0) {
-        m = z.a2 * (float(q) + 0.5) / nf; // one axis: uniform on [0, a2]
+        m = z.a2 * (float(q) + 0.5) / float(n); // one axis: uniform on [0, a2]
     } else {
-        m = fsot_quantile_mean(z, float(q) / nf, float(q + 1u) / nf);
+        m = fsot_quantile_mean(z, q, n);
     }
     return upper ? z.offset + total - m : z.offset + m;
 }

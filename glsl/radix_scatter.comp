@@ -1,14 +1,19 @@
 #version 450
-// Radix pass 3 of 3: stable scatter. Each block walks its elements in rounds of
-// WG (input order); within a round an element's rank among equal digits comes
-// from subgroup ballots (lanes with the same digit and a lower index) plus the
-// counts of earlier subgroups and earlier rounds, so equal keys keep their order.
+// Radix pass 3 of 3: stable scatter. A block is walked in rounds of WG x KEYS
+// elements; in a round each subgroup owns a contiguous chunk of S x KEYS
+// elements, taken KEYS slots of S at a time, so (subgroup, slot, lane) is input
+// order. An element's rank among equal digits comes from subgroup ballots (lanes
+// of its slot with the same digit and a lower index), the same digit's count in
+// the subgroup's earlier slots, in earlier subgroups, and in earlier rounds:
+// equal keys keep their order.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
 #include "radix_common.glsl"
 
 // Subgroups per workgroup: WG / the device's subgroup size (the host queries it).
 layout(constant_id = 2) const uint SUBGROUPS = 8u;
+// Keys per invocation per round (ITEMS must be a multiple).
+#define KEYS 4u
 
 layout(std430, set = 0, binding = 1) readonly buffer KeysIn { uint keys_in[]; };
 layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
@@ -25,29 +30,46 @@ void main() {
     uint wg = gl_WorkGroupSize.x;
     uint block = gl_WorkGroupID.x;
     uint sg = gl_SubgroupID;
-    if (block * block_size() >= count) {
+    uint lane = gl_SubgroupInvocationID;
+    uint sgsize = gl_SubgroupSize;
+    uint base = block * block_size();
+    if (base >= count) {
         return; // whole workgroup: nothing to place
     }
-    for (uint d = tid; d < 256u; d += wg) { s_offset[d] = hist[d * pc.blocks + block]; }
-    uint base = block * block_size();
-    for (uint it = 0u; it < ITEMS; ++it) {
+    for (uint d = tid; d < 256u; d += wg) { s_offset[d] = hist[d * pc.blocks + block]; s_round[d] = 0u; }
+    for (uint r = 0u; r < ITEMS / KEYS; ++r) {
+        // Phase A: fold the previous round into the offsets; clear the counters.
+        for (uint d = tid; d < 256u; d += wg) { s_offset[d] += s_round[d]; }
         for (uint j = tid; j < SUBGROUPS * 256u; j += wg) { s_sub[j] = 0u; }
         barrier();
-        uint i = base + it * wg + tid;
-        bool valid = i < count;
-        uint key = valid ? keys_in[i] : 0u;
-        uint digit = (key >> pc.shift) & 255u;
-        uvec4 same = subgroupBallot(valid);
-        for (uint b = 0u; b < 8u; ++b) {
-            bool bit = ((digit >> b) & 1u) == 1u;
-            uvec4 ones = subgroupBallot(bit);
-            same &= bit ? ones : ~ones;
-        }
-        uint below = subgroupBallotExclusiveBitCount(same);
-        if (valid && below == 0u) {
-            s_sub[sg * 256u + digit] = subgroupBallotBitCount(same);
+        // Phase B: ranks within the subgroup's chunk, slot by slot.
+        uint chunk = base + r * wg * KEYS + sg * sgsize * KEYS;
+        uint key[KEYS];
+        uint digit[KEYS];
+        uint rank[KEYS];
+        bool valid[KEYS];
+        for (uint k = 0u; k < KEYS; ++k) {
+            uint i = chunk + k * sgsize + lane;
+            valid[k] = i < count;
+            key[k] = valid[k] ? keys_in[i] : 0u;
+            digit[k] = (key[k] >> pc.shift) & 255u;
+            uvec4 same = subgroupBallot(valid[k]);
+            for (uint b = 0u; b < 8u; ++b) {
+                bool bit = ((digit[k] >> b) & 1u) == 1u;
+                uvec4 ones = subgroupBallot(bit);
+                same &= bit ? ones : ~ones;
+            }
+            uint below = subgroupBallotExclusiveBitCount(same);
+            uint prior = valid[k] ? s_sub[sg * 256u + digit[k]] : 0u;
+            rank[k] = prior + below;
+            subgroupBarrier();
+            if (valid[k] && below == 0u) {
+                s_sub[sg * 256u + digit[k]] = prior + subgroupBallotBitCount(same);
+            }
+            subgroupBarrier();
         }
         barrier();
+        // Phase C: per digit, exclusive prefix over subgroups; the round's total.
         for (uint d = tid; d < 256u; d += wg) {
             uint run = 0u;
             for (uint s = 0u; s < SUBGROUPS; ++s) {
@@ -58,13 +80,15 @@ void main() {
             s_round[d] = run;
         }
         barrier();
-        if (valid) {
-            uint dst = s_offset[digit] + s_sub[sg * 256u + digit] + below;
-            keys_out[dst] = key;
-            vals_out[dst] = vals_in[i];
+        // Phase D: place.
+        for (uint k = 0u; k < KEYS; ++k) {
+            if (valid[k]) {
+                uint i = chunk + k * sgsize + lane;
+                uint dst = s_offset[digit[k]] + s_sub[sg * 256u + digit[k]] + rank[k];
+                keys_out[dst] = key[k];
+                vals_out[dst] = vals_in[i];
+            }
         }
-        barrier();
-        for (uint d = tid; d < 256u; d += wg) { s_offset[d] += s_round[d]; }
         barrier();
     }
 }

@@ -48,7 +48,8 @@ impl Engine {
                 )));
             }
             let run = GpuRun::new(&ctx, tile, settings, init, gpu)?;
-            let scatter = if run.uses_float_atomics() { "float atomics" } else { "fixed point, deterministic" };
+            let scatter =
+                if run.uses_float_atomics() { "float atomics" } else { "fixed point, deterministic" };
             Ok(Started {
                 note: format!("backend: vulkan on {} ({}; scatter: {scatter})", info.name, info.driver),
                 engine: Engine::Gpu(Box::new(run)),

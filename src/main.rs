@@ -7,12 +7,12 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use fsot::engine::{BackendChoice, Engine, Started};
 use fsot::error::{Error, Result};
+use fsot::gpu::optimizer::GpuOptions;
 use fsot::io::atomic::AtomicFile;
 use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
 use fsot::mask::Mask;
-use fsot::engine::{BackendChoice, Engine, Started};
-use fsot::gpu::optimizer::GpuOptions;
 use fsot::optimize::Settings;
 use fsot::problem::Tile;
 use fsot::score::{score, SCORE_SLICES};
@@ -246,7 +246,8 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     settings.iterations = args.iterations;
     settings.slices = args.slices;
     let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile };
-    let Started { mut engine, note } = Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
+    let Started { mut engine, note } =
+        Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
     eprintln!("{note}");
     eprintln!(
         "optimizing {} for kernel {}: {} iterations x {} slices",
@@ -262,8 +263,10 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
     let bar = ProgressBar::new(args.iterations as u64);
     bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let start = Instant::now();
     while !engine.finished() {
@@ -295,7 +298,10 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     );
     if let Engine::Gpu(run) = &engine {
         if run.overflowed() > 0 {
-            eprintln!("warning: {} large classes did not fit their buffer and were skipped", run.overflowed());
+            eprintln!(
+                "warning: {} large classes did not fit their buffer and were skipped",
+                run.overflowed()
+            );
         }
         if args.profile {
             let p = &run.profile;
@@ -343,7 +349,8 @@ fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
         BenchSuite::Sort { n, repeats, device } => {
             let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
-            let ctx = fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
+            let ctx =
+                fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
             let b = fsot::bench::bench_sort(&ctx, n, repeats)?;
             println!(
                 "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",

@@ -89,7 +89,8 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--init", "missing.exr"], "cannot read"),
         (&["--init", "garbage.exr"], "not a readable EXR"),
         (&["--out", "no/such/folder/m.exr"], "does not exist"),
-        (&["--backend", "vulkan"], "Vulkan"),
+        (&["--backend", "vulkan", "--dims", "3"], "d <= 2"),
+        (&["--backend", "vulkan", "--device", "no-such-gpu"], "no device matches"),
     ];
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.

@@ -41,7 +41,8 @@ fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
     let mut s = settings(kernel, 10, 21);
     s.slices = Some(300);
     let mask = Mask::white(tile, 21);
-    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic, profile: false }).unwrap();
+    let mut gpu =
+        GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic, profile: false }).unwrap();
     for iteration in [0u32, 5] {
         let g = gpu.displacements(iteration).unwrap();
         let c = cpu_displacements(&mask, &s, 300, iteration);
@@ -80,7 +81,8 @@ fn large_classes_sorted_globally_give_the_cpu_displacements() {
     assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
     let mask = Mask::white(tile, 5);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic: true, profile: false }).unwrap();
+    let mut gpu =
+        GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic: true, profile: false }).unwrap();
     assert!(gpu.large_capacity() > 2048);
     let (mut checked, mut ties) = (0, 0);
     for iteration in 0..400 {
@@ -91,7 +93,9 @@ fn large_classes_sorted_globally_give_the_cpu_displacements() {
         let g = gpu.displacements(iteration).unwrap();
         // CPU: projection, rank target and displacement of each class member.
         let mut members = Vec::new();
-        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut Scratch::default(), |p, delta| members.push((p, delta)));
+        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut Scratch::default(), |p, delta| {
+            members.push((p, delta))
+        });
         let mut order: Vec<(f64, u32, f64)> = members
             .iter()
             .map(|&(p, delta)| {
@@ -143,8 +147,14 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let run = || {
-        let mut g = GpuRun::new(&ctx, tile, settings("taa", 40, 3), None, GpuOptions { deterministic: true, profile: false })
-            .unwrap();
+        let mut g = GpuRun::new(
+            &ctx,
+            tile,
+            settings("taa", 40, 3),
+            None,
+            GpuOptions { deterministic: true, profile: false },
+        )
+        .unwrap();
         while !g.finished() {
             g.step_batch(u32::MAX).unwrap();
         }
@@ -180,10 +190,15 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
 #[test]
 fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     let Some(ctx) = common::gpu_context() else { return };
-    let err = GpuRun::new(&ctx, Tile::new(8, 8, 4, 1, 3).unwrap(), settings("taa", 5, 1), None, GpuOptions::default())
-        .err()
-        .unwrap();
+    let err = GpuRun::new(
+        &ctx,
+        Tile::new(8, 8, 4, 1, 3).unwrap(),
+        settings("taa", 5, 1),
+        None,
+        GpuOptions::default(),
+    )
+    .err()
+    .unwrap();
     assert!(err.to_string().contains("d <= 2"), "{err}");
     common::assert_no_validation_messages(&ctx);
 }
-

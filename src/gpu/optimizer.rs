@@ -114,7 +114,11 @@ impl TransportShape {
             let wg = info.subgroup_size.clamp(1, 128);
             Self { workgroup: wg, slices_per_group: 16, one_subgroup: true }
         } else {
-            Self { workgroup: 128.min(info.max_workgroup_invocations), slices_per_group: 1, one_subgroup: false }
+            Self {
+                workgroup: 128.min(info.max_workgroup_invocations),
+                slices_per_group: 1,
+                one_subgroup: false,
+            }
         };
         if let Ok(v) = std::env::var("FSOT_TRANSPORT") {
             let f: Vec<u32> = v.split(',').filter_map(|x| x.trim().parse().ok()).collect();
@@ -429,7 +433,11 @@ impl GpuRun {
                 if let Some(t) = &self.timer {
                     t.stamp(cmd, 4 * k);
                 }
-                self.transport.dispatch(cmd, two_d(self.slices.div_ceil(self.shape.slices_per_group)), push.bytes());
+                self.transport.dispatch(
+                    cmd,
+                    two_d(self.slices.div_ceil(self.shape.slices_per_group)),
+                    push.bytes(),
+                );
                 barrier(&ctx, cmd);
                 if let Some(t) = &self.timer {
                     t.stamp(cmd, 4 * k + 1);
@@ -499,9 +507,14 @@ impl GpuRun {
             device.cmd_fill_buffer(cmd, self.large_meta.raw, 0, 16, 0);
             device.cmd_fill_buffer(cmd, self._acc.raw, 0, vk::WHOLE_SIZE, 0);
             barrier(&ctx, cmd);
-            self.transport.dispatch(cmd, two_d(self.slices.div_ceil(self.shape.slices_per_group)), push.bytes());
+            self.transport.dispatch(
+                cmd,
+                two_d(self.slices.div_ceil(self.shape.slices_per_group)),
+                push.bytes(),
+            );
             barrier(&ctx, cmd);
-            if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large) {
+            if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large)
+            {
                 sort.record(cmd, 32, None);
                 gather.dispatch(cmd, two_d(self.large_capacity.div_ceil(256)), &[]);
                 barrier(&ctx, cmd);

@@ -36,7 +36,9 @@ impl SortShape {
         for wg in [256u32, 128, 64] {
             let subgroups = wg.div_ceil(sub);
             let shared = subgroups * 256 * 4 + 2 * 256 * 4;
-            if wg <= info.max_workgroup_invocations && shared <= info.max_shared_memory && BLOCK / wg <= 32 {
+            // ITEMS = BLOCK / wg must be a multiple of the scatter's 4 keys per round.
+            if wg <= info.max_workgroup_invocations && shared <= info.max_shared_memory && BLOCK / wg % 4 == 0
+            {
                 return Ok(Self { workgroup: wg, items: BLOCK / wg, subgroups });
             }
         }
