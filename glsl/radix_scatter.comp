@@ -1,19 +1,26 @@
 #version 450
-// Radix pass 3 of 3: stable scatter. A block is walked in rounds of WG x KEYS
-// elements; in a round each subgroup owns a contiguous chunk of S x KEYS
-// elements, taken KEYS slots of S at a time, so (subgroup, slot, lane) is input
-// order. An element's rank among equal digits comes from subgroup ballots (lanes
-// of its slot with the same digit and a lower index), the same digit's count in
-// the subgroup's earlier slots, in earlier subgroups, and in earlier rounds:
-// equal keys keep their order.
+// Radix pass 3 of 3: stable scatter through shared memory. The block's elements
+// are first ranked (as below) and placed in shared memory in digit order; then
+// the block is written out in that order, so consecutive invocations write
+// consecutive addresses of each digit's run (coalesced), instead of every store
+// of a subgroup touching up to 32 runs.
+//
+// Ranking: a block is walked in rounds of WG x KEYS elements; in a round each
+// subgroup owns a contiguous chunk of S x KEYS elements, taken KEYS slots of S at
+// a time, so (subgroup, slot, lane) is input order. An element's rank among equal
+// digits comes from subgroup ballots (lanes of its slot with the same digit and a
+// lower index), the digit's count in the subgroup's earlier slots, in earlier
+// subgroups and in earlier rounds: equal keys keep their order.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "radix_common.glsl"
 
 // Subgroups per workgroup: WG / the device's subgroup size (the host queries it).
 layout(constant_id = 2) const uint SUBGROUPS = 8u;
 // Keys per invocation per round (ITEMS must be a multiple).
 #define KEYS 4u
+#define BLOCK 2048u
 
 layout(std430, set = 0, binding = 1) readonly buffer KeysIn { uint keys_in[]; };
 layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
@@ -21,9 +28,13 @@ layout(std430, set = 0, binding = 3) writeonly buffer KeysOut { uint keys_out[];
 layout(std430, set = 0, binding = 4) writeonly buffer ValsOut { uint vals_out[]; };
 layout(std430, set = 0, binding = 5) readonly buffer Hist { uint hist[]; };
 
-shared uint s_offset[256];
+shared uint s_global[256]; // where digit d of this block starts in the output
+shared uint s_local[256];  // where digit d starts within the block (staged order)
+shared uint s_seen[256];   // digit d's count in earlier rounds
 shared uint s_round[256];
 shared uint s_sub[SUBGROUPS * 256u];
+shared uint s_stage_k[BLOCK];
+shared uint s_stage_v[BLOCK];
 
 void main() {
     uint tid = gl_LocalInvocationID.x;
@@ -36,10 +47,39 @@ void main() {
     if (base >= count) {
         return; // whole workgroup: nothing to place
     }
-    for (uint d = tid; d < 256u; d += wg) { s_offset[d] = hist[d * pc.blocks + block]; s_round[d] = 0u; }
+    uint len = min(block_size(), count - base);
+    // The block's count of digit d is the next scanned entry minus this one
+    // (entries are digit-major; the one after the last is the total).
+    for (uint d = tid; d < 256u; d += wg) {
+        uint e = d * pc.blocks + block;
+        uint next = e + 1u < 256u * pc.blocks ? hist[e + 1u] : count;
+        s_global[d] = hist[e];
+        s_local[d] = next - hist[e];
+        s_seen[d] = 0u;
+        s_round[d] = 0u;
+    }
+    barrier();
+    // Exclusive scan of the block's digit counts, by the first subgroup.
+    if (sg == 0u) {
+        uint per = (256u + sgsize - 1u) / sgsize;
+        uint first = lane * per;
+        uint sum = 0u;
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) { sum += s_local[first + j]; }
+        }
+        uint run = subgroupExclusiveAdd(sum);
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) {
+                uint c = s_local[first + j];
+                s_local[first + j] = run;
+                run += c;
+            }
+        }
+    }
+    barrier();
     for (uint r = 0u; r < ITEMS / KEYS; ++r) {
-        // Phase A: fold the previous round into the offsets; clear the counters.
-        for (uint d = tid; d < 256u; d += wg) { s_offset[d] += s_round[d]; }
+        // Phase A: fold the previous round into the counts; clear the counters.
+        for (uint d = tid; d < 256u; d += wg) { s_seen[d] += s_round[d]; }
         for (uint j = tid; j < SUBGROUPS * 256u; j += wg) { s_sub[j] = 0u; }
         barrier();
         // Phase B: ranks within the subgroup's chunk, slot by slot.
@@ -80,15 +120,24 @@ void main() {
             s_round[d] = run;
         }
         barrier();
-        // Phase D: place.
+        // Phase D: stage in digit order.
         for (uint k = 0u; k < KEYS; ++k) {
             if (valid[k]) {
                 uint i = chunk + k * sgsize + lane;
-                uint dst = s_offset[digit[k]] + s_sub[sg * 256u + digit[k]] + rank[k];
-                keys_out[dst] = key[k];
-                vals_out[dst] = vals_in[i];
+                uint d = digit[k];
+                uint pos = s_local[d] + s_seen[d] + s_sub[sg * 256u + d] + rank[k];
+                s_stage_k[pos] = key[k];
+                s_stage_v[pos] = vals_in[i];
             }
         }
         barrier();
+    }
+    // Write the staged block out: runs of equal digits go to consecutive addresses.
+    for (uint i = tid; i < len; i += wg) {
+        uint k = s_stage_k[i];
+        uint d = (k >> pc.shift) & 255u;
+        uint dst = s_global[d] + (i - s_local[d]);
+        keys_out[dst] = k;
+        vals_out[dst] = s_stage_v[i];
     }
 }

@@ -10,7 +10,7 @@ void main() {
     uint tid = gl_LocalInvocationID.x;
     uint n = 256u * pc.blocks;
     uint base = gl_WorkGroupID.x * block_size() + tid * ITEMS;
-    uint local[16];
+    uint local[32];
     uint sum = 0u;
     for (uint it = 0u; it < ITEMS; ++it) {
         uint i = base + it;

@@ -8,7 +8,7 @@ void main() {
     uint tid = gl_LocalInvocationID.x;
     uint n = pc.chunks;
     uint base = tid * ITEMS;
-    uint local[16];
+    uint local[32];
     uint sum = 0u;
     for (uint it = 0u; it < ITEMS; ++it) {
         uint i = base + it;

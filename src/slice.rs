@@ -146,6 +146,11 @@ pub fn turn_cos_sin(u: f64) -> (f64, f64) {
     }
 }
 
+/// The key of a run's slice stream, from its seed key.
+pub fn slice_key(seed_key: u32) -> u32 {
+    derive(seed_key, 0x51ce)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -159,9 +164,4 @@ mod tests {
             assert!((c - a.cos()).abs() < 1e-12 && (s - a.sin()).abs() < 1e-12, "{u}");
         }
     }
-}
-
-/// The key of a run's slice stream, from its seed key.
-pub fn slice_key(seed_key: u32) -> u32 {
-    derive(seed_key, 0x51ce)
 }

@@ -35,7 +35,8 @@ impl SortShape {
         let sub = info.subgroup_size.max(1);
         for wg in [256u32, 128, 64] {
             let subgroups = wg.div_ceil(sub);
-            let shared = subgroups * 256 * 4 + 2 * 256 * 4;
+            // Per-subgroup digit counters, four digit tables, the staged block.
+            let shared = subgroups * 256 * 4 + 4 * 256 * 4 + BLOCK * 8;
             // ITEMS = BLOCK / wg must be a multiple of the scatter's 4 keys per round.
             if wg <= info.max_workgroup_invocations && shared <= info.max_shared_memory && BLOCK / wg % 4 == 0
             {
