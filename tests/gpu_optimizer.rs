@@ -202,3 +202,23 @@ fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     assert!(err.to_string().contains("d <= 2"), "{err}");
     common::assert_no_validation_messages(&ctx);
 }
+
+#[test]
+fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
+    // The "host" here is an fsot context whose handles we hand over as if a
+    // renderer had made them; fsot must use them and not destroy them.
+    let Some(host) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    {
+        let guest = fsot::gpu::context::Context::wrap(host.external()).unwrap();
+        let mut run = GpuRun::new(&guest, tile, settings("taa", 20, 2), None, GpuOptions::default()).unwrap();
+        while !run.finished() {
+            run.step_batch(u32::MAX).unwrap();
+        }
+        assert!(run.samples().unwrap().iter().all(|v| (0.0..1.0).contains(v)));
+    } // guest dropped: the host's device must still work
+    let mut again = GpuRun::new(&host, tile, settings("taa", 5, 2), None, GpuOptions::default()).unwrap();
+    again.step_batch(u32::MAX).unwrap();
+    drop(again);
+    common::assert_no_validation_messages(&host);
+}

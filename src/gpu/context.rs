@@ -54,6 +54,25 @@ pub struct Shared {
     pub info: DeviceInfo,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     messages: *mut Mutex<Vec<String>>,
+    /// False when a host renderer owns the instance and device (`Context::wrap`).
+    owns_device: bool,
+}
+
+/// A device made by a host application (a renderer) for fsot to work on. fsot
+/// never destroys these handles; the host keeps them alive while the Context
+/// lives. `int64_atomics` and `float_atomic_add` say which of those features the
+/// host enabled on the device (the Vulkan optimizer needs the first; the second
+/// is optional).
+#[derive(Clone)]
+pub struct ExternalDevice {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue_family: u32,
+    pub queue_index: u32,
+    pub int64_atomics: bool,
+    pub float_atomic_add: bool,
 }
 
 // The raw pointer is a Box we own; the Mutex makes it safe to share.
@@ -85,6 +104,53 @@ unsafe extern "system" fn on_message(
 }
 
 impl Context {
+    /// Works on a device that a host application made (see `ExternalDevice`);
+    /// fsot allocates its own memory on it and submits to the given queue.
+    pub fn wrap(external: ExternalDevice) -> Result<Self> {
+        let mut info = device_info(&external.instance, external.physical_device);
+        info.int64_atomics &= external.int64_atomics;
+        info.float_atomic_add &= external.float_atomic_add;
+        let queue = unsafe { external.device.get_device_queue(external.queue_family, external.queue_index) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: external.instance.clone(),
+            device: external.device.clone(),
+            physical_device: external.physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })?;
+        Ok(Self {
+            shared: Arc::new(Shared {
+                entry: external.entry,
+                instance: external.instance,
+                device: external.device,
+                physical_device: external.physical_device,
+                queue,
+                queue_family: external.queue_family,
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                info,
+                debug: None,
+                messages: Box::into_raw(Box::new(Mutex::new(Vec::new()))),
+                owns_device: false,
+            }),
+        })
+    }
+
+    /// The handles, for handing fsot's device to other code (or to `wrap`).
+    pub fn external(&self) -> ExternalDevice {
+        let s = &self.shared;
+        ExternalDevice {
+            entry: s.entry.clone(),
+            instance: s.instance.clone(),
+            physical_device: s.physical_device,
+            device: s.device.clone(),
+            queue_family: s.queue_family,
+            queue_index: 0,
+            int64_atomics: s.info.int64_atomics,
+            float_atomic_add: s.info.float_atomic_add,
+        }
+    }
+
     pub fn new(options: &ContextOptions) -> Result<Self> {
         let entry = unsafe { ash::Entry::load() }
             .map_err(|e| Error::VulkanUnavailable(format!("no Vulkan loader ({e})")))?;
@@ -223,6 +289,7 @@ impl Context {
                 info,
                 debug,
                 messages,
+                owns_device: true,
             }),
         })
     }
@@ -245,11 +312,13 @@ impl Drop for Shared {
         unsafe {
             let _ = self.device.device_wait_idle();
             ManuallyDrop::drop(&mut self.allocator);
-            self.device.destroy_device(None);
-            if let Some((loader, m)) = &self.debug {
-                loader.destroy_debug_utils_messenger(*m, None);
+            if self.owns_device {
+                self.device.destroy_device(None);
+                if let Some((loader, m)) = &self.debug {
+                    loader.destroy_debug_utils_messenger(*m, None);
+                }
+                self.instance.destroy_instance(None);
             }
-            self.instance.destroy_instance(None);
             drop(Box::from_raw(self.messages));
         }
     }

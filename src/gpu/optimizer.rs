@@ -107,8 +107,11 @@ impl TransportShape {
     /// GPUs: 128 invocations, one slice each. CPU implementations (lavapipe):
     /// one subgroup per workgroup (its barriers are nearly free there, while a
     /// workgroup barrier costs a coroutine switch per subgroup) and 16 slices per
-    /// workgroup (launches are dear). `FSOT_TRANSPORT=WG,SPG` overrides.
-    pub fn for_device(info: &super::context::DeviceInfo) -> Self {
+    /// workgroup (launches are dear), fewer when the kernel's largest class would
+    /// take an invocation past LOOP_BUDGET loop iterations (lavapipe silently
+    /// drops iterations past 65535 per invocation). `FSOT_TRANSPORT=WG,SPG`
+    /// overrides.
+    pub fn for_device(info: &super::context::DeviceInfo, max_class: u32) -> Self {
         let cpu = info.device_type == vk::PhysicalDeviceType::CPU;
         let mut shape = if cpu {
             let wg = info.subgroup_size.clamp(1, 128);
@@ -120,6 +123,8 @@ impl TransportShape {
                 one_subgroup: false,
             }
         };
+        let worst = Self::slice_iterations(max_class.min(LOCAL_MAX), shape.workgroup);
+        shape.slices_per_group = shape.slices_per_group.min((LOOP_BUDGET / worst).max(1));
         if let Ok(v) = std::env::var("FSOT_TRANSPORT") {
             let f: Vec<u32> = v.split(',').filter_map(|x| x.trim().parse().ok()).collect();
             if f.len() == 2 && f[0] > 0 && f[1] > 0 {
@@ -131,6 +136,23 @@ impl TransportShape {
         shape
     }
 }
+
+impl TransportShape {
+    /// Upper bound on the loop iterations one invocation spends on a class of
+    /// `n` samples (n <= LOCAL_MAX) in a workgroup of `wg`: gather, bitonic
+    /// stages, targets, reduction.
+    pub fn slice_iterations(n: u32, wg: u32) -> u32 {
+        let p = n.max(2).next_power_of_two();
+        let log = p.trailing_zeros();
+        let per_stage = p.div_ceil(wg);
+        let stages = log * (log + 1) / 2;
+        stages * (per_stage + 1) + 3 * per_stage + 2 * log + 64
+    }
+}
+
+/// Loop iterations one transport invocation may spend over its slices: under half
+/// of lavapipe's cap of 65535 per invocation.
+pub const LOOP_BUDGET: u32 = 30_000;
 
 fn two_d(groups: u32) -> [u32; 3] {
     let x = groups.clamp(1, 65535);
@@ -172,7 +194,8 @@ impl GpuRun {
             None => Mask::white(tile, settings.seed).samples,
         };
         let float_acc = !options.deterministic && info.float_atomic_add;
-        let shape = TransportShape::for_device(&info);
+        let kernel_max_class = (Kernel::new(settings.kernel, &tile).taps.len() * tile.spp) as u32;
+        let shape = TransportShape::for_device(&info, kernel_max_class);
         let values = tile.values() as u64;
         let fits = |name: &str, bytes: u64| -> Result<u64> {
             if bytes > info.max_storage_buffer_range {
@@ -271,7 +294,9 @@ impl GpuRun {
                 let g = ComputePipeline::new(ctx, shaders::LARGE_GATHER, 4, 0, &[256])?;
                 g.bind(&[&large_meta, &s.keys[0], &s.vals[0], &large_seg])?;
                 let spv = if float_acc { shaders::TRANSPORT_LARGE_FLOAT } else { shaders::TRANSPORT_LARGE };
-                let t = ComputePipeline::new(ctx, spv, 6, tpush, &spec)?;
+                // 128 invocations whatever the device: a class may hold
+                // taps x spp samples, and each invocation loops over n / WG.
+                let t = ComputePipeline::new(ctx, spv, 6, tpush, &[128])?;
                 t.bind(&[&acc, &costs, &large_meta, &s.vals[0], &large_points, &large_proj])?;
                 (Some(g), Some(t))
             }
@@ -553,5 +578,24 @@ impl GpuRun {
         }
         let _ = self.workgroup;
         Ok(mask)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_invocation_stays_under_the_loop_budget() {
+        // The largest local class on one subgroup of 8 (lavapipe), and many
+        // slices per workgroup only when classes are small.
+        assert!(TransportShape::slice_iterations(LOCAL_MAX, 8) < LOOP_BUDGET);
+        for max_class in [2u32, 100, 500, 1360, 2048, 100_000] {
+            let worst = TransportShape::slice_iterations(max_class.min(LOCAL_MAX), 8);
+            let spg = 16u32.min((LOOP_BUDGET / worst).max(1));
+            assert!(spg * worst <= LOOP_BUDGET, "{max_class}: {spg} x {worst}");
+        }
+        // A bitonic network of 2048 on 8 invocations: 66 stages of 256 pairs.
+        assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 256);
     }
 }
