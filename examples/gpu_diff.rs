@@ -19,8 +19,14 @@ fn main() {
     let mask = Mask::white(tile, 21);
     let kernel = Kernel::new(s.kernel, &tile);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let mut gpu =
-        GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic: true, profile: false }).unwrap();
+    let mut gpu = GpuRun::new(
+        &ctx,
+        tile,
+        s,
+        Some(&mask),
+        GpuOptions { deterministic: true, profile: false, transport: None },
+    )
+    .unwrap();
     let mut worst = (0.0f64, String::new());
     let mut hist = [0usize; 8];
     for it in 0..300 {

@@ -245,7 +245,7 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = args.iterations;
     settings.slices = args.slices;
-    let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile };
+    let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile, transport: None };
     let Started { mut engine, note } =
         Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
     eprintln!("{note}");

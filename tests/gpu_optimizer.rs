@@ -2,7 +2,7 @@
 
 mod common;
 
-use fsot::gpu::optimizer::{GpuOptions, GpuRun};
+use fsot::gpu::optimizer::{GpuOptions, GpuRun, TransportKind};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::mask::Mask;
 use fsot::optimize::{optimize, Settings};
@@ -37,19 +37,25 @@ fn cpu_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> 
 }
 
 fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
+    for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        compare_one_iteration_with(tile, kernel, deterministic, transport);
+    }
+}
+
+fn compare_one_iteration_with(tile: Tile, kernel: &str, deterministic: bool, transport: TransportKind) {
     let Some(ctx) = common::gpu_context() else { return };
     let mut s = settings(kernel, 10, 21);
     s.slices = Some(300);
     let mask = Mask::white(tile, 21);
-    let mut gpu =
-        GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic, profile: false }).unwrap();
+    let options = GpuOptions { deterministic, profile: false, transport: Some(transport) };
+    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     for iteration in [0u32, 5] {
         let g = gpu.displacements(iteration).unwrap();
         let c = cpu_displacements(&mask, &s, 300, iteration);
         let worst = g.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         let moved = c.iter().filter(|v| **v != 0.0).count();
         assert!(moved > tile.values() / 4, "too few coordinates moved: {moved}");
-        assert!(worst < 1e-5, "{kernel} {tile:?}: largest difference {worst}");
+        assert!(worst < 1e-5, "{kernel} {tile:?} {transport:?}: largest difference {worst}");
     }
     assert_eq!(gpu.overflowed(), 0);
     drop(gpu);
@@ -68,7 +74,12 @@ fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
 
 #[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
-    // 4 spp makes the largest classes exceed shared memory: the radix sort path.
+    for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        large_classes_with(transport);
+    }
+}
+
+fn large_classes_with(transport: TransportKind) {
     // One slice per iteration, so each read-back is one class. In classes of
     // thousands of points some projections lie within float32 rounding of each
     // other and may rank the other way round on the GPU; such a point must then
@@ -81,13 +92,14 @@ fn large_classes_sorted_globally_give_the_cpu_displacements() {
     assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
     let mask = Mask::white(tile, 5);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let mut gpu =
-        GpuRun::new(&ctx, tile, s, Some(&mask), GpuOptions { deterministic: true, profile: false }).unwrap();
-    assert!(gpu.large_capacity() > 2048);
+    let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
+    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
+    assert!(gpu.large_capacity() > 1024);
     let (mut checked, mut ties) = (0, 0);
     for iteration in 0..400 {
         let slice = sampler.draw(iteration, 0);
-        if slice.len as usize * 4 <= 2048 {
+        let limit = if transport == TransportKind::PerLane { fsot::gpu::optimizer::LANE_MAX } else { 2048 };
+        if slice.len * 4 <= limit {
             continue;
         }
         let g = gpu.displacements(iteration).unwrap();
@@ -124,7 +136,7 @@ fn large_classes_sorted_globally_give_the_cpu_displacements() {
             break;
         }
     }
-    eprintln!("checked {checked} large classes, {ties} near-tie rank swaps");
+    eprintln!("{transport:?}: checked {checked} large classes, {ties} near-tie rank swaps");
     assert!(checked >= 3, "too few large classes drawn");
     assert_eq!(gpu.overflowed(), 0);
     drop(gpu);
@@ -146,24 +158,20 @@ fn float_atomics_agree_with_the_cpu_too() {
 fn deterministic_mode_is_bit_identical_run_to_run() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
-    let run = || {
-        let mut g = GpuRun::new(
-            &ctx,
-            tile,
-            settings("taa", 40, 3),
-            None,
-            GpuOptions { deterministic: true, profile: false },
-        )
-        .unwrap();
+    let run = |transport| {
+        let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
+        let mut g = GpuRun::new(&ctx, tile, settings("taa", 40, 3), None, options).unwrap();
         while !g.finished() {
             g.step_batch(u32::MAX).unwrap();
         }
         g.samples().unwrap()
     };
-    let a = run();
-    let b = run();
-    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
-    assert!(a.iter().all(|v| (0.0..1.0).contains(v)));
+    for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        let a = run(transport);
+        let b = run(transport);
+        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "{transport:?}");
+        assert!(a.iter().all(|v| (0.0..1.0).contains(v)));
+    }
     common::assert_no_validation_messages(&ctx);
 }
 

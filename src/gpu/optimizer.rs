@@ -29,6 +29,9 @@ use crate::slice::{level_thresholds, slice_key};
 /// Classes up to this many samples are sorted in shared memory
 /// (`FSOT_LOCAL_MAX` in transport_body.glsl).
 pub const LOCAL_MAX: u32 = 2048;
+/// Classes up to this many samples are sorted by one invocation in the per-lane
+/// transport (`FSOT_LANE_MAX` in transport_lane_body.glsl).
+pub const LANE_MAX: u32 = 1024;
 /// Largest dimension the GPU path handles (its exact targets are the closed form
 /// for d <= 2).
 pub const GPU_MAX_DIMS: usize = 2;
@@ -44,6 +47,18 @@ pub struct GpuOptions {
     pub deterministic: bool,
     /// Time each pass with timestamp queries.
     pub profile: bool,
+    /// Which transport pass to use: None picks by device (per lane on CPU
+    /// implementations, workgroups on GPUs); tests force each.
+    pub transport: Option<TransportKind>,
+}
+
+/// The two transport passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportKind {
+    /// One workgroup per slice, bitonic sort in shared memory (GPUs).
+    Workgroup,
+    /// One invocation per slice, heap sort in private memory (CPU implementations).
+    PerLane,
 }
 
 /// Time spent per pass, from timestamp queries (nanoseconds, summed).
@@ -66,6 +81,7 @@ pub struct GpuRun {
     float_acc: bool,
     workgroup: u32,
     shape: TransportShape,
+    local_max: u32,
     large_capacity: u32,
     seg_bits: u32,
     pub profile: Profile,
@@ -101,6 +117,10 @@ pub struct TransportShape {
     pub slices_per_group: u32,
     /// The workgroup is one subgroup: subgroup barriers suffice.
     pub one_subgroup: bool,
+    /// One invocation per slice (`transport_lane.comp`): for CPU implementations,
+    /// which run invocations as SIMD lanes and pay dearly for barriers and
+    /// shared-memory traffic between lanes.
+    pub per_lane: bool,
 }
 
 impl TransportShape {
@@ -109,18 +129,23 @@ impl TransportShape {
     /// workgroup barrier costs a coroutine switch per subgroup) and 16 slices per
     /// workgroup (launches are dear), fewer when the kernel's largest class would
     /// take an invocation past LOOP_BUDGET loop iterations (lavapipe silently
-    /// drops iterations past 65535 per invocation). `FSOT_TRANSPORT=WG,SPG`
-    /// overrides.
+    /// drops iterations past 65535 per invocation). On CPU implementations, the
+    /// per-lane transport when the kernel allows. `FSOT_TRANSPORT=WG,SPG` forces
+    /// the workgroup transport with that shape.
     pub fn for_device(info: &super::context::DeviceInfo, max_class: u32) -> Self {
         let cpu = info.device_type == vk::PhysicalDeviceType::CPU;
         let mut shape = if cpu {
             let wg = info.subgroup_size.clamp(1, 128);
-            Self { workgroup: wg, slices_per_group: 16, one_subgroup: true }
+            // Per lane when one invocation can also write out the largest class
+            // for the large-class path within the loop budget.
+            let per_lane = max_class <= LOOP_BUDGET / 2;
+            Self { workgroup: wg, slices_per_group: 16, one_subgroup: true, per_lane }
         } else {
             Self {
                 workgroup: 128.min(info.max_workgroup_invocations),
                 slices_per_group: 1,
                 one_subgroup: false,
+                per_lane: false,
             }
         };
         let worst = Self::slice_iterations(max_class.min(LOCAL_MAX), shape.workgroup);
@@ -130,6 +155,7 @@ impl TransportShape {
             if f.len() == 2 && f[0] > 0 && f[1] > 0 {
                 shape.workgroup = f[0].min(info.max_workgroup_invocations);
                 shape.slices_per_group = f[1];
+                shape.per_lane = false;
                 shape.one_subgroup = shape.workgroup <= info.subgroup_size;
             }
         }
@@ -195,7 +221,15 @@ impl GpuRun {
         };
         let float_acc = !options.deterministic && info.float_atomic_add;
         let kernel_max_class = (Kernel::new(settings.kernel, &tile).taps.len() * tile.spp) as u32;
-        let shape = TransportShape::for_device(&info, kernel_max_class);
+        let mut shape = TransportShape::for_device(&info, kernel_max_class);
+        match options.transport {
+            Some(TransportKind::PerLane) if kernel_max_class > LOOP_BUDGET / 2 => {
+                return Err(Error::invalid("the per-lane transport cannot take classes this large"))
+            }
+            Some(TransportKind::PerLane) => shape.per_lane = true,
+            Some(TransportKind::Workgroup) => shape.per_lane = false,
+            None => {}
+        }
         let values = tile.values() as u64;
         let fits = |name: &str, bytes: u64| -> Result<u64> {
             if bytes > info.max_storage_buffer_range {
@@ -229,14 +263,15 @@ impl GpuRun {
         // memory holds. Capacity: three times the expected elements per iteration
         // plus four largest classes; overflows are counted and reported.
         let max_class = kernel.taps.len() as u64 * tile.spp as u64;
-        let needs_large = max_class > LOCAL_MAX as u64;
+        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let needs_large = max_class > local_max as u64;
         let large_capacity = if needs_large {
             let mut expected = 0.0;
             for (l, &q) in thresholds.iter().enumerate() {
                 let next = thresholds.get(l + 1).copied().unwrap_or(0);
                 let p = (q as f64 - next as f64) / 4_294_967_296.0; // P(len = l + 1)
                 let n = (l as u64 + 1) * tile.spp as u64;
-                if n > LOCAL_MAX as u64 {
+                if n > local_max as u64 {
                     expected += p * n as f64;
                 }
             }
@@ -246,7 +281,7 @@ impl GpuRun {
             0
         };
         let seg_bits = 32 - large_capacity.leading_zeros();
-        let meta_len = 16 + 16 * (large_capacity as u64 / (LOCAL_MAX as u64 + 1) + 1);
+        let meta_len = 16 + 16 * (large_capacity as u64 / (local_max as u64 + 1) + 1);
         let large_meta = Buffer::new(ctx, meta_len, Location::Device, "large-meta")?;
         let large_len = (large_capacity.max(1) as u64) * 4;
         let large_points = Buffer::new(ctx, large_len, Location::Device, "large-points")?;
@@ -271,9 +306,13 @@ impl GpuRun {
         let workgroup = shape.workgroup;
         let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32];
         let tpush = std::mem::size_of::<TransportPush>() as u32;
-        let transport_spv = if float_acc { shaders::TRANSPORT_FLOAT } else { shaders::TRANSPORT };
-        let transport = ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?;
-        transport.bind(&[
+        let transport_spv = match (shape.per_lane, float_acc) {
+            (true, true) => shaders::TRANSPORT_LANE_FLOAT,
+            (true, false) => shaders::TRANSPORT_LANE,
+            (false, true) => shaders::TRANSPORT_FLOAT,
+            (false, false) => shaders::TRANSPORT,
+        };
+        let transport_buffers = [
             &samples,
             &taps,
             &acc,
@@ -284,7 +323,10 @@ impl GpuRun {
             &large_points,
             &large_proj,
             &large_seg,
-        ])?;
+        ];
+        let transport =
+            ComputePipeline::new(ctx, transport_spv, transport_buffers.len() as u32, tpush, &spec)?;
+        transport.bind(&transport_buffers)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
         let update =
             ComputePipeline::new(ctx, update_spv, 4, std::mem::size_of::<UpdatePush>() as u32, &[256])?;
@@ -333,6 +375,7 @@ impl GpuRun {
             float_acc,
             workgroup,
             shape,
+            local_max,
             large_capacity,
             seg_bits,
             profile: Profile::default(),
@@ -384,6 +427,45 @@ impl GpuRun {
     }
     pub fn device_name(&self) -> &str {
         &self.ctx.info().name
+    }
+
+    /// Records the transport pass of one iteration (and the reset of the
+    /// large-class counters).
+    fn record_transport(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+        let ctx = &self.ctx;
+        unsafe {
+            ctx.device().cmd_fill_buffer(cmd, self.large_meta.raw, 0, 16, 0);
+        }
+        barrier(ctx, cmd);
+        self.transport.dispatch(cmd, two_d(self.transport_groups()), push.bytes());
+        barrier(ctx, cmd);
+    }
+
+    /// Records the large-class stage (two global sorts and the finishing pass),
+    /// when the kernel can make classes too large for the transport pass.
+    fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+        if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large) {
+            sort.record(cmd, 32, None);
+            gather.dispatch(cmd, two_d(self.large_capacity.div_ceil(256)), &[]);
+            barrier(&self.ctx, cmd);
+            sort.record(cmd, self.seg_bits, None);
+            large.dispatch(cmd, [self.large_capacity / (self.local_max + 1) + 1, 1, 1], push.bytes());
+            barrier(&self.ctx, cmd);
+        }
+    }
+
+    /// Workgroups of the transport pass.
+    fn transport_groups(&self) -> u32 {
+        if self.shape.per_lane {
+            self.slices.div_ceil(self.shape.workgroup)
+        } else {
+            self.slices.div_ceil(self.shape.slices_per_group)
+        }
+    }
+
+    /// How the transport pass is launched here.
+    pub fn transport_shape(&self) -> TransportShape {
+        self.shape
     }
 
     fn transport_push(&self, iteration: u32, slot: u32) -> TransportPush {
@@ -451,33 +533,14 @@ impl GpuRun {
             for k in 0..count {
                 let it = self.iteration + k;
                 let push = self.transport_push(it, k);
-                if self.sort.is_some() {
-                    device.cmd_fill_buffer(cmd, self.large_meta.raw, 0, 16, 0);
-                    barrier(&ctx, cmd);
-                }
                 if let Some(t) = &self.timer {
                     t.stamp(cmd, 4 * k);
                 }
-                self.transport.dispatch(
-                    cmd,
-                    two_d(self.slices.div_ceil(self.shape.slices_per_group)),
-                    push.bytes(),
-                );
-                barrier(&ctx, cmd);
+                self.record_transport(cmd, &push);
                 if let Some(t) = &self.timer {
                     t.stamp(cmd, 4 * k + 1);
                 }
-                if let (Some(sort), Some(gather), Some(large)) =
-                    (&self.sort, &self.gather, &self.transport_large)
-                {
-                    sort.record(cmd, 32, None);
-                    gather.dispatch(cmd, two_d(self.large_capacity.div_ceil(256)), &[]);
-                    barrier(&ctx, cmd);
-                    sort.record(cmd, self.seg_bits, None);
-                    let groups = self.large_capacity / (LOCAL_MAX + 1) + 1;
-                    large.dispatch(cmd, [groups, 1, 1], push.bytes());
-                    barrier(&ctx, cmd);
-                }
+                self.record_large(cmd, &push);
                 if let Some(t) = &self.timer {
                     t.stamp(cmd, 4 * k + 2);
                 }
@@ -528,28 +591,14 @@ impl GpuRun {
         let values = self.tile.values() as u64;
         let width = if self.float_acc { 4 } else { 8 };
         let push = self.transport_push(iteration, 0);
-        submit_and_wait(&ctx, |cmd| unsafe {
-            device.cmd_fill_buffer(cmd, self.large_meta.raw, 0, 16, 0);
-            device.cmd_fill_buffer(cmd, self._acc.raw, 0, vk::WHOLE_SIZE, 0);
+        submit_and_wait(&ctx, |cmd| {
+            unsafe { device.cmd_fill_buffer(cmd, self._acc.raw, 0, vk::WHOLE_SIZE, 0) };
             barrier(&ctx, cmd);
-            self.transport.dispatch(
-                cmd,
-                two_d(self.slices.div_ceil(self.shape.slices_per_group)),
-                push.bytes(),
-            );
-            barrier(&ctx, cmd);
-            if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large)
-            {
-                sort.record(cmd, 32, None);
-                gather.dispatch(cmd, two_d(self.large_capacity.div_ceil(256)), &[]);
-                barrier(&ctx, cmd);
-                sort.record(cmd, self.seg_bits, None);
-                large.dispatch(cmd, [self.large_capacity / (LOCAL_MAX + 1) + 1, 1, 1], push.bytes());
-                barrier(&ctx, cmd);
-            }
+            self.record_transport(cmd, &push);
+            self.record_large(cmd, &push);
             copy_range(&ctx, cmd, &self._acc, &self.readback, values * width);
             barrier(&ctx, cmd);
-            device.cmd_fill_buffer(cmd, self._acc.raw, 0, vk::WHOLE_SIZE, 0);
+            unsafe { device.cmd_fill_buffer(cmd, self._acc.raw, 0, vk::WHOLE_SIZE, 0) };
             barrier(&ctx, cmd);
         })?;
         let bytes = &self.readback.read()?[..(values * width) as usize];
@@ -595,6 +644,13 @@ mod tests {
             let spg = 16u32.min((LOOP_BUDGET / worst).max(1));
             assert!(spg * worst <= LOOP_BUDGET, "{max_class}: {spg} x {worst}");
         }
+        // Per lane, one invocation sorts a whole class: gather and project (d + 1
+        // per sample), heap sort (3n/2 sift-downs of at most log2 n steps),
+        // targets and scatter (d + 1 per sample). At LANE_MAX and d = 2, that is
+        // about half of lavapipe's 65535.
+        let n = LANE_MAX;
+        let per_lane = n * 7 + (3 * n / 2) * (32 - n.leading_zeros());
+        assert!(per_lane < 36_000, "{per_lane}");
         // A bitonic network of 2048 on 8 invocations: 66 stages of 256 pairs.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 256);
     }
