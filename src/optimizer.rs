@@ -86,7 +86,7 @@ pub fn step_value(
             wrap01(x + step * scale * *first)
         }
         StepRule::Adam { lr, beta1, beta2, eps } => {
-            let v = second.expect("Adam keeps a second moment");
+            let v = second.expect("Adam keeps a second moment"); // ok: OptimizerState::new allocates it for Adam
             *first = beta1 * *first + (1.0 - beta1) * g;
             *v = beta2 * *v + (1.0 - beta2) * g * g;
             let mh = *first / (1.0 - beta1.powi(t as i32));

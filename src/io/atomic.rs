@@ -44,7 +44,7 @@ impl AtomicFile {
 
     /// Writes `bytes` to the temporary file, syncs it, renames it over the target.
     pub fn commit(mut self, bytes: &[u8]) -> Result<()> {
-        let mut file = self.file.take().expect("file present until commit");
+        let mut file = self.file.take().expect("file present until commit"); // ok: commit consumes self
         let ctx = || format!("writing {}", self.temp.display());
         file.write_all(bytes).map_err(|e| Error::io(ctx(), e))?;
         file.sync_all().map_err(|e| Error::io(ctx(), e))?;
