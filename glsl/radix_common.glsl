@@ -14,10 +14,15 @@ layout(std430, set = 0, binding = 0) readonly buffer Info { uint count; };
 
 struct RadixPush {
     uint shift;   // bit offset of this pass's digit
-    uint blocks;  // blocks in the dispatch (hist has 256 x blocks entries)
-    uint chunks;  // scan: entries per workgroup chunk
+    uint blocks;  // blocks in the dispatch (hist has 256 x blocks entries); 0: from count
+    uint chunks;  // scan chunks (workgroups of scan_reduce / scan_apply); 0: from count
     uint pad;
 };
 layout(push_constant) uniform Push { RadixPush pc; };
 
 uint block_size() { return gl_WorkGroupSize.x * ITEMS; }
+
+// Blocks and scan chunks: given by the host, or (0) derived from the element
+// count the GPU produced, matching the indirect dispatch sizes of sort_args.comp.
+uint radix_blocks() { return pc.blocks != 0u ? pc.blocks : max(1u, (count + block_size() - 1u) / block_size()); }
+uint radix_chunks() { return pc.chunks != 0u ? pc.chunks : (256u * radix_blocks() + block_size() - 1u) / block_size(); }

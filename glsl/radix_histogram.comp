@@ -20,5 +20,5 @@ void main() {
         }
     }
     barrier();
-    for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) { hist[d * pc.blocks + block] = s_hist[d]; }
+    for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) { hist[d * radix_blocks() + block] = s_hist[d]; }
 }

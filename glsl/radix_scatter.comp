@@ -51,8 +51,8 @@ void main() {
     // The block's count of digit d is the next scanned entry minus this one
     // (entries are digit-major; the one after the last is the total).
     for (uint d = tid; d < 256u; d += wg) {
-        uint e = d * pc.blocks + block;
-        uint next = e + 1u < 256u * pc.blocks ? hist[e + 1u] : count;
+        uint e = d * radix_blocks() + block;
+        uint next = e + 1u < 256u * radix_blocks() ? hist[e + 1u] : count;
         s_global[d] = hist[e];
         s_local[d] = next - hist[e];
         s_seen[d] = 0u;

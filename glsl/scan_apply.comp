@@ -8,7 +8,7 @@ layout(std430, set = 0, binding = 2) readonly buffer Partials { uint partials[];
 
 void main() {
     uint tid = gl_LocalInvocationID.x;
-    uint n = 256u * pc.blocks;
+    uint n = 256u * radix_blocks();
     uint base = gl_WorkGroupID.x * block_size() + tid * ITEMS;
     uint local[32];
     uint sum = 0u;

@@ -6,7 +6,7 @@ layout(std430, set = 0, binding = 1) buffer Partials { uint partials[]; };
 
 void main() {
     uint tid = gl_LocalInvocationID.x;
-    uint n = pc.chunks;
+    uint n = radix_chunks();
     uint base = tid * ITEMS;
     uint local[32];
     uint sum = 0u;

@@ -7,7 +7,7 @@ layout(std430, set = 0, binding = 2) writeonly buffer Partials { uint partials[]
 
 void main() {
     uint tid = gl_LocalInvocationID.x;
-    uint n = 256u * pc.blocks;
+    uint n = 256u * radix_blocks();
     uint base = gl_WorkGroupID.x * block_size() + tid * ITEMS;
     uint sum = 0u;
     for (uint it = 0u; it < ITEMS; ++it) {

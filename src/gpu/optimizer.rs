@@ -15,7 +15,7 @@ use super::context::Context;
 use super::layout::{Pod, TransportPush, UpdatePush};
 use super::pipeline::{barrier, submit_and_wait, ComputePipeline};
 use super::shaders;
-use super::sort::{as_bytes, copy_range, from_bytes, RadixSort};
+use super::sort::{as_bytes, copy_range, from_bytes, RadixSort, ARG_GATHER, ARG_SEGMENTS};
 use super::timer::Timer;
 use crate::error::{Error, Result};
 use crate::kernel::Kernel;
@@ -81,7 +81,6 @@ pub struct GpuRun {
     float_acc: bool,
     workgroup: u32,
     shape: TransportShape,
-    local_max: u32,
     large_capacity: u32,
     seg_bits: u32,
     pub profile: Profile,
@@ -375,7 +374,6 @@ impl GpuRun {
             float_acc,
             workgroup,
             shape,
-            local_max,
             large_capacity,
             seg_bits,
             profile: Profile::default(),
@@ -445,11 +443,14 @@ impl GpuRun {
     /// when the kernel can make classes too large for the transport pass.
     fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
         if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large) {
+            // The sort sizes its dispatches from the count the transport left on
+            // the GPU (indirect), and writes the sizes of the two passes below.
             sort.record(cmd, 32, None);
-            gather.dispatch(cmd, two_d(self.large_capacity.div_ceil(256)), &[]);
+            let Some(args) = &sort.args else { return };
+            gather.dispatch_indirect_set(cmd, 0, &args.buffer, ARG_GATHER, &[]);
             barrier(&self.ctx, cmd);
             sort.record(cmd, self.seg_bits, None);
-            large.dispatch(cmd, [self.large_capacity / (self.local_max + 1) + 1, 1, 1], push.bytes());
+            large.dispatch_indirect_set(cmd, 0, &args.buffer, ARG_SEGMENTS, push.bytes());
             barrier(&self.ctx, cmd);
         }
     }

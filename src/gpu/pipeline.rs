@@ -156,6 +156,34 @@ impl ComputePipeline {
         self.dispatch_set(cmd, 0, groups, push)
     }
 
+    /// Records a dispatch whose size the GPU wrote into `args` at `offset` (a
+    /// VkDispatchIndirectCommand), using descriptor set `set`.
+    pub fn dispatch_indirect_set(
+        &self,
+        cmd: vk::CommandBuffer,
+        set: usize,
+        args: &Buffer,
+        offset: u64,
+        push: &[u8],
+    ) {
+        let device = self.ctx.device();
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.sets[set]],
+                &[],
+            );
+            if self.push_bytes > 0 {
+                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+            device.cmd_dispatch_indirect(cmd, args.raw, offset);
+        }
+    }
+
     /// Records a dispatch using descriptor set `set`.
     pub fn dispatch_set(&self, cmd: vk::CommandBuffer, set: usize, groups: [u32; 3], push: &[u8]) {
         let device = self.ctx.device();
@@ -191,7 +219,7 @@ impl Drop for ComputePipeline {
 }
 
 /// A full memory barrier between recorded commands (compute and transfer writes
-/// made visible to compute, transfer and host reads).
+/// made visible to compute, transfer, host and indirect-argument reads).
 pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
     let mb = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
@@ -199,7 +227,8 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
             vk::AccessFlags::SHADER_READ
                 | vk::AccessFlags::SHADER_WRITE
                 | vk::AccessFlags::TRANSFER_READ
-                | vk::AccessFlags::HOST_READ,
+                | vk::AccessFlags::HOST_READ
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
         );
     unsafe {
         ctx.device().cmd_pipeline_barrier(
@@ -207,7 +236,8 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
             vk::PipelineStageFlags::COMPUTE_SHADER
                 | vk::PipelineStageFlags::TRANSFER
-                | vk::PipelineStageFlags::HOST,
+                | vk::PipelineStageFlags::HOST
+                | vk::PipelineStageFlags::DRAW_INDIRECT,
             vk::DependencyFlags::empty(),
             &[mb],
             &[],

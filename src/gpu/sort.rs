@@ -19,6 +19,19 @@ use crate::error::{Error, Result};
 /// Elements per block (workgroup x items per invocation).
 pub const BLOCK: u32 = 2048;
 
+/// Offsets of the indirect dispatch commands that `sort_args.comp` writes: the
+/// sort's blocks, its scan chunks, the large-class gather, one group per class.
+pub const ARG_BLOCKS: u64 = 0;
+pub const ARG_CHUNKS: u64 = 16;
+pub const ARG_GATHER: u64 = 32;
+pub const ARG_SEGMENTS: u64 = 48;
+
+/// The pass that sizes dispatches from a count on the GPU, and its output.
+pub struct SortArgs {
+    pipeline: ComputePipeline,
+    pub buffer: Buffer,
+}
+
 /// Launch shape chosen from the device's limits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SortShape {
@@ -67,6 +80,8 @@ pub struct RadixSort {
     scan_partials: ComputePipeline,
     scan_apply: ComputePipeline,
     scatter: ComputePipeline,
+    /// Present when the count comes from a GPU buffer: indirect dispatch sizes.
+    pub args: Option<SortArgs>,
     ctx: Context,
 }
 
@@ -126,6 +141,15 @@ impl RadixSort {
         scan_reduce.bind(&[info_buf, &hist, &partials])?;
         scan_partials.bind(&[info_buf, &partials])?;
         scan_apply.bind(&[info_buf, &hist, &partials])?;
+        let args = match count {
+            Some(c) => {
+                let pipeline = ComputePipeline::new(ctx, shaders::SORT_ARGS, 2, 0, &[BLOCK])?;
+                let buffer = Buffer::new(ctx, 64, Location::Device, "sort-indirect-args")?;
+                pipeline.bind(&[c, &buffer])?;
+                Some(SortArgs { pipeline, buffer })
+            }
+            None => None,
+        };
         Ok(Self {
             capacity,
             shape,
@@ -140,6 +164,7 @@ impl RadixSort {
             scan_partials,
             scan_apply,
             scatter,
+            args,
             ctx: ctx.clone(),
         })
     }
@@ -166,25 +191,42 @@ impl RadixSort {
     /// None: the count is only in the count buffer, the dispatch covers capacity.
     pub fn record(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>) {
         let passes = bits.clamp(1, 32).div_ceil(8);
+        barrier(&self.ctx, cmd);
+        // With the count only on the GPU, size every dispatch from it (indirect).
+        let indirect = match (known, &self.args) {
+            (None, Some(args)) => {
+                args.pipeline.dispatch(cmd, [1, 1, 1], &[]);
+                barrier(&self.ctx, cmd);
+                Some(&args.buffer)
+            }
+            _ => None,
+        };
         let blocks = match known {
             Some(n) => n.div_ceil(BLOCK).clamp(1, self.blocks),
             None => self.blocks,
         };
         let chunks = (256 * blocks).div_ceil(BLOCK);
-        barrier(&self.ctx, cmd);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
-            let push = RadixPush { shift: 8 * pass, blocks, chunks, pad: 0 };
+            let push = match indirect {
+                // 0: the shaders derive both from the count, as sort_args did.
+                Some(_) => RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, pad: 0 },
+                None => RadixPush { shift: 8 * pass, blocks, chunks, pad: 0 },
+            };
             let p = push.bytes();
-            self.histogram.dispatch_set(cmd, src, [blocks, 1, 1], p);
+            let run = |pipeline: &ComputePipeline, set: usize, groups: u32, arg: u64| match indirect {
+                Some(args) => pipeline.dispatch_indirect_set(cmd, set, args, arg, p),
+                None => pipeline.dispatch_set(cmd, set, [groups, 1, 1], p),
+            };
+            run(&self.histogram, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
-            self.scan_reduce.dispatch(cmd, [chunks, 1, 1], p);
+            run(&self.scan_reduce, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
             self.scan_partials.dispatch(cmd, [1, 1, 1], p);
             barrier(&self.ctx, cmd);
-            self.scan_apply.dispatch(cmd, [chunks, 1, 1], p);
+            run(&self.scan_apply, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
-            self.scatter.dispatch_set(cmd, src, [blocks, 1, 1], p);
+            run(&self.scatter, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
         }
         if passes % 2 == 1 {
