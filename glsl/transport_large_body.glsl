@@ -19,10 +19,9 @@ layout(std430, set = 0, binding = 5) readonly buffer LargeProj { float large_pro
 
 layout(push_constant) uniform Push { TransportPush pc; };
 
-shared float s_part[gl_WorkGroupSize.x];
+#include "accumulate.glsl"
 
-const float FIXED_SCALE = 1099511627776.0;
-const float COST_SCALE = 4294967296.0;
+shared float s_part[gl_WorkGroupSize.x];
 
 void main() {
     uint g = gl_WorkGroupID.x;
@@ -40,17 +39,7 @@ void main() {
         uint e = vals[off + r];
         float delta = fsot_rank_target(z, r, n) - large_proj[e];
         local_cost += delta * delta;
-        uint base = large_points[e] * pc.dims;
-        for (uint k = 0u; k < pc.dims; ++k) {
-            float t = s.theta[k];
-            if (t != 0.0) {
-#ifdef FSOT_FLOAT_ATOMICS
-                atomicAdd(acc[base + k], delta * t);
-#else
-                atomicAdd(acc[base + k], int64_t(round(delta * t * FIXED_SCALE)));
-#endif
-            }
-        }
+        fsot_add_displacement(large_points[e], pc.dims, delta, s.theta);
     }
     s_part[tid] = local_cost;
     barrier();
@@ -59,7 +48,6 @@ void main() {
         barrier();
     }
     if (tid == 0u) {
-        atomicAdd(costs[2u * pc.cost_slot], int64_t(round(s_part[0] * COST_SCALE)));
-        atomicAdd(costs[2u * pc.cost_slot + 1u], int64_t(n));
+        fsot_add_cost(pc.cost_slot, s_part[0], n);
     }
 }

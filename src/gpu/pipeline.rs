@@ -156,6 +156,25 @@ impl ComputePipeline {
         self.dispatch_set(cmd, 0, groups, push)
     }
 
+    /// Binds the pipeline, descriptor set `set` and the push constants.
+    fn bind_for_dispatch(&self, cmd: vk::CommandBuffer, set: usize, push: &[u8]) {
+        let device = self.ctx.device();
+        unsafe {
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            device.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                self.layout,
+                0,
+                &[self.sets[set]],
+                &[],
+            );
+            if self.push_bytes > 0 {
+                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+            }
+        }
+    }
+
     /// Records a dispatch whose size the GPU wrote into `args` at `offset` (a
     /// VkDispatchIndirectCommand), using descriptor set `set`.
     pub fn dispatch_indirect_set(
@@ -166,42 +185,14 @@ impl ComputePipeline {
         offset: u64,
         push: &[u8],
     ) {
-        let device = self.ctx.device();
-        unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-            device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[self.sets[set]],
-                &[],
-            );
-            if self.push_bytes > 0 {
-                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            }
-            device.cmd_dispatch_indirect(cmd, args.raw, offset);
-        }
+        self.bind_for_dispatch(cmd, set, push);
+        unsafe { self.ctx.device().cmd_dispatch_indirect(cmd, args.raw, offset) };
     }
 
     /// Records a dispatch using descriptor set `set`.
     pub fn dispatch_set(&self, cmd: vk::CommandBuffer, set: usize, groups: [u32; 3], push: &[u8]) {
-        let device = self.ctx.device();
-        unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-            device.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                self.layout,
-                0,
-                &[self.sets[set]],
-                &[],
-            );
-            if self.push_bytes > 0 {
-                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            }
-            device.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
-        }
+        self.bind_for_dispatch(cmd, set, push);
+        unsafe { self.ctx.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
     }
 }
 

@@ -1,0 +1,82 @@
+// Bindings and helpers of the two transport passes (transport_body.glsl for GPUs,
+// transport_lane_body.glsl for CPU implementations): same buffers, same rules.
+#include "common.glsl"
+
+layout(std430, set = 0, binding = 0) readonly buffer Samples { float samples[]; };
+layout(std430, set = 0, binding = 1) readonly buffer Taps { uvec4 taps[]; }; // dx, dy, dt, threshold
+#ifdef FSOT_FLOAT_ATOMICS
+layout(std430, set = 0, binding = 2) buffer Acc { float acc[]; };
+#else
+layout(std430, set = 0, binding = 2) buffer Acc { int64_t acc[]; };
+#endif
+layout(std430, set = 0, binding = 3) buffer Costs { int64_t costs[]; }; // per slot: squared (2^32 fixed), count
+layout(std430, set = 0, binding = 4) buffer LargeMeta { uint large_count; uint large_segments; uint large_overflow; uint large_pad; uvec4 segments[]; };
+// Large classes, element e: sort key and payload (the radix sort's input), point,
+// projection, and the segment (its first element) it belongs to.
+layout(std430, set = 0, binding = 5) writeonly buffer LargeKeys { uint large_keys[]; };
+layout(std430, set = 0, binding = 6) writeonly buffer LargeVals { uint large_vals[]; };
+layout(std430, set = 0, binding = 7) writeonly buffer LargePoints { uint large_points[]; };
+layout(std430, set = 0, binding = 8) writeonly buffer LargeProj { float large_proj[]; };
+layout(std430, set = 0, binding = 9) writeonly buffer LargeSeg { uint large_seg[]; };
+
+layout(push_constant) uniform Push { TransportPush pc; };
+
+#include "accumulate.glsl"
+
+// Class size (samples) of a slice: taps whose threshold exceeds its level
+// (thresholds decrease), times spp.
+uint fsot_class_size(FsotSlice s) {
+    uint lo = 0u, hi = pc.taps;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (taps[mid].w > s.level) { lo = mid + 1u; } else { hi = mid; }
+    }
+    return lo * pc.spp;
+}
+
+// Point index of class member i.
+uint fsot_class_point(FsotSlice s, uint i) {
+    uvec4 tap = taps[i / pc.spp];
+    uint x = (s.cx + tap.x) % pc.width;
+    uint y = (s.cy + tap.y) % pc.height;
+    uint f = (s.ct + tap.z) % pc.frames;
+    return ((f * pc.height + y) * pc.width + x) * pc.spp + (i % pc.spp);
+}
+
+// Projection of a point on the slice's direction after its toroidal shift.
+float fsot_project(FsotSlice s, uint point) {
+    float p = 0.0;
+    for (uint k = 0u; k < pc.dims; ++k) {
+        float y = samples[point * pc.dims + k] - s.shift[k];
+        p += s.theta[k] * (y - floor(y));
+    }
+    return p;
+}
+
+// Reserves room for a large class in the radix sort's input; -1 if full.
+int fsot_reserve_large(uint slice, uint n) {
+    uint off = atomicAdd(large_count, n);
+    if (off + n > pc.large_capacity) {
+        atomicAdd(large_overflow, 1u);
+        return -1;
+    }
+    uint seg = atomicAdd(large_segments, 1u);
+    segments[seg] = uvec4(slice, off, n, 0u);
+    return int(off);
+}
+
+// Writes large-class member i (element off + i) for the radix sort.
+void fsot_write_large(FsotSlice s, uint off, uint i) {
+    uint point = fsot_class_point(s, i);
+    uint e = off + i;
+    float proj = fsot_project(s, point);
+    large_keys[e] = fsot_float_key(proj);
+    large_vals[e] = e;
+    large_points[e] = point;
+    large_proj[e] = proj;
+    large_seg[e] = off;
+}
+
+bool fsot_before(float ka, uint va, float kb, uint vb) {
+    return ka < kb || (ka == kb && va < vb);
+}
