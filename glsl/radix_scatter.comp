@@ -20,7 +20,8 @@
 layout(constant_id = 2) const uint SUBGROUPS = 8u;
 // Keys per invocation per round (ITEMS must be a multiple).
 #define KEYS 4u
-#define BLOCK 2048u
+// Pairs per block (WG x ITEMS): sizes the staging arrays.
+layout(constant_id = 3) const uint BLOCK = 2048u;
 
 layout(std430, set = 0, binding = 1) readonly buffer KeysIn { uint keys_in[]; };
 layout(std430, set = 0, binding = 2) readonly buffer ValsIn { uint vals_in[]; };
