@@ -22,6 +22,11 @@ pub struct SortBench {
     /// Median CPU time (rayon's parallel stable sort, all cores), seconds.
     pub cpu_seconds: f64,
     pub cpu_threads: usize,
+    /// One profiled sort, milliseconds summed over the 4 passes: histogram, scan
+    /// (3 dispatches), scatter.
+    pub stages_ms: [f64; 3],
+    /// Pairs per block on this device.
+    pub block: u32,
 }
 
 impl SortBench {
@@ -76,6 +81,23 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     })?;
     let ns = timer.read_ns(2 * runs)?;
     let gpu_seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
+    // One more run with a timestamp after every dispatch, for the breakdown.
+    let stages = Timer::new(ctx, 21)?;
+    submit_and_wait(ctx, |cmd| {
+        stages.reset(cmd);
+        copy_range(ctx, cmd, &pristine_k, &sort.keys[0], bytes);
+        copy_range(ctx, cmd, &pristine_v, &sort.vals[0], bytes);
+        barrier(ctx, cmd);
+        sort.record_timed(cmd, 32, Some(n), Some(&stages));
+    })?;
+    let t = stages.read_ns(21)?;
+    let mut stages_ms = [0.0f64; 3];
+    for pass in 0..4usize {
+        let b = 5 * pass;
+        stages_ms[0] += (t[b + 1] - t[b]) * 1e-6;
+        stages_ms[1] += (t[b + 4] - t[b + 1]) * 1e-6;
+        stages_ms[2] += (t[b + 5] - t[b + 4]) * 1e-6;
+    }
     // Check the last run against the CPU.
     let down = Buffer::new(ctx, bytes, Location::Readback, "bench-readback")?;
     submit_and_wait(ctx, |cmd| {
@@ -101,5 +123,7 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
         gpu_seconds,
         cpu_seconds: median(cpu_times),
         cpu_threads: rayon::current_num_threads(),
+        stages_ms,
+        block: sort.shape().block,
     })
 }

@@ -362,6 +362,10 @@ fn bench_command(args: BenchArgs) -> Result<()> {
                 b.cpu_pairs_per_second() * 1e-9,
                 b.cpu_threads
             );
+            println!(
+                "  one profiled sort ({}-pair blocks), 4 passes: histogram {:.3} ms, scan {:.3} ms, scatter {:.3} ms",
+                b.block, b.stages_ms[0], b.stages_ms[1], b.stages_ms[2]
+            );
             Ok(())
         }
     }

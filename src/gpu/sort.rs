@@ -14,6 +14,7 @@ use super::context::Context;
 use super::layout::{Pod, RadixPush};
 use super::pipeline::{barrier, copy, submit_and_wait, ComputePipeline};
 use super::shaders;
+use super::timer::Timer;
 use crate::error::{Error, Result};
 
 /// Offsets of the indirect dispatch commands that `sort_args.comp` writes: the
@@ -41,6 +42,7 @@ pub struct SortShape {
 
 impl SortShape {
     /// The first of (256 x 16), (256 x 8), (128 x 16), (64 x 32) invocations x
+    /// items (a multiple of the scatter's 8 keys per round)
     /// items whose scatter fits in shared memory (per-subgroup digit counters,
     /// four digit tables, the staged block); the subgroup size is the device's,
     /// never assumed. Larger blocks mean fewer blocks, a smaller histogram and
@@ -199,6 +201,18 @@ impl RadixSort {
     /// `known`: the element count when the host knows it (smaller dispatches);
     /// None: the count is only in the count buffer, the dispatch covers capacity.
     pub fn record(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>) {
+        self.record_timed(cmd, bits, known, None)
+    }
+
+    /// As `record`; with a timer, stamps 0..=5 x passes: before the first
+    /// dispatch, then after each of a pass's histogram, scan (3 dispatches) and
+    /// scatter.
+    pub fn record_timed(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
+        let stamp = |i: u32| {
+            if let Some(t) = timer {
+                t.stamp(cmd, i);
+            }
+        };
         let passes = bits.clamp(1, 32).div_ceil(8);
         barrier(&self.ctx, cmd);
         // With the count only on the GPU, size every dispatch from it (indirect).
@@ -215,6 +229,7 @@ impl RadixSort {
             None => self.blocks,
         };
         let chunks = (256 * blocks).div_ceil(self.shape.block);
+        stamp(0);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
             let push = match indirect {
@@ -229,14 +244,19 @@ impl RadixSort {
             };
             run(&self.histogram, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
+            stamp(1 + 5 * pass);
             run(&self.scan_reduce, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
+            stamp(2 + 5 * pass);
             self.scan_partials.dispatch(cmd, [1, 1, 1], p);
             barrier(&self.ctx, cmd);
+            stamp(3 + 5 * pass);
             run(&self.scan_apply, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
+            stamp(4 + 5 * pass);
             run(&self.scatter, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
+            stamp(5 + 5 * pass);
         }
         if passes % 2 == 1 {
             copy(&self.ctx, cmd, &self.keys[1], &self.keys[0]);
