@@ -1,5 +1,6 @@
 //! fsot: perceptually optimized spatio-temporal sample masks by filtered sliced
 //! optimal transport.
+pub mod baselines;
 pub mod bench;
 pub mod cpu;
 pub mod engine;

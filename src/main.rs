@@ -89,6 +89,18 @@ impl KernelName {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Method {
+    /// fsot's optimizer (filtered sliced optimal transport) under --kernel.
+    Fsot,
+    /// Independent uniform samples (seeded).
+    White,
+    /// Spatiotemporal blue noise (Wolfe et al. 2022): scalar masks (d = 1) by
+    /// void-and-cluster, energy = 2-D Gaussian in the frame + 1-D Gaussian over
+    /// time, sigma --sigma and --sigma-t (default 1.9).
+    Stbn,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Backend {
     /// Vulkan when a device is there, else the CPU (says which).
     Auto,
@@ -103,9 +115,10 @@ struct KernelArgs {
     /// Temporal filter of the kernel.
     #[arg(long, value_enum, default_value = "perceptual-taa")]
     kernel: KernelName,
-    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels.
-    #[arg(long, default_value_t = DEFAULT_SIGMA, allow_negative_numbers = true)]
-    sigma: f64,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels [default: 2.1; for --method
+    /// stbn, its energy's sigma, default 1.9].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma: Option<f64>,
     /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
     #[arg(long, allow_negative_numbers = true)]
     sigma_t: Option<f64>,
@@ -119,7 +132,13 @@ struct KernelArgs {
 
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
-        KernelSpec::from_name(self.kernel.as_str(), self.sigma, self.sigma_t, self.alpha, self.fps)
+        KernelSpec::from_name(
+            self.kernel.as_str(),
+            self.sigma.unwrap_or(DEFAULT_SIGMA),
+            self.sigma_t,
+            self.alpha,
+            self.fps,
+        )
     }
 }
 
@@ -135,6 +154,9 @@ struct OptimizeArgs {
     /// Samples per pixel and frame, 1 to 64 [default: 1, or the --init file's].
     #[arg(long, allow_negative_numbers = true)]
     spp: Option<usize>,
+    /// How to make the mask.
+    #[arg(long, value_enum, default_value = "fsot")]
+    method: Method,
     #[command(flatten)]
     kernel: KernelArgs,
     /// Iterations of the optimizer.
@@ -236,6 +258,9 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         if dir.exists() && !dir.is_dir() {
             return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
         }
+    }
+    if args.method != Method::Fsot {
+        return make_baseline(&args, tile, spec, out);
     }
     let choice = match args.backend {
         Backend::Auto => BackendChoice::Auto,
@@ -369,4 +394,43 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// The peers' methods: same tile, same files, time reported.
+fn make_baseline(args: &OptimizeArgs, tile: Tile, spec: KernelSpec, out: AtomicFile) -> Result<()> {
+    let start = Instant::now();
+    let mask = match args.method {
+        Method::White => {
+            let mut m = Mask::white(tile, args.seed);
+            m.set_meta("version", env!("CARGO_PKG_VERSION"));
+            m
+        }
+        Method::Stbn => {
+            if tile.dims != 1 || tile.spp != 1 {
+                return Err(Error::invalid(
+                    "--method stbn makes scalar masks for now (--dims 1, --spp 1); vector STBN (annealing) is not built yet",
+                ));
+            }
+            let sigma = args.kernel.sigma.unwrap_or(fsot::baselines::stbn::DEFAULT_SIGMA);
+            fsot::baselines::stbn::stbn_mask(tile, sigma, args.kernel.sigma_t.unwrap_or(sigma), args.seed)?
+        }
+        Method::Fsot => unreachable!("handled by optimize"),
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    let s = score(&mask, spec, SCORE_SLICES);
+    fsot::io::exr::write(&mask, out)?;
+    if let Some(dir) = &args.png {
+        let files = fsot::io::png::write(&mask, dir)?;
+        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    println!(
+        "wrote {}: {}, method {:?}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
+        args.out.display(),
+        tile.describe(),
+        args.method,
+        spec.describe(),
+        s.objective,
+        s.ratio()
+    );
+    Ok(())
 }

@@ -155,3 +155,35 @@ fn every_flag_has_help() {
         assert!(!lines[i + 1].trim().is_empty(), "{flag} has no description");
     }
 }
+
+#[test]
+fn baseline_methods_write_valid_masks() {
+    let dir = tempfile::tempdir().unwrap();
+    for dims in ["1", "2", "3", "4"] {
+        let out = format!("white{dims}.exr");
+        let o = fsot(
+            &["optimize", "--method", "white", "--size", "8x8x4", "--dims", dims, "--out", &out],
+            dir.path(),
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let m = fsot::io::exr::read(&dir.path().join(&out)).unwrap();
+        assert_eq!(m.tile.dims.to_string(), dims);
+        assert_eq!(m.meta("method"), Some("white"));
+    }
+    let o = fsot(
+        &["optimize", "--method", "stbn", "--size", "8x8x4", "--dims", "1", "--out", "stbn.exr"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = fsot::io::exr::read(&dir.path().join("stbn.exr")).unwrap();
+    let mut values: Vec<f32> = m.samples.clone();
+    values.sort_by(|a, b| a.total_cmp(b));
+    for (r, v) in values.iter().enumerate() {
+        assert_eq!(*v, ((r as f64 + 0.5) / 256.0) as f32, "a scalar STBN mask holds each rank once");
+    }
+    let o = fsot(
+        &["optimize", "--method", "stbn", "--size", "8x8x4", "--dims", "2", "--out", "v.exr"],
+        dir.path(),
+    );
+    assert!(!o.status.success() && stderr(&o).contains("scalar masks"), "{}", stderr(&o));
+}

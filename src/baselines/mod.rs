@@ -1,0 +1,3 @@
+//! The peers' methods, made by fsot on the same tile, the same way: the masks fsot
+//! is measured against.
+pub mod stbn;

@@ -1,0 +1,55 @@
+//! The peers' methods made by fsot: STBN (void-and-cluster) and white noise.
+
+use fsot::baselines::stbn::{stbn_mask, void_and_cluster};
+use fsot::eval::perceived::{perceived_error, TestSetup};
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+
+#[test]
+fn void_and_cluster_gives_every_rank_exactly_once() {
+    for (w, h, t) in [(16, 16, 4), (7, 5, 3), (1, 1, 1), (8, 8, 1)] {
+        let tile = Tile::new(w, h, t, 1, 1).unwrap();
+        let ranks = void_and_cluster(&tile, 1.9, 1.9, 5).unwrap();
+        let mut seen = vec![false; tile.pixels()];
+        for &r in &ranks {
+            assert!(!seen[r as usize], "rank {r} twice in {w}x{h}x{t}");
+            seen[r as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s));
+    }
+}
+
+#[test]
+fn void_and_cluster_is_deterministic_and_rejects_vectors() {
+    let tile = Tile::new(12, 12, 4, 1, 1).unwrap();
+    assert_eq!(void_and_cluster(&tile, 1.9, 1.9, 9).unwrap(), void_and_cluster(&tile, 1.9, 1.9, 9).unwrap());
+    assert_ne!(void_and_cluster(&tile, 1.9, 1.9, 9).unwrap(), void_and_cluster(&tile, 1.9, 1.9, 10).unwrap());
+    assert!(void_and_cluster(&Tile::new(8, 8, 2, 1, 2).unwrap(), 1.9, 1.9, 1).is_err());
+    assert!(void_and_cluster(&tile, -1.0, 1.9, 1).is_err());
+}
+
+#[test]
+fn white_noise_is_uniform() {
+    // Chi-square over 32 bins per dimension, 32768 values each: 31 degrees of
+    // freedom, 70 is far in the tail (p < 1e-4).
+    let mask = Mask::white(Tile::new(32, 32, 32, 1, 3).unwrap(), 17);
+    for k in 0..3 {
+        let mut bins = [0u32; 32];
+        for s in mask.samples.chunks_exact(3) {
+            bins[(s[k] * 32.0) as usize] += 1;
+        }
+        let expect = 32768.0 / 32.0;
+        let chi2: f64 = bins.iter().map(|&b| (b as f64 - expect).powi(2) / expect).sum();
+        assert!(chi2 < 70.0, "dimension {k}: chi2 {chi2}");
+    }
+}
+
+#[test]
+fn a_stbn_mask_has_far_less_perceived_error_than_white_noise_under_taa() {
+    let tile = Tile::new(32, 32, 16, 1, 1).unwrap();
+    let setup = TestSetup { image: 64, frames: 64, warmup: 32, renders: 2, ..TestSetup::default() };
+    let stbn = perceived_error(&stbn_mask(tile, 1.9, 1.9, 3).unwrap(), &setup, 1);
+    let white = (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0;
+    eprintln!("STBN / white under TAA: {:.3}", stbn / white);
+    assert!(stbn < 0.4 * white, "stbn {stbn} white {white}");
+}
