@@ -66,28 +66,94 @@ impl Energy {
     }
 }
 
-/// Index of the largest (`want_max`) or smallest energy among pixels whose state
-/// is `state`; ties to the lowest index. Scanned on every core in fixed chunks,
-/// so the answer does not depend on the thread count.
-fn extreme(energy: &[f64], on: &[bool], state: bool, want_max: bool) -> Option<usize> {
-    use rayon::prelude::*;
-    const CHUNK: usize = 4096;
-    let key = |e: f64| if want_max { -e } else { e };
-    energy
-        .par_chunks(CHUNK)
-        .zip(on.par_chunks(CHUNK))
-        .enumerate()
-        .filter_map(|(c, (es, os))| {
-            let mut best: Option<(f64, usize)> = None;
-            for (i, (&e, &o)) in es.iter().zip(os).enumerate() {
-                if o == state && best.map(|(b, _)| key(e) < b).unwrap_or(true) {
-                    best = Some((key(e), c * CHUNK + i));
-                }
-            }
-            best
-        })
-        .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)))
-        .map(|(_, i)| i)
+/// A tournament tree over the pixels: the leaf of a pixel in the tracked state
+/// holds its key, others hold +inf; each node keeps its subtree's smallest (key,
+/// index). The extreme is the root; changing a leaf costs log N.
+struct Tournament {
+    size: usize,
+    nodes: Vec<(f64, u32)>,
+}
+
+impl Tournament {
+    fn new(n: usize) -> Self {
+        let size = n.next_power_of_two();
+        Self { size, nodes: vec![(f64::INFINITY, u32::MAX); 2 * size] }
+    }
+
+    fn set(&mut self, i: usize, key: f64) {
+        let mut k = self.size + i;
+        self.nodes[k] = (key, i as u32);
+        while k > 1 {
+            k /= 2;
+            let (a, b) = (self.nodes[2 * k], self.nodes[2 * k + 1]);
+            self.nodes[k] = if (b.0, b.1) < (a.0, a.1) { b } else { a };
+        }
+    }
+
+    /// The smallest key's index (ties to the lowest index), if any leaf is live.
+    fn best(&self) -> Option<usize> {
+        let (key, i) = self.nodes[1];
+        (key < f64::INFINITY).then_some(i as usize)
+    }
+}
+
+/// The pattern, its energy, and the two extremes void-and-cluster needs: the
+/// tightest cluster (largest energy among ones) and the largest void (smallest
+/// energy among zeros).
+struct Pattern<'a> {
+    tile: &'a Tile,
+    kernel: &'a Energy,
+    on: Vec<bool>,
+    energy: Vec<f64>,
+    clusters: Tournament,
+    voids: Tournament,
+}
+
+impl<'a> Pattern<'a> {
+    fn new(tile: &'a Tile, kernel: &'a Energy, ones: &[usize]) -> Self {
+        let n = tile.pixels();
+        let mut on = vec![false; n];
+        let mut energy = vec![0.0; n];
+        for &p in ones {
+            on[p] = true;
+            kernel.splat(tile, &mut energy, p, 1.0);
+        }
+        let mut me =
+            Self { tile, kernel, on, energy, clusters: Tournament::new(n), voids: Tournament::new(n) };
+        for p in 0..n {
+            me.refresh(p);
+        }
+        me
+    }
+
+    fn refresh(&mut self, p: usize) {
+        let e = self.energy[p];
+        if self.on[p] {
+            self.clusters.set(p, -e);
+            self.voids.set(p, f64::INFINITY);
+        } else {
+            self.clusters.set(p, f64::INFINITY);
+            self.voids.set(p, e);
+        }
+    }
+
+    fn toggle(&mut self, p: usize) {
+        let sign = if self.on[p] { -1.0 } else { 1.0 };
+        self.on[p] = !self.on[p];
+        let (w, h, t) = (self.tile.width, self.tile.height, self.tile.frames);
+        let (x, y, f) = (p % w, (p / w) % h, p / (w * h));
+        for &(dx, dy, g) in &self.kernel.spatial {
+            let q = (f * h + (y + dy) % h) * w + (x + dx) % w;
+            self.energy[q] += sign * g;
+            self.refresh(q);
+        }
+        for &(dt, g) in &self.kernel.temporal {
+            let q = (((f + dt) % t) * h + y) * w + x;
+            self.energy[q] += sign * g;
+            self.refresh(q);
+        }
+        self.refresh(p);
+    }
 }
 
 /// Ranks 0..N of every pixel of a scalar mask (a permutation), by void-and-cluster.
@@ -112,42 +178,36 @@ pub fn void_and_cluster(tile: &Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> 
     for i in (1..n).rev() {
         order.swap(i, rng.below(i as u32 + 1) as usize);
     }
-    let mut on = vec![false; n];
-    let mut energy = vec![0.0f64; n];
-    for &p in &order[..ones] {
-        on[p] = true;
-        kernel.splat(tile, &mut energy, p, 1.0);
-    }
+    let mut pattern = Pattern::new(tile, &kernel, &order[..ones]);
     // Relax: move the tightest cluster into the largest void until it stays.
     for _ in 0..n {
-        let cluster = extreme(&energy, &on, true, true).expect("pattern has ones"); // ok: ones >= 1
-        on[cluster] = false;
-        kernel.splat(tile, &mut energy, cluster, -1.0);
-        let void = extreme(&energy, &on, false, false).expect("pattern has zeros"); // ok: a zero was just made
-        on[void] = true;
-        kernel.splat(tile, &mut energy, void, 1.0);
+        let Some(cluster) = pattern.clusters.best() else { break };
+        pattern.toggle(cluster);
+        let Some(void) = pattern.voids.best() else { break };
+        pattern.toggle(void);
         if void == cluster {
             break;
         }
     }
     let mut rank = vec![u32::MAX; n];
     // Phase 1: ranks below the pattern, removing tightest clusters.
+    let initial: Vec<usize> = (0..n).filter(|&p| pattern.on[p]).collect();
     {
-        let mut on1 = on.clone();
-        let mut e1 = energy.clone();
-        for r in (0..ones).rev() {
-            let c = extreme(&e1, &on1, true, true).expect("ones left"); // ok: r counts them
-            on1[c] = false;
-            kernel.splat(tile, &mut e1, c, -1.0);
+        let mut below = Pattern::new(tile, &kernel, &initial);
+        for r in (0..initial.len()).rev() {
+            let Some(c) = below.clusters.best() else { break };
+            below.toggle(c);
             rank[c] = r as u32;
         }
     }
     // Phases 2 and 3: ranks above it, filling largest voids.
-    for r in ones..n {
-        let v = extreme(&energy, &on, false, false).expect("zeros left"); // ok: r < n
-        on[v] = true;
-        kernel.splat(tile, &mut energy, v, 1.0);
+    for r in initial.len()..n {
+        let Some(v) = pattern.voids.best() else { break };
+        pattern.toggle(v);
         rank[v] = r as u32;
+    }
+    if rank.contains(&u32::MAX) {
+        return Err(Error::invalid("void-and-cluster left a pixel unranked (internal error)"));
     }
     Ok(rank)
 }

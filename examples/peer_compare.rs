@@ -1,0 +1,64 @@
+//! Compares masks, ours and the published ones, on the independent perceived-error
+//! test (with and without TAA, ratio to white noise of the same shape) and on the
+//! `fsot score` objective under the taa kernel.
+//!
+//! cargo run --release --example peer_compare -- [MASK.exr | PEER.png ...]
+//! QUANT8=1 quantises the .exr masks to 8 bits first, as the published ones are.
+//! A .png is read as a published 128x128x64 scalar mask: 8-bit grey (or grey in
+//! RGB/RGBA, first channel read), the 64 frames
+//! stacked vertically, value v standing for (v + 0.5) / 256 (see
+//! ../shared/data/peer-masks/README.md; used for comparison only).
+use fsot::eval::perceived::{ratio_to_white, TestSetup};
+use fsot::kernel::KernelSpec;
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+use fsot::score::{score, SCORE_SLICES};
+
+fn read_peer_png(path: &str) -> Result<Mask, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("{path}: {e}"))?;
+    let mut reader = png::Decoder::new(file).read_info().map_err(|e| format!("{path}: {e}"))?;
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).map_err(|e| format!("{path}: {e}"))?;
+    if info.bit_depth != png::BitDepth::Eight {
+        return Err(format!("{path}: expected 8 bits per channel"));
+    }
+    // Grey, or grey stored in RGB(A): the first channel.
+    let stride = info.color_type.samples();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let frames = h / w;
+    let tile = Tile::new(w, w, frames, 1, 1).map_err(|e| e.to_string())?;
+    // Row-major stacked frames match fsot's layout (frame-major, then rows).
+    let samples = buf[..w * h * stride].iter().step_by(stride).map(|&v| (v as f32 + 0.5) / 256.0).collect();
+    Ok(Mask { tile, samples, meta: vec![("method".into(), format!("published: {path}"))] })
+}
+
+fn main() {
+    let paths: Vec<String> = std::env::args().skip(1).collect();
+    let taa = KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap();
+    println!("| mask | tile | perceived, TAA (x white) | perceived, no TAA (x white) | objective, taa kernel (x white) |");
+    println!("| --- | --- | ---: | ---: | ---: |");
+    for path in paths {
+        let mask = if path.ends_with(".png") {
+            read_peer_png(&path)
+        } else {
+            fsot::io::exr::read(path.as_ref()).map_err(|e| e.to_string())
+        };
+        let mask = match mask {
+            // QUANT8=1: store our masks as the published ones are, 8 bits.
+            Ok(mut m) if std::env::var("QUANT8").is_ok() && !path.ends_with(".png") => {
+                m.samples.iter_mut().for_each(|v| *v = ((*v * 256.0).floor() + 0.5) / 256.0);
+                m
+            }
+            Ok(m) => m,
+            Err(e) => {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        };
+        let with = ratio_to_white(&mask, &TestSetup::default(), 4);
+        let without = ratio_to_white(&mask, &TestSetup { taa_alpha: None, ..TestSetup::default() }, 4);
+        let s = score(&mask, taa, SCORE_SLICES);
+        let name = std::path::Path::new(&path).file_name().unwrap().to_string_lossy().into_owned();
+        println!("| {name} | {} | {with:.3} | {without:.3} | {:.3} |", mask.tile.describe(), s.ratio());
+    }
+}
