@@ -64,9 +64,11 @@ impl Engine {
         match choice {
             BackendChoice::Cpu => cpu(String::new()),
             BackendChoice::Vulkan => try_gpu(false),
+            // Any reason the GPU path cannot take the run (no device, d > 2, a tile
+            // too large for a binding) falls back to the CPU path, which reports
+            // input that is wrong everywhere itself.
             BackendChoice::Auto => match try_gpu(true) {
                 Ok(s) => Ok(s),
-                Err(e @ Error::Invalid(_)) => Err(e),
                 Err(e) => cpu(format!(" (no Vulkan GPU used: {e})")),
             },
         }
