@@ -4,6 +4,8 @@
 //!
 //! cargo run --release --example peer_compare -- [MASK.exr | PEER.png ...]
 //! QUANT8=1 quantises the .exr masks to 8 bits first, as the published ones are.
+//! SPECTRA=DIR also writes each mask's XY and XT power spectra as PNG images
+//! (DC in the centre, log scale from 1/100 to 10 times white noise).
 //! A .png is read as a published 128x128x64 scalar mask: 8-bit grey (or grey in
 //! RGB/RGBA, first channel read), the 64 frames
 //! stacked vertically, value v standing for (v + 0.5) / 256 (see
@@ -59,6 +61,15 @@ fn main() {
         let without = ratio_to_white(&mask, &TestSetup { taa_alpha: None, ..TestSetup::default() }, 4);
         let s = score(&mask, taa, SCORE_SLICES);
         let name = std::path::Path::new(&path).file_name().unwrap().to_string_lossy().into_owned();
+        if let Ok(dir) = std::env::var("SPECTRA") {
+            use fsot::eval::spectrum::{spectrum_png, spectrum_xt, spectrum_xy};
+            let t = mask.tile;
+            let stem = name.trim_end_matches(".png").trim_end_matches(".exr");
+            let xy = spectrum_png(&spectrum_xy(&mask, 0).unwrap(), t.height, t.width).unwrap();
+            let xt = spectrum_png(&spectrum_xt(&mask, 0).unwrap(), t.frames, t.width).unwrap();
+            std::fs::write(format!("{dir}/{stem}-xy.png"), xy).unwrap();
+            std::fs::write(format!("{dir}/{stem}-xt.png"), xt).unwrap();
+        }
         println!("| {name} | {} | {with:.3} | {without:.3} | {:.3} |", mask.tile.describe(), s.ratio());
     }
 }

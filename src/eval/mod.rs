@@ -2,3 +2,4 @@
 //! as a display (TAA) and an eye would, and measure what is left.
 pub mod integrands;
 pub mod perceived;
+pub mod spectrum;
