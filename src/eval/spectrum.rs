@@ -41,9 +41,11 @@ pub fn fft(re: &mut [f64], im: &mut [f64]) {
     }
 }
 
-/// |2-D DFT|^2 of a rows x cols grid (row-major), added into `out`.
+/// |2-D DFT|^2 of a rows x cols grid (row-major) with its mean removed, added
+/// into `out`.
 fn add_power_2d(grid: &[f64], rows: usize, cols: usize, out: &mut [f64]) {
-    let mut re = grid.to_vec();
+    let mean = grid.iter().sum::<f64>() / grid.len() as f64;
+    let mut re: Vec<f64> = grid.iter().map(|v| v - mean).collect();
     let mut im = vec![0.0; rows * cols];
     for r in 0..rows {
         fft(&mut re[r * cols..(r + 1) * cols], &mut im[r * cols..(r + 1) * cols]);
@@ -84,9 +86,7 @@ pub fn spectrum_xy(mask: &Mask, dim: usize) -> Result<Vec<f64>> {
         let grid: Vec<f64> = (0..t.width * t.height)
             .map(|i| mask.sample(i % t.width, i / t.width, f, 0)[dim] as f64)
             .collect();
-        let mean = grid.iter().sum::<f64>() / grid.len() as f64;
-        let centred: Vec<f64> = grid.iter().map(|v| v - mean).collect();
-        add_power_2d(&centred, t.height, t.width, &mut out);
+        add_power_2d(&grid, t.height, t.width, &mut out);
     }
     // White noise of variance 1/12 has expected power N / 12 per frequency.
     let scale = 12.0 / (t.frames * t.width * t.height) as f64;
@@ -103,9 +103,7 @@ pub fn spectrum_xt(mask: &Mask, dim: usize) -> Result<Vec<f64>> {
         let grid: Vec<f64> = (0..t.width * t.frames)
             .map(|i| mask.sample(i % t.width, y, i / t.width, 0)[dim] as f64)
             .collect();
-        let mean = grid.iter().sum::<f64>() / grid.len() as f64;
-        let centred: Vec<f64> = grid.iter().map(|v| v - mean).collect();
-        add_power_2d(&centred, t.frames, t.width, &mut out);
+        add_power_2d(&grid, t.frames, t.width, &mut out);
     }
     let scale = 12.0 / (t.height * t.width * t.frames) as f64;
     out.iter_mut().for_each(|v| *v *= scale);
