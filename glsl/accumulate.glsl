@@ -5,18 +5,22 @@
 const float FIXED_SCALE = 1099511627776.0; // 2^40, as src/cpu.rs
 const float COST_SCALE = 4294967296.0;     // 2^32
 
-// The member `point` moves by delta along theta.
+// The member `point` moves by delta along theta (d <= 2, as fsot_project).
+void fsot_add_component(uint index, float value) {
+#ifdef FSOT_FLOAT_ATOMICS
+    atomicAdd(acc[index], value);
+#else
+    atomicAdd(acc[index], int64_t(round(value * FIXED_SCALE)));
+#endif
+}
+
 void fsot_add_displacement(uint point, uint dims, float delta, float theta[FSOT_MAX_DIMS]) {
     uint base = point * dims;
-    for (uint k = 0u; k < dims; ++k) {
-        float t = theta[k];
-        if (t != 0.0) {
-#ifdef FSOT_FLOAT_ATOMICS
-            atomicAdd(acc[base + k], delta * t);
-#else
-            atomicAdd(acc[base + k], int64_t(round(delta * t * FIXED_SCALE)));
-#endif
-        }
+    if (theta[0] != 0.0) {
+        fsot_add_component(base, delta * theta[0]);
+    }
+    if (dims > 1u && theta[1] != 0.0) {
+        fsot_add_component(base + 1u, delta * theta[1]);
     }
 }
 

@@ -36,19 +36,32 @@ uint fsot_class_size(FsotSlice s) {
 
 // Point index of class member i.
 uint fsot_class_point(FsotSlice s, uint i) {
-    uvec4 tap = taps[i / pc.spp];
-    uint x = (s.cx + tap.x) % pc.width;
-    uint y = (s.cy + tap.y) % pc.height;
-    uint f = (s.ct + tap.z) % pc.frames;
-    return ((f * pc.height + y) * pc.width + x) * pc.spp + (i % pc.spp);
+    // No integer division or remainder by a run-time value on the common path:
+    // on SIMD drivers (llvmpipe) each one is a scalar divide per lane. Taps and
+    // centres both lie in [0, size), so one conditional subtraction wraps.
+    uint tap_index = pc.spp == 1u ? i : i / pc.spp;
+    uint member = i - tap_index * pc.spp;
+    uvec4 tap = taps[tap_index];
+    uint x = s.cx + tap.x;
+    uint y = s.cy + tap.y;
+    uint f = s.ct + tap.z;
+    x = x >= pc.width ? x - pc.width : x;
+    y = y >= pc.height ? y - pc.height : y;
+    f = f >= pc.frames ? f - pc.frames : f;
+    return ((f * pc.height + y) * pc.width + x) * pc.spp + member;
 }
 
 // Projection of a point on the slice's direction after its toroidal shift.
+// Written out for d <= 2, the only dimensions the GPU path takes (the host
+// checks): a loop over a run-time count with indexed private arrays costs
+// gathers on SIMD drivers.
 float fsot_project(FsotSlice s, uint point) {
-    float p = 0.0;
-    for (uint k = 0u; k < pc.dims; ++k) {
-        float y = samples[point * pc.dims + k] - s.shift[k];
-        p += s.theta[k] * (y - floor(y));
+    uint base = point * pc.dims;
+    float y = samples[base] - s.shift[0];
+    float p = 0.0 + s.theta[0] * (y - floor(y));
+    if (pc.dims > 1u) {
+        y = samples[base + 1u] - s.shift[1];
+        p += s.theta[1] * (y - floor(y));
     }
     return p;
 }

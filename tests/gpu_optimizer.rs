@@ -43,15 +43,19 @@ fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
 }
 
 fn compare_one_iteration_with(tile: Tile, kernel: &str, deterministic: bool, transport: TransportKind) {
+    compare_on_mask(&Mask::white(tile, 21), kernel, deterministic, transport);
+}
+
+fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: TransportKind) {
     let Some(ctx) = common::gpu_context() else { return };
+    let tile = mask.tile;
     let mut s = settings(kernel, 10, 21);
     s.slices = Some(300);
-    let mask = Mask::white(tile, 21);
     let options = GpuOptions { deterministic, profile: false, transport: Some(transport) };
-    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
+    let mut gpu = GpuRun::new(&ctx, tile, s, Some(mask), options).unwrap();
     for iteration in [0u32, 5] {
         let g = gpu.displacements(iteration).unwrap();
-        let c = cpu_displacements(&mask, &s, 300, iteration);
+        let c = cpu_displacements(mask, &s, 300, iteration);
         let worst = g.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
         let moved = c.iter().filter(|v| **v != 0.0).count();
         assert!(moved > tile.values() / 4, "too few coordinates moved: {moved}");
@@ -70,6 +74,31 @@ fn one_iteration_gives_the_cpu_displacements_small_classes() {
 #[test]
 fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
     compare_one_iteration(Tile::new(16, 16, 8, 1, 1).unwrap(), "perceptual-taa", true);
+}
+
+#[test]
+fn per_lane_classes_up_to_its_limit_give_the_cpu_displacements() {
+    // 3 spp: classes of several hundred to about two thousand points, all
+    // sorted by one invocation each (bucket sort, insertion within buckets).
+    let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
+    let kernel = Kernel::new(KernelSpec::from_name("gaussian", 2.1, None, 0.1, 60.0).unwrap(), &tile);
+    let largest = kernel.taps.len() * 3;
+    assert!(largest > 1024 && largest <= fsot::gpu::optimizer::LANE_MAX as usize, "{largest}");
+    compare_on_mask(&Mask::white(tile, 8), "gaussian", true, TransportKind::PerLane);
+}
+
+#[test]
+fn per_lane_sort_stays_exact_when_every_key_ties() {
+    // Every sample at the same place: every projection of a class is equal, so
+    // all keys pile into one bucket and the per-lane pass takes its heap-sort
+    // fallback; ties go by point index on both paths, so the displacements
+    // agree exactly as for distinct keys.
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let mut mask = Mask::white(tile, 3);
+    mask.samples.iter_mut().for_each(|v| *v = 0.375);
+    for transport in [TransportKind::PerLane, TransportKind::Workgroup] {
+        compare_on_mask(&mask, "taa", true, transport);
+    }
 }
 
 #[test]
