@@ -7,6 +7,7 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use fsot::baselines::fast::{Combine, Filter};
 use fsot::engine::{BackendChoice, Engine, Started};
 use fsot::error::{Error, Result};
 use fsot::gpu::optimizer::GpuOptions;
@@ -31,7 +32,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Optimize a mask and write it as EXR (and optionally PNG slices).
-    Optimize(OptimizeArgs),
+    Optimize(Box<OptimizeArgs>),
     /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
     /// slices, beside that of white noise of the same shape.
     Score(ScoreArgs),
@@ -94,10 +95,14 @@ enum Method {
     Fsot,
     /// Independent uniform samples (seeded).
     White,
-    /// Spatiotemporal blue noise (Wolfe et al. 2022): scalar masks (d = 1) by
-    /// void-and-cluster, energy = 2-D Gaussian in the frame + 1-D Gaussian over
-    /// time, sigma --sigma and --sigma-t (default 1.9).
+    /// Spatiotemporal blue noise (Wolfe et al. 2022): energy = 2-D Gaussian in
+    /// the frame + 1-D Gaussian over time, sigma --sigma and --sigma-t (default
+    /// 1.9); scalar masks (d = 1) by void-and-cluster, vector masks by
+    /// simulated annealing of swaps (--passes).
     Stbn,
+    /// Filter-adapted masks (FAST, Donnelly et al. 2024): greedy swaps for the
+    /// filter --fast-spatial x --fast-temporal (--fast-combine), --passes.
+    Fast,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -189,6 +194,21 @@ struct OptimizeArgs {
     /// Start from this mask (EXR written by fsot or laid out the same way).
     #[arg(long)]
     init: Option<PathBuf>,
+    /// Swap methods (stbn with d >= 2, fast): passes of as many proposed swaps
+    /// as pixels.
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
+    passes: u32,
+    /// FAST spatial filter: none, gaussian:SIGMA, box:N or binomial:N.
+    #[arg(long, default_value = "gaussian:1.3435")]
+    fast_spatial: String,
+    /// FAST temporal filter: none, gaussian:SIGMA, box:N, binomial:N or
+    /// ema:ALPHA:BETA (blend alpha, history reset beta).
+    #[arg(long, default_value = "ema:0.1:0.1")]
+    fast_temporal: String,
+    /// FAST: `product` (one separable filter) or `sum:W` (W x spatial loss +
+    /// (1 - W) x temporal loss).
+    #[arg(long, default_value = "product")]
+    fast_combine: String,
     /// Output EXR file.
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
@@ -211,7 +231,7 @@ struct ScoreArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Optimize(args) => optimize(args),
+        Command::Optimize(args) => optimize(*args),
         Command::Score(args) => score_command(args),
         Command::Bench(args) => bench_command(args),
     };
@@ -396,8 +416,27 @@ fn bench_command(args: BenchArgs) -> Result<()> {
     }
 }
 
+/// Progress of a swap search, hidden when there is none (void-and-cluster).
+fn swap_bar(passes: u32, shown: bool) -> ProgressBar {
+    if !shown {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(passes as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} passes, {elapsed} elapsed, {eta} left, energy {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
 /// The peers' methods: same tile, same files, time reported.
 fn make_baseline(args: &OptimizeArgs, tile: Tile, spec: KernelSpec, out: AtomicFile) -> Result<()> {
+    let swaps = args.method == Method::Fast || (args.method == Method::Stbn && tile.dims > 1);
+    if swaps && !(1..=100_000).contains(&args.passes) {
+        return Err(Error::invalid(format!("--passes must be in 1..=100000, got {}", args.passes)));
+    }
     let start = Instant::now();
     let mask = match args.method {
         Method::White => {
@@ -406,13 +445,47 @@ fn make_baseline(args: &OptimizeArgs, tile: Tile, spec: KernelSpec, out: AtomicF
             m
         }
         Method::Stbn => {
-            if tile.dims != 1 || tile.spp != 1 {
-                return Err(Error::invalid(
-                    "--method stbn makes scalar masks for now (--dims 1, --spp 1); vector STBN (annealing) is not built yet",
-                ));
-            }
             let sigma = args.kernel.sigma.unwrap_or(fsot::baselines::stbn::DEFAULT_SIGMA);
-            fsot::baselines::stbn::stbn_mask(tile, sigma, args.kernel.sigma_t.unwrap_or(sigma), args.seed)?
+            let sigma_t = args.kernel.sigma_t.unwrap_or(sigma);
+            let bar = swap_bar(args.passes, tile.dims > 1);
+            let mask = fsot::baselines::stbn::stbn_mask_with(
+                tile,
+                sigma,
+                sigma_t,
+                args.passes,
+                args.seed,
+                |_, e| {
+                    bar.inc(1);
+                    bar.set_message(format!("{e:.6e}"));
+                },
+            )?;
+            bar.finish_and_clear();
+            mask
+        }
+        Method::Fast => {
+            let spec = fsot::baselines::fast::FastSpec {
+                spatial: Filter::parse(&args.fast_spatial, false)?,
+                temporal: Filter::parse(&args.fast_temporal, true)?,
+                combine: Combine::parse(&args.fast_combine)?,
+            };
+            let bar = swap_bar(args.passes, true);
+            let (mask, report) =
+                fsot::baselines::fast::fast_mask(tile, &spec, args.passes, args.seed, |_, e| {
+                    bar.inc(1);
+                    bar.set_message(format!("{e:.6e}"));
+                })?;
+            bar.finish_and_clear();
+            eprintln!(
+                "{} ({} neighbours per pixel): loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated)",
+                spec.describe(),
+                report.offsets,
+                report.start_energy,
+                report.trace.last().copied().unwrap_or(report.start_energy),
+                report.accepted,
+                report.proposed,
+                report.recomputed
+            );
+            mask
         }
         Method::Fsot => unreachable!("handled by optimize"),
     };

@@ -1,6 +1,9 @@
-//! The peers' methods made by fsot: STBN (void-and-cluster) and white noise.
+//! The peers' methods made by fsot: STBN (void-and-cluster, annealing), FAST and
+//! white noise.
 
-use fsot::baselines::stbn::{stbn_mask, void_and_cluster};
+use fsot::baselines::fast::{fast_mask, FastSpec};
+use fsot::baselines::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
+use fsot::baselines::swap::{PairEnergy, ValueTerm};
 use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
@@ -52,4 +55,40 @@ fn a_stbn_mask_has_far_less_perceived_error_than_white_noise_under_taa() {
     let white = (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0;
     eprintln!("STBN / white under TAA: {:.3}", stbn / white);
     assert!(stbn < 0.4 * white, "stbn {stbn} white {white}");
+}
+
+#[test]
+fn annealing_accepts_uphill_swaps_yet_the_energy_falls_pass_after_pass() {
+    // Vector STBN's schedule: early passes take some swaps that raise the
+    // energy; the energy at the end of each pass still falls, monotonically,
+    // and matches the energy summed afresh.
+    let tile = Tile::new(24, 24, 8, 1, 2).unwrap();
+    let (values, report) = stbn_vector(tile, 1.9, 1.9, 8, 4, |_, _| {}).unwrap();
+    assert!(report.uphill > 0, "no uphill move: not annealing");
+    let mut last = report.start_energy;
+    for (pass, &e) in report.trace.iter().enumerate() {
+        assert!(e < last, "pass {pass}: energy {e} after {last}");
+        last = e;
+    }
+    let energy = PairEnergy::new(tile, &stbn_offsets(1.9, 1.9), ValueTerm::Gaussian { sigma: 1.0 }).unwrap();
+    let fresh = energy.total(&values);
+    assert!((fresh - last).abs() < 1e-9 * fresh, "tracked {last}, summed {fresh}");
+}
+
+#[test]
+fn fast_and_vector_stbn_masks_beat_white_noise_under_taa() {
+    let setup = TestSetup { image: 64, frames: 64, warmup: 32, renders: 2, ..TestSetup::default() };
+    let white = |tile: Tile| {
+        (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0
+    };
+    let scalar = Tile::new(32, 32, 16, 1, 1).unwrap();
+    let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, |_, _| {}).unwrap();
+    let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
+    eprintln!("FAST / white under TAA: {ratio:.3}");
+    assert!(ratio < 0.4, "{ratio}");
+    let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
+    let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, |_, _| {}).unwrap();
+    let ratio = perceived_error(&stbn, &setup, 1) / white(vector);
+    eprintln!("vector STBN / white under TAA: {ratio:.3}");
+    assert!(ratio < 0.8, "{ratio}");
 }

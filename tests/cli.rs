@@ -157,33 +157,81 @@ fn every_flag_has_help() {
 }
 
 #[test]
-fn baseline_methods_write_valid_masks() {
+fn every_method_writes_valid_masks_for_one_to_four_dimensions() {
     let dir = tempfile::tempdir().unwrap();
-    for dims in ["1", "2", "3", "4"] {
-        let out = format!("white{dims}.exr");
-        let o = fsot(
-            &["optimize", "--method", "white", "--size", "8x8x4", "--dims", dims, "--out", &out],
-            dir.path(),
-        );
-        assert!(o.status.success(), "{}", stderr(&o));
-        let m = fsot::io::exr::read(&dir.path().join(&out)).unwrap();
-        assert_eq!(m.tile.dims.to_string(), dims);
-        assert_eq!(m.meta("method"), Some("white"));
+    for method in ["fsot", "white", "stbn", "fast"] {
+        for dims in ["1", "2", "3", "4"] {
+            let out = format!("{method}{dims}.exr");
+            let o = fsot(
+                &[
+                    "optimize",
+                    "--method",
+                    method,
+                    "--size",
+                    "8x8x4",
+                    "--dims",
+                    dims,
+                    "--iterations",
+                    "5",
+                    "--passes",
+                    "2",
+                    "--backend",
+                    "cpu",
+                    "--out",
+                    &out,
+                ],
+                dir.path(),
+            );
+            assert!(o.status.success(), "{method} d = {dims}: {}", stderr(&o));
+            let m = fsot::io::exr::read(&dir.path().join(&out)).unwrap();
+            assert_eq!((m.tile.width, m.tile.height, m.tile.frames), (8, 8, 4));
+            assert_eq!(m.tile.dims.to_string(), dims);
+            assert_eq!(m.meta("method"), Some(method));
+            assert!(
+                m.samples.iter().all(|v| (0.0..1.0).contains(v)),
+                "{method} d = {dims}: a value outside [0, 1)"
+            );
+            if method == "stbn" || method == "fast" {
+                // Ranks (d = 1) or swaps of stratified values (d >= 2): every
+                // dimension holds each of the 256 strata exactly once.
+                let d = m.tile.dims;
+                for k in 0..d {
+                    let mut values: Vec<f32> = m.samples.iter().skip(k).step_by(d).copied().collect();
+                    values.sort_by(|a, b| a.total_cmp(b));
+                    for (r, v) in values.iter().enumerate() {
+                        assert_eq!(
+                            *v,
+                            ((r as f64 + 0.5) / 256.0) as f32,
+                            "{method} d = {dims}, dimension {k}"
+                        );
+                    }
+                }
+            }
+        }
     }
-    let o = fsot(
-        &["optimize", "--method", "stbn", "--size", "8x8x4", "--dims", "1", "--out", "stbn.exr"],
-        dir.path(),
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let m = fsot::io::exr::read(&dir.path().join("stbn.exr")).unwrap();
-    let mut values: Vec<f32> = m.samples.clone();
-    values.sort_by(|a, b| a.total_cmp(b));
-    for (r, v) in values.iter().enumerate() {
-        assert_eq!(*v, ((r as f64 + 0.5) / 256.0) as f32, "a scalar STBN mask holds each rank once");
+}
+
+#[test]
+fn swap_methods_refuse_bad_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--method", "fast", "--passes", "0"], "--passes"),
+        (&["--method", "stbn", "--dims", "2", "--passes", "0"], "--passes"),
+        (&["--method", "fast", "--fast-spatial", "sinc:2"], "unknown filter"),
+        (&["--method", "fast", "--fast-spatial", "ema:0.1:0.1"], "unknown filter"),
+        (&["--method", "fast", "--fast-temporal", "ema:1.5:0.1"], "out of range"),
+        (&["--method", "fast", "--fast-temporal", "gaussian:-1"], "out of range"),
+        (&["--method", "fast", "--fast-combine", "sum:2"], "--fast-combine"),
+        (&["--method", "fast", "--spp", "2"], "1 spp"),
+        (&["--method", "stbn", "--spp", "2"], "1 spp"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["optimize", "--size", "4x4x2", "--out", "m.exr"];
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
     }
-    let o = fsot(
-        &["optimize", "--method", "stbn", "--size", "8x8x4", "--dims", "2", "--out", "v.exr"],
-        dir.path(),
-    );
-    assert!(!o.status.success() && stderr(&o).contains("scalar masks"), "{}", stderr(&o));
 }

@@ -1,4 +1,4 @@
-//! Spatiotemporal blue noise (Wolfe et al. 2022), scalar masks: void-and-cluster
+//! Spatiotemporal blue noise (Wolfe et al. 2022). Scalar masks: void-and-cluster
 //! with STBN's energy, a 2-D Gaussian within each frame plus a 1-D Gaussian over
 //! time at the same pixel, exp(-r^2 / (2 sigma^2)) with sigma 1.9 for both, on the
 //! wrapping tile.
@@ -7,9 +7,15 @@
 //! the pixels, relaxed by moving its tightest cluster into its largest void until
 //! that changes nothing), then ranks below it by removing tightest clusters, then
 //! ranks above it by filling largest voids. Every step updates the energy of the
-//! toggled pixel's neighbourhood only; the extreme is found by a scan. Ties go to
-//! the lowest pixel index, so the result is a pure function of the seed.
+//! toggled pixel's neighbourhood only; tournament trees find the extremes. Ties
+//! go to the lowest pixel index, so the result is a pure function of the seed.
+//!
+//! Vector masks (d >= 2), as the STBN paper does after Georgiev and Fajardo
+//! (2016): simulated annealing of swaps between pixels (`swap.rs`), the same
+//! pixel weights times the sample term exp(-|a - b|^(d/2)).
 
+use crate::baselines::fast::stratified_values;
+use crate::baselines::swap::{swap_search, PairEnergy, Schedule, SwapReport, ValueTerm};
 use crate::error::{Error, Result};
 use crate::problem::Tile;
 use crate::rng::{derive, seed_key, Stream};
@@ -23,25 +29,37 @@ struct Energy {
     temporal: Vec<(usize, f64)>,
 }
 
+/// STBN's energy weights as unfolded offsets (dx, dy, dt, weight): the 2-D
+/// Gaussian exp(-r^2 / (2 sigma^2)) within the frame (the pixel itself included,
+/// weight 1) and the 1-D Gaussian over time at the same pixel, to 3 sigma.
+pub fn stbn_offsets(sigma_xy: f64, sigma_t: f64) -> Vec<(i64, i64, i64, f64)> {
+    let mut out = Vec::new();
+    let r = (3.0 * sigma_xy).ceil() as i64;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            out.push((dx, dy, 0, (-((dx * dx + dy * dy) as f64) / (2.0 * sigma_xy * sigma_xy)).exp()));
+        }
+    }
+    let rt = (3.0 * sigma_t).ceil() as i64;
+    for dt in (-rt..=rt).filter(|&dt| dt != 0) {
+        out.push((0, 0, dt, (-((dt * dt) as f64) / (2.0 * sigma_t * sigma_t)).exp()));
+    }
+    out
+}
+
 impl Energy {
     fn new(tile: &Tile, sigma_xy: f64, sigma_t: f64) -> Self {
-        let (w, h, t) = (tile.width, tile.height, tile.frames);
-        let r = (3.0 * sigma_xy).ceil() as i64;
-        let mut spatial = vec![0.0f64; w * h];
-        for dy in -r..=r {
-            for dx in -r..=r {
-                let g = (-((dx * dx + dy * dy) as f64) / (2.0 * sigma_xy * sigma_xy)).exp();
-                spatial[dy.rem_euclid(h as i64) as usize * w + dx.rem_euclid(w as i64) as usize] += g;
+        let (w, h, t) = (tile.width as i64, tile.height as i64, tile.frames as i64);
+        let mut spatial = vec![0.0f64; tile.width * tile.height];
+        let mut temporal = vec![0.0f64; tile.frames];
+        for (dx, dy, dt, g) in stbn_offsets(sigma_xy, sigma_t) {
+            if dt == 0 {
+                spatial[(dy.rem_euclid(h) * w + dx.rem_euclid(w)) as usize] += g;
+            } else {
+                temporal[dt.rem_euclid(t) as usize] += g;
             }
         }
-        let rt = (3.0 * sigma_t).ceil() as i64;
-        let mut temporal = vec![0.0f64; t];
-        for dt in -rt..=rt {
-            if dt != 0 {
-                temporal[dt.rem_euclid(t as i64) as usize] +=
-                    (-((dt * dt) as f64) / (2.0 * sigma_t * sigma_t)).exp();
-            }
-        }
+        let w = tile.width;
         Self {
             spatial: spatial
                 .iter()
@@ -164,11 +182,7 @@ pub fn void_and_cluster(tile: &Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> 
             tile.describe()
         )));
     }
-    for (name, s) in [("sigma", sigma_xy), ("temporal sigma", sigma_t)] {
-        if !(s.is_finite() && s > 0.0 && s <= 64.0) {
-            return Err(Error::invalid(format!("STBN {name} must be in (0, 64], got {s}")));
-        }
-    }
+    check_sigmas(sigma_xy, sigma_t)?;
     let n = tile.pixels();
     let kernel = Energy::new(tile, sigma_xy, sigma_t);
     // Initial pattern: a tenth of the pixels (at least one), chosen by the seed.
@@ -212,17 +226,71 @@ pub fn void_and_cluster(tile: &Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> 
     Ok(rank)
 }
 
-/// A scalar STBN mask: rank r of N becomes the sample (r + 0.5) / N.
-pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<crate::mask::Mask> {
-    let ranks = void_and_cluster(&tile, sigma_xy, sigma_t, seed)?;
-    let n = ranks.len() as f64;
-    let samples = ranks.iter().map(|&r| ((r as f64 + 0.5) / n) as f32).collect();
+/// Annealing schedule of vector STBN: from half the mean |delta| of the first
+/// proposals down to zero over the first three quarters of the passes, then
+/// greedy.
+pub const ANNEALING: (f64, f64) = (0.1, 0.25);
+
+/// Vector STBN (d >= 2): simulated annealing of swaps under STBN's pixel weights
+/// times Georgiev and Fajardo's sample term exp(-|a - b|^(d/2)), from values
+/// stratified per dimension.
+pub fn stbn_vector(
+    tile: Tile,
+    sigma_xy: f64,
+    sigma_t: f64,
+    passes: u32,
+    seed: u64,
+    on_pass: impl FnMut(u32, f64),
+) -> Result<(Vec<f32>, SwapReport)> {
+    check_sigmas(sigma_xy, sigma_t)?;
+    let energy = PairEnergy::new(tile, &stbn_offsets(sigma_xy, sigma_t), ValueTerm::Gaussian { sigma: 1.0 })?;
+    let mut values = stratified_values(&tile, seed, 0x57b2);
+    let schedule = Schedule { passes, start_temperature: ANNEALING.0, greedy_share: ANNEALING.1 };
+    let report = swap_search(&energy, &mut values, schedule, derive(seed_key(seed), 0x57b3), on_pass)?;
+    Ok((values, report))
+}
+
+/// An STBN mask: void-and-cluster for d = 1 (rank r of N becomes the sample
+/// (r + 0.5) / N), annealing for d >= 2 (`passes` passes).
+pub fn stbn_mask_with(
+    tile: Tile,
+    sigma_xy: f64,
+    sigma_t: f64,
+    passes: u32,
+    seed: u64,
+    on_pass: impl FnMut(u32, f64),
+) -> Result<crate::mask::Mask> {
+    let (samples, how) = if tile.dims == 1 {
+        let ranks = void_and_cluster(&tile, sigma_xy, sigma_t, seed)?;
+        let n = ranks.len() as f64;
+        (ranks.iter().map(|&r| ((r as f64 + 0.5) / n) as f32).collect(), "void-and-cluster".to_string())
+    } else {
+        let (values, _) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, on_pass)?;
+        (values, format!("annealing, {passes} passes"))
+    };
     let mut meta = vec![
         ("method".to_string(), "stbn".to_string()),
-        ("kernel".to_string(), format!("stbn void-and-cluster (sigma = {sigma_xy}, sigma_t = {sigma_t})")),
+        ("kernel".to_string(), format!("stbn {how} (sigma = {sigma_xy}, sigma_t = {sigma_t})")),
         ("seed".to_string(), seed.to_string()),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
     meta.sort();
     Ok(crate::mask::Mask { tile, samples, meta })
+}
+
+/// A scalar STBN mask (void-and-cluster).
+pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<crate::mask::Mask> {
+    if tile.dims != 1 {
+        return Err(Error::invalid("stbn_mask makes scalar masks; use stbn_mask_with for vectors"));
+    }
+    stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, |_, _| {})
+}
+
+fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {
+    for (name, s) in [("sigma", sigma_xy), ("temporal sigma", sigma_t)] {
+        if !(s.is_finite() && s > 0.0 && s <= 64.0) {
+            return Err(Error::invalid(format!("STBN {name} must be in (0, 64], got {s}")));
+        }
+    }
+    Ok(())
 }
