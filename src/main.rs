@@ -38,6 +38,29 @@ enum Command {
     Score(ScoreArgs),
     /// Benchmarks that print figures.
     Bench(BenchArgs),
+    /// Render animated scenes with every method's mask, with and without TAA,
+    /// and measure the perceptual error (pRelMSE) and RelMSE.
+    Eval(EvalArgs),
+}
+
+#[derive(Args)]
+struct EvalArgs {
+    /// Small tiles, images and sample counts: a few minutes on 2 cores.
+    #[arg(long)]
+    quick: bool,
+    /// Also write the records as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Folder for the tables (results.md, results.json) and the cache of masks
+    /// and references.
+    #[arg(long, default_value = "eval-out")]
+    out: PathBuf,
+    /// Eye sigmas to evaluate (the seed's tables: 2.1 and 1.9).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![2.1, 1.9], allow_negative_numbers = true)]
+    sigma: Vec<f64>,
+    /// Only these scenes (comma-separated names) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    scenes: Vec<String>,
 }
 
 #[derive(Args)]
@@ -234,6 +257,7 @@ fn main() -> ExitCode {
         Command::Optimize(args) => optimize(*args),
         Command::Score(args) => score_command(args),
         Command::Bench(args) => bench_command(args),
+        Command::Eval(args) => eval_command(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -414,6 +438,66 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+fn eval_command(args: EvalArgs) -> Result<()> {
+    use fsot::eval::scenes::SCENES;
+    use fsot::eval::suite::{cache_dir, run_eval, to_json, to_markdown, EvalSize};
+    for &s in &args.sigma {
+        if !(s.is_finite() && s > 0.0 && s <= 8.0) {
+            return Err(Error::invalid(format!("--sigma must be in (0, 8], got {s}")));
+        }
+    }
+    let scenes: Vec<_> = if args.scenes.is_empty() {
+        SCENES.to_vec()
+    } else {
+        args.scenes
+            .iter()
+            .map(|name| {
+                SCENES.iter().copied().find(|s| s.name() == name).ok_or_else(|| {
+                    let names: Vec<_> = SCENES.iter().map(|s| s.name()).collect();
+                    Error::invalid(format!("unknown scene `{name}` (one of {})", names.join(", ")))
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", args.out.display())))?;
+    // Reserve the outputs before the long work: a bad path fails now.
+    let md = AtomicFile::create(&args.out.join("results.md"))?;
+    let js = AtomicFile::create(&args.out.join("results.json"))?;
+    let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
+    let size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
+    let start = Instant::now();
+    let records = run_eval(&size, &args.sigma, &scenes, &cache_dir(&args.out), |line| eprintln!("{line}"))?;
+    let json = to_json(&records);
+    let t = size.tile;
+    let table = format!(
+        "# fsot eval{}\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
+         {} warm-up, {} renders per cell, references {} samples per pixel; TAA alpha 0.1; eps 0.01. Run time {:.0} s.\n{}",
+        if args.quick { " --quick" } else { "" },
+        t.width,
+        t.height,
+        t.frames,
+        t.dims,
+        size.iterations,
+        size.passes,
+        size.shot.image,
+        size.shot.image,
+        size.shot.frames,
+        size.warmup,
+        size.renders,
+        size.reference_samples,
+        start.elapsed().as_secs_f64(),
+        to_markdown(&records)
+    );
+    md.commit(table.as_bytes())?;
+    js.commit(json.as_bytes())?;
+    if let Some(f) = extra {
+        f.commit(json.as_bytes())?;
+    }
+    println!("{table}");
+    Ok(())
 }
 
 /// Progress of a swap search, hidden when there is none (void-and-cluster).

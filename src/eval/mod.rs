@@ -1,5 +1,9 @@
 //! Evaluation: render animated integrands with a mask's samples, filter the error
 //! as a display (TAA) and an eye would, and measure what is left.
+pub mod eye;
 pub mod integrands;
 pub mod perceived;
+pub mod render;
+pub mod scenes;
 pub mod spectrum;
+pub mod suite;

@@ -4,13 +4,13 @@
 //! render), the error against the exact reference goes through the display's TAA
 //! (exponential moving average) when asked, then through the eye: a spatial
 //! Gaussian exp(-r^2 / sigma^2) and FovVideoVDP's temporal response at 60 fps (all
-//! 15 taps, negative ones included). The score is the mean squared filtered error
+//! 15 taps, negative ones included; `eye.rs`). The score is the mean squared filtered error
 //! over the image's interior and the frames after a warm-up.
 
 use rayon::prelude::*;
 
+use crate::eval::eye::Eye;
 use crate::eval::integrands::{Family, FAMILIES_1D, FAMILIES_2D};
-use crate::kernel::perceptual_taps;
 use crate::mask::Mask;
 use crate::problem::Tile;
 use crate::rng::{derive, seed_key, Stream};
@@ -78,44 +78,12 @@ fn render_error(mask: &Mask, family: Family, variant: u32, shift: [f64; 2], setu
         }
     }
     // The eye: temporal response, then spatial Gaussian, on the interior.
-    let taps = perceptual_taps(setup.fps);
-    let r = (setup.eye_sigma * 3.0).ceil() as i64;
-    let mut spatial = Vec::new();
-    for dy in -r..=r {
-        for dx in -r..=r {
-            spatial.push((
-                dx,
-                dy,
-                (-((dx * dx + dy * dy) as f64) / (setup.eye_sigma * setup.eye_sigma)).exp(),
-            ));
-        }
-    }
-    let total: f64 = spatial.iter().map(|s| s.2).sum();
-    let margin = r as usize;
-    let start = setup.warmup.max(taps.len());
+    let eye = Eye::new(setup.eye_sigma, setup.fps);
+    let start = setup.warmup.max(eye.history());
     let sums: Vec<(f64, usize)> = (start..frames)
-        .into_par_iter()
         .map(|f| {
-            let mut temporal = vec![0.0f64; n * n];
-            for (k, w) in taps.iter().enumerate() {
-                for (t, e) in temporal.iter_mut().zip(&after_taa[f - k]) {
-                    *t += w * e;
-                }
-            }
-            let mut sum = 0.0;
-            let mut count = 0;
-            for y in margin..n - margin {
-                for x in margin..n - margin {
-                    let mut v = 0.0;
-                    for &(dx, dy, w) in &spatial {
-                        v += w * temporal[(y as i64 + dy) as usize * n + (x as i64 + dx) as usize];
-                    }
-                    v /= total;
-                    sum += v * v;
-                    count += 1;
-                }
-            }
-            (sum, count)
+            let seen = eye.filter(&after_taa, f, n);
+            (seen.iter().map(|v| v * v).sum::<f64>(), seen.len())
         })
         .collect();
     let (sum, count) = sums.iter().fold((0.0, 0), |a, b| (a.0 + b.0, a.1 + b.1));

@@ -1,0 +1,89 @@
+//! The perceptual filter of the evaluation: what the eye does to a sequence of
+//! images, a spatial Gaussian exp(-r^2 / sigma^2) (sigma in pixels at the viewing
+//! distance) and FovVideoVDP's temporal response at the frame rate, each
+//! normalised to sum 1, so a constant image passes unchanged.
+
+use rayon::prelude::*;
+
+use crate::kernel::perceptual_taps;
+
+pub struct Eye {
+    /// 1-D Gaussian taps at offsets -margin..=margin; the 2-D filter is their
+    /// product, applied as two passes.
+    spatial: Vec<f64>,
+    temporal: Vec<f64>,
+    /// Pixels at the border that the spatial filter would read outside the image.
+    pub margin: usize,
+}
+
+impl Eye {
+    pub fn new(sigma: f64, fps: f64) -> Self {
+        let r = (sigma * 3.0).ceil() as i64;
+        let mut spatial: Vec<f64> = (-r..=r).map(|d| (-((d * d) as f64) / (sigma * sigma)).exp()).collect();
+        let total: f64 = spatial.iter().sum();
+        spatial.iter_mut().for_each(|w| *w /= total);
+        let taps = perceptual_taps(fps);
+        let sum: f64 = taps.iter().sum();
+        Self { spatial, temporal: taps.iter().map(|t| t / sum).collect(), margin: r as usize }
+    }
+
+    /// Frames the temporal filter needs before the first one it can filter.
+    pub fn history(&self) -> usize {
+        self.temporal.len() - 1
+    }
+
+    /// Frame `f` of `frames` (n x n images) as the eye sees it, on the interior
+    /// (margin pixels cut from each side), row by row. Needs f >= history().
+    pub fn filter(&self, frames: &[Vec<f64>], f: usize, n: usize) -> Vec<f64> {
+        let mut temporal = vec![0.0f64; n * n];
+        for (k, w) in self.temporal.iter().enumerate() {
+            for (t, e) in temporal.iter_mut().zip(&frames[f - k]) {
+                *t += w * e;
+            }
+        }
+        let m = self.margin;
+        let inner = n.saturating_sub(2 * m);
+        // Along x (every row, interior columns), then along y (interior rows).
+        let rows: Vec<f64> = (0..n * inner)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y) = (i % inner, i / inner);
+                self.spatial.iter().enumerate().map(|(k, w)| w * temporal[y * n + x + k]).sum()
+            })
+            .collect();
+        (0..inner * inner)
+            .into_par_iter()
+            .map(|i| {
+                let (x, y) = (i % inner, i / inner);
+                self.spatial.iter().enumerate().map(|(k, w)| w * rows[(y + k) * inner + x]).sum()
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_constant_sequence_passes_unchanged_and_a_pixel_spreads_by_the_weights() {
+        let eye = Eye::new(2.1, 60.0);
+        let n = 40;
+        let frames: Vec<Vec<f64>> = (0..20).map(|_| vec![0.7; n * n]).collect();
+        let out = eye.filter(&frames, 19, n);
+        assert!(out.iter().all(|v| (v - 0.7).abs() < 1e-12));
+        // One lit pixel in the current frame only: the centre of the filtered
+        // image is that pixel times the centre weights of both filters.
+        let mut frames: Vec<Vec<f64>> = (0..20).map(|_| vec![0.0; n * n]).collect();
+        frames[19][20 * n + 20] = 1.0;
+        let out = eye.filter(&frames, 19, n);
+        let inner = n - 2 * eye.margin;
+        let centre = out[(20 - eye.margin) * inner + 20 - eye.margin];
+        let spatial_centre = eye.spatial[eye.margin] * eye.spatial[eye.margin];
+        assert!((centre - spatial_centre * eye.temporal[0]).abs() < 1e-15);
+        // The product of the 1-D taps is the 2-D Gaussian exp(-r^2 / sigma^2).
+        let (a, b) = (eye.spatial[eye.margin + 2] * eye.spatial[eye.margin + 1], spatial_centre);
+        assert!((a / b - (-5.0f64 / (2.1 * 2.1)).exp()).abs() < 1e-12);
+        assert!((out.iter().sum::<f64>() - eye.temporal[0]).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,188 @@
+//! Rendering the evaluation's scenes: one sample per pixel per frame with a
+//! mask's numbers, and references with many stratified samples, cached on disk.
+
+use std::path::Path;
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::eval::scenes::{reference, Scene};
+use crate::io::atomic::AtomicFile;
+use crate::mask::Mask;
+use crate::rng::{derive, seed_key, Stream};
+
+/// Image size and frames of a render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shot {
+    pub image: usize,
+    pub frames: usize,
+}
+
+/// How a render takes its numbers from a mask. The scene's dimension k is
+/// component k mod d of the mask's sample (d the mask's dimension), in group
+/// k / d; each group reads the tile at its own random pixel offset and adds its
+/// own random toroidal shift, so groups are decorrelated.
+pub struct MaskSampler<'a> {
+    mask: &'a Mask,
+    /// Per group: pixel offset (x, y, frame) and value shift per component.
+    groups: Vec<([usize; 3], Vec<f64>)>,
+}
+
+impl<'a> MaskSampler<'a> {
+    pub fn new(mask: &'a Mask, scene_dims: usize, seed: u64) -> Self {
+        let t = mask.tile;
+        let d = t.dims;
+        let mut rng = Stream::new(derive(seed_key(seed), 0x5ca1));
+        let groups = (0..scene_dims.div_ceil(d))
+            .map(|_| {
+                let offset = [
+                    rng.below(t.width as u32) as usize,
+                    rng.below(t.height as u32) as usize,
+                    rng.below(t.frames as u32) as usize,
+                ];
+                (offset, (0..d).map(|_| rng.next_f64()).collect())
+            })
+            .collect();
+        Self { mask, groups }
+    }
+
+    /// The numbers of pixel (x, y) in frame f, into u (the scene's dimension).
+    pub fn numbers(&self, x: usize, y: usize, f: usize, u: &mut [f64]) {
+        let t = self.mask.tile;
+        let d = t.dims;
+        for (k, slot) in u.iter_mut().enumerate() {
+            let (offset, shift) = &self.groups[k / d];
+            let s = self.mask.sample(
+                (x + offset[0]) % t.width,
+                (y + offset[1]) % t.height,
+                (f + offset[2]) % t.frames,
+                0,
+            );
+            let v = s[k % d] as f64 + shift[k % d];
+            *slot = v - v.floor();
+        }
+    }
+}
+
+/// Frames of an n x n render at 1 sample per pixel, numbers from `sampler`.
+pub fn render(scene: Scene, shot: Shot, sampler: &MaskSampler) -> Vec<Vec<f64>> {
+    let n = shot.image;
+    let dims = scene.dims();
+    (0..shot.frames)
+        .map(|f| {
+            (0..n * n)
+                .into_par_iter()
+                .map(|i| {
+                    let (x, y) = (i % n, i / n);
+                    let mut u = [0.0f64; 4];
+                    sampler.numbers(x, y, f, &mut u[..dims]);
+                    scene.shade(
+                        (x as f64 + 0.5) / n as f64,
+                        (y as f64 + 0.5) / n as f64,
+                        f as f64,
+                        &u[..dims],
+                    )
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The reference frames: `samples` stratified samples per pixel (see
+/// `scenes::reference`), read from `cache` when a file for the same scene, shot
+/// and sample count is there, else rendered and written there.
+pub fn references(scene: Scene, shot: Shot, samples: usize, cache: Option<&Path>) -> Result<Vec<Vec<f64>>> {
+    let n = shot.image;
+    let name = format!("ref-{}-{}x{}-m{}.f32", scene.name(), n, shot.frames, samples);
+    let path = cache.map(|c| c.join(&name));
+    if let Some(path) = &path {
+        if let Ok(bytes) = std::fs::read(path) {
+            if bytes.len() == n * n * shot.frames * 4 {
+                let values: Vec<f64> = bytes
+                    .chunks_exact(4)
+                    .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
+                    .collect();
+                return Ok(values.chunks(n * n).map(|c| c.to_vec()).collect());
+            }
+        }
+    }
+    let key = derive(seed_key(0x2ef), scene.dims() as u32);
+    let frames: Vec<Vec<f64>> = (0..shot.frames)
+        .map(|f| {
+            (0..n * n)
+                .into_par_iter()
+                .map(|i| {
+                    let mut stream = Stream::new(derive(derive(key, f as u32), i as u32));
+                    let (x, y) = ((i % n) as f64 + 0.5, (i / n) as f64 + 0.5);
+                    // Kept at the cache's precision, so a cached run gives the
+                    // same figures as a fresh one.
+                    reference(scene, x / n as f64, y / n as f64, f as f64, samples, &mut stream) as f32 as f64
+                })
+                .collect()
+        })
+        .collect();
+    if let Some(path) = &path {
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| {
+                Error::invalid(format!("cannot make the cache folder {}: {e}", dir.display()))
+            })?;
+        }
+        let bytes: Vec<u8> = frames.iter().flatten().flat_map(|&v| (v as f32).to_le_bytes()).collect();
+        AtomicFile::create(path)?.commit(&bytes)?;
+    }
+    Ok(frames)
+}
+
+/// The display's temporal antialiasing: an exponential moving average with the
+/// current frame's weight alpha, history starting at the first frame.
+pub fn taa(frames: &[Vec<f64>], alpha: f64) -> Vec<Vec<f64>> {
+    let mut out: Vec<Vec<f64>> = Vec::with_capacity(frames.len());
+    for (f, frame) in frames.iter().enumerate() {
+        let next = match f {
+            0 => frame.clone(),
+            _ => frame.iter().zip(&out[f - 1]).map(|(c, h)| alpha * c + (1.0 - alpha) * h).collect(),
+        };
+        out.push(next);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::problem::Tile;
+
+    #[test]
+    fn groups_read_the_mask_at_their_own_offset_and_shift() {
+        let tile = Tile::new(4, 4, 2, 1, 2).unwrap();
+        let mask = Mask::white(tile, 1);
+        let s = MaskSampler::new(&mask, 4, 9);
+        let mut u = [0.0; 4];
+        s.numbers(1, 2, 1, &mut u);
+        for k in 0..4 {
+            let (o, shift) = &s.groups[k / 2];
+            let v =
+                mask.sample((1 + o[0]) % 4, (2 + o[1]) % 4, (1 + o[2]) % 2, 0)[k % 2] as f64 + shift[k % 2];
+            assert_eq!(u[k], v - v.floor());
+            assert!((0.0..1.0).contains(&u[k]));
+        }
+        assert_ne!(s.groups[0].1, s.groups[1].1);
+    }
+
+    #[test]
+    fn taa_is_an_exponential_moving_average() {
+        let frames = vec![vec![1.0], vec![0.0], vec![0.0]];
+        let out = taa(&frames, 0.25);
+        assert_eq!(out, vec![vec![1.0], vec![0.75], vec![0.5625]]);
+    }
+
+    #[test]
+    fn references_are_cached_and_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let shot = Shot { image: 6, frames: 2 };
+        let a = references(Scene::SoftShadow, shot, 16, Some(dir.path())).unwrap();
+        let b = references(Scene::SoftShadow, shot, 16, Some(dir.path())).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,299 @@
+//! `fsot eval`: every method's mask rendered into every scene, with and without
+//! TAA, measured by pRelMSE and RelMSE (the seed's Tables 1 and 2, for fsot).
+//!
+//! Definitions (per pixel p of the image interior and per frame f after the
+//! warm-up; the mean over both is reported, then averaged over renders):
+//! - e = I - R: the 1-spp render I minus the reference R, both after the
+//!   display's TAA (moving average, alpha 0.1) in the TAA case;
+//! - RelMSE = mean e^2 / (R^2 + eps);
+//! - pRelMSE = mean (P e)^2 / ((P R)^2 + eps), P the perceptual filter (the eye's
+//!   spatial Gaussian exp(-r^2 / sigma^2) times FovVideoVDP's temporal response,
+//!   normalised to sum 1; `eye.rs`); eps = 0.01.
+
+use std::path::{Path, PathBuf};
+
+use crate::baselines::fast::{fast_mask, FastSpec, Filter};
+use crate::baselines::stbn::stbn_mask_with;
+use crate::error::{Error, Result};
+use crate::eval::eye::Eye;
+use crate::eval::render::{references, render, taa, MaskSampler, Shot};
+use crate::eval::scenes::Scene;
+use crate::io::atomic::AtomicFile;
+use crate::kernel::KernelSpec;
+use crate::mask::Mask;
+use crate::optimize::{optimize, Settings};
+use crate::problem::Tile;
+
+pub const EPSILON: f64 = 0.01;
+pub const TAA_ALPHA: f64 = 0.1;
+
+/// The compared methods, in table order.
+pub const METHODS: [&str; 8] = [
+    "white",
+    "fsot-spatial",
+    "stbn",
+    "fast",
+    "ours-gaussian",
+    "ours-taa",
+    "ours-perceptual",
+    "ours-perceptual-taa",
+];
+
+/// Sizes of an evaluation run.
+#[derive(Clone, Copy, Debug)]
+pub struct EvalSize {
+    pub tile: Tile,
+    pub iterations: u32,
+    pub passes: u32,
+    pub shot: Shot,
+    pub warmup: usize,
+    pub renders: u32,
+    pub reference_samples: usize,
+}
+
+impl EvalSize {
+    /// A few minutes on 2 cores.
+    pub fn quick() -> Self {
+        Self {
+            tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"),
+            iterations: 300,
+            passes: 8,
+            shot: Shot { image: 64, frames: 48 },
+            warmup: 16,
+            renders: 2,
+            reference_samples: 256,
+        }
+    }
+
+    pub fn full() -> Self {
+        Self {
+            tile: Tile::new(64, 64, 16, 1, 2).expect("valid tile"),
+            iterations: 1000,
+            passes: 32,
+            shot: Shot { image: 128, frames: 96 },
+            warmup: 32,
+            renders: 3,
+            reference_samples: 1024,
+        }
+    }
+}
+
+/// One table cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Record {
+    pub scene: String,
+    pub method: String,
+    pub taa: bool,
+    pub sigma: f64,
+    pub prelmse: f64,
+    pub relmse: f64,
+}
+
+/// The mask of `method` for eye sigma `sigma`, from `cache` when made before
+/// with the same parameters.
+pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> Result<Mask> {
+    let t = size.tile;
+    let name = format!(
+        "mask-{method}-s{sigma}-{}x{}x{}-d{}-i{}-p{}.exr",
+        t.width, t.height, t.frames, t.dims, size.iterations, size.passes
+    );
+    let path = cache.join(name);
+    if let Ok(mask) = crate::io::exr::read(&path) {
+        if mask.tile == t {
+            return Ok(mask);
+        }
+    }
+    let seed = 1;
+    let fsot = |kernel: &str| -> Result<Mask> {
+        let mut s = Settings::new(KernelSpec::from_name(kernel, sigma, None, TAA_ALPHA, 60.0)?, seed);
+        s.iterations = size.iterations;
+        optimize(t, s, None)
+    };
+    let mask = match method {
+        "white" => Mask::white(t, seed),
+        "fsot-spatial" => fsot("spatial")?,
+        "ours-gaussian" => fsot("gaussian")?,
+        "ours-taa" => fsot("taa")?,
+        "ours-perceptual" => fsot("perceptual")?,
+        "ours-perceptual-taa" => fsot("perceptual-taa")?,
+        // STBN keeps its own sigma (1.9, its paper's); vector masks by annealing.
+        "stbn" => stbn_mask_with(t, 1.9, 1.9, size.passes, seed, |_, _| {})?,
+        // FAST's Gaussian exp(-r^2 / (2 s^2)) matches the eye's exp(-r^2 /
+        // sigma^2) at s = sigma / sqrt 2 (1.3435 for 1.9, as published).
+        "fast" => {
+            let spec = FastSpec {
+                spatial: Filter::Gaussian { sigma: sigma / std::f64::consts::SQRT_2 },
+                ..FastSpec::default()
+            };
+            fast_mask(t, &spec, size.passes, seed, |_, _| {})?.0
+        }
+        other => return Err(Error::invalid(format!("unknown method `{other}`"))),
+    };
+    std::fs::create_dir_all(cache)
+        .map_err(|e| Error::invalid(format!("cannot make the cache folder {}: {e}", cache.display())))?;
+    crate::io::exr::write(&mask, AtomicFile::create(&path)?)?;
+    Ok(mask)
+}
+
+/// Filtered references of one scene: per TAA setting, the frames after TAA
+/// (or not) and what the eye sees of them.
+struct SceneReference {
+    frames: [Vec<Vec<f64>>; 2],
+    seen: [Vec<Vec<f64>>; 2],
+}
+
+/// (pRelMSE, RelMSE) of one render against the reference.
+fn errors(
+    render: &[Vec<f64>],
+    reference: &[Vec<f64>],
+    seen_reference: &[Vec<f64>],
+    eye: &Eye,
+    start: usize,
+    n: usize,
+) -> (f64, f64) {
+    let m = eye.margin;
+    let inner = n - 2 * m;
+    let error: Vec<Vec<f64>> =
+        render.iter().zip(reference).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
+    let (mut p_sum, mut r_sum, mut count) = (0.0, 0.0, 0usize);
+    for f in start..render.len() {
+        let seen = eye.filter(&error, f, n);
+        for (i, (&e, &r)) in seen.iter().zip(&seen_reference[f - start]).enumerate() {
+            p_sum += e * e / (r * r + EPSILON);
+            let (x, y) = (i % inner + m, i / inner + m);
+            let (e, r) = (error[f][y * n + x], reference[f][y * n + x]);
+            r_sum += e * e / (r * r + EPSILON);
+            count += 1;
+        }
+    }
+    (p_sum / count as f64, r_sum / count as f64)
+}
+
+/// Runs the evaluation; `log` gets a line per step.
+pub fn run_eval(
+    size: &EvalSize,
+    sigmas: &[f64],
+    scenes: &[Scene],
+    cache: &Path,
+    mut log: impl FnMut(&str),
+) -> Result<Vec<Record>> {
+    let n = size.shot.image;
+    let mut records = Vec::new();
+    for &scene in scenes {
+        let refs = references(scene, size.shot, size.reference_samples, Some(cache))?;
+        log(&format!("reference of {} ready", scene.name()));
+        for &sigma in sigmas {
+            let eye = Eye::new(sigma, 60.0);
+            if n <= 2 * eye.margin {
+                return Err(Error::invalid(format!("image {n} too small for the eye's sigma {sigma}")));
+            }
+            let start = size.warmup.max(eye.history());
+            let taa_frames = taa(&refs, TAA_ALPHA);
+            let seen =
+                |frames: &Vec<Vec<f64>>| (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect();
+            let reference =
+                SceneReference { seen: [seen(&refs), seen(&taa_frames)], frames: [refs.clone(), taa_frames] };
+            for method in METHODS {
+                let mask = method_mask(method, sigma, size, cache)?;
+                let mut sums = [(0.0, 0.0); 2];
+                for r in 0..size.renders {
+                    let sampler = MaskSampler::new(&mask, scene.dims(), 100 + r as u64);
+                    let image = render(scene, size.shot, &sampler);
+                    let with_taa = taa(&image, TAA_ALPHA);
+                    for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
+                        let (p, rel) =
+                            errors(frames, &reference.frames[k], &reference.seen[k], &eye, start, n);
+                        sums[k].0 += p / size.renders as f64;
+                        sums[k].1 += rel / size.renders as f64;
+                    }
+                }
+                for (k, &(prelmse, relmse)) in sums.iter().enumerate() {
+                    records.push(Record {
+                        scene: scene.name().to_string(),
+                        method: method.to_string(),
+                        taa: k == 1,
+                        sigma,
+                        prelmse,
+                        relmse,
+                    });
+                }
+                log(&format!(
+                    "{} sigma {sigma} {method}: pRelMSE {:.4e} (TAA {:.4e})",
+                    scene.name(),
+                    sums[0].0,
+                    sums[1].0
+                ));
+            }
+        }
+    }
+    Ok(records)
+}
+
+/// The records as JSON: a list of {"scene", "method", "taa", "sigma",
+/// "prelmse", "relmse"}.
+pub fn to_json(records: &[Record]) -> String {
+    let rows: Vec<String> = records
+        .iter()
+        .map(|r| {
+            format!(
+                "  {{\"scene\": \"{}\", \"method\": \"{}\", \"taa\": {}, \"sigma\": {}, \"prelmse\": {:e}, \"relmse\": {:e}}}",
+                r.scene, r.method, r.taa, r.sigma, r.prelmse, r.relmse
+            )
+        })
+        .collect();
+    format!("[\n{}\n]\n", rows.join(",\n"))
+}
+
+/// Markdown tables laid out like the seed's Table 2: scenes x methods, one
+/// table per sigma and TAA setting, pRelMSE as a ratio to white noise (white's
+/// absolute value in its column), the best of each row in bold.
+pub fn to_markdown(records: &[Record]) -> String {
+    let mut out = String::new();
+    let mut sigmas: Vec<f64> = records.iter().map(|r| r.sigma).collect();
+    sigmas.sort_by(|a, b| b.total_cmp(a));
+    sigmas.dedup();
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in records {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    for &sigma in &sigmas {
+        for taa in [true, false] {
+            out += &format!(
+                "\n### pRelMSE, sigma {sigma}, {} (white: absolute; others: ratio to white)\n\n",
+                if taa { "with TAA" } else { "without TAA" }
+            );
+            out += &format!("| scene | {} |\n", METHODS.join(" | "));
+            out += &format!("| --- |{}\n", " ---: |".repeat(METHODS.len()));
+            for scene in &scenes {
+                let get = |m: &str| {
+                    records
+                        .iter()
+                        .find(|r| r.scene == *scene && r.method == m && r.taa == taa && r.sigma == sigma)
+                };
+                let Some(white) = get("white") else { continue };
+                let best = METHODS[1..]
+                    .iter()
+                    .filter_map(|m| get(m).map(|r| r.prelmse))
+                    .fold(f64::INFINITY, f64::min);
+                let cells: Vec<String> = METHODS
+                    .iter()
+                    .map(|m| match get(m) {
+                        Some(r) if *m == "white" => format!("{:.3e}", r.prelmse),
+                        Some(r) if r.prelmse == best => format!("**{:.3}**", r.prelmse / white.prelmse),
+                        Some(r) => format!("{:.3}", r.prelmse / white.prelmse),
+                        None => "-".to_string(),
+                    })
+                    .collect();
+                out += &format!("| {scene} | {} |\n", cells.join(" | "));
+            }
+        }
+    }
+    out
+}
+
+/// Where the cache goes under an output folder.
+pub fn cache_dir(out: &Path) -> PathBuf {
+    out.join("cache")
+}

@@ -1,0 +1,66 @@
+//! The evaluation (`fsot eval`): scenes rendered with each method's mask,
+//! measured with and without TAA. Tiny sizes here; the figures come from the
+//! command itself (RESULTS.md).
+
+use fsot::eval::render::Shot;
+use fsot::eval::scenes::Scene;
+use fsot::eval::suite::{run_eval, to_json, to_markdown, EvalSize, METHODS};
+use fsot::problem::Tile;
+
+fn tiny() -> EvalSize {
+    EvalSize {
+        tile: Tile::new(16, 16, 8, 1, 2).unwrap(),
+        iterations: 40,
+        passes: 2,
+        shot: Shot { image: 40, frames: 24 },
+        warmup: 16,
+        renders: 1,
+        reference_samples: 16,
+    }
+}
+
+#[test]
+fn every_scene_and_method_gets_a_record_with_and_without_taa() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = [Scene::LightPick, Scene::DefocusMotion];
+    let records = run_eval(&tiny(), &[2.1], &scenes, dir.path(), |_| {}).unwrap();
+    assert_eq!(records.len(), scenes.len() * METHODS.len() * 2);
+    for r in &records {
+        assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
+        assert!(r.relmse.is_finite() && r.relmse > 0.0, "{r:?}");
+        // The eye averages noise away: what it sees is less than the raw error.
+        assert!(r.prelmse < r.relmse, "{r:?}");
+    }
+    // TAA averages 1-spp noise over frames: far less error than without.
+    for scene in ["light-pick", "defocus-motion"] {
+        let get =
+            |taa| records.iter().find(|r| r.scene == scene && r.method == "white" && r.taa == taa).unwrap();
+        assert!(get(true).relmse < 0.5 * get(false).relmse, "{scene}");
+    }
+    let json = to_json(&records);
+    assert_eq!(json.matches("\"scene\"").count(), records.len());
+    for key in ["\"method\"", "\"taa\"", "\"sigma\"", "\"prelmse\"", "\"relmse\""] {
+        assert_eq!(json.matches(key).count(), records.len(), "{key}");
+    }
+    let md = to_markdown(&records);
+    assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
+    // A second run reads the masks and references from the cache: same figures.
+    let again = run_eval(&tiny(), &[2.1], &scenes, dir.path(), |_| {}).unwrap();
+    assert_eq!(records, again);
+}
+
+#[test]
+fn a_blue_noise_mask_beats_white_noise_in_every_scene_under_taa() {
+    // Even tiny, briefly optimised masks: fsot's spatial mask against white
+    // noise, every scene, TAA on.
+    let dir = tempfile::tempdir().unwrap();
+    let mut size = tiny();
+    size.iterations = 100;
+    let records = run_eval(&size, &[2.1], &fsot::eval::scenes::SCENES, dir.path(), |_| {}).unwrap();
+    for scene in fsot::eval::scenes::SCENES {
+        let get = |m: &str| {
+            records.iter().find(|r| r.scene == scene.name() && r.method == m && r.taa).unwrap().prelmse
+        };
+        assert!(get("ours-taa") < get("white"), "{}: {} vs {}", scene.name(), get("ours-taa"), get("white"));
+    }
+}
