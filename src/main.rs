@@ -469,7 +469,10 @@ fn eval_command(args: EvalArgs) -> Result<()> {
     let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     let start = Instant::now();
-    let records = run_eval(&size, &args.sigma, &scenes, &cache_dir(&args.out), |line| eprintln!("{line}"))?;
+    let pictures = args.out.join("pictures");
+    let records = run_eval(&size, &args.sigma, &scenes, &cache_dir(&args.out), Some(&pictures), |line| {
+        eprintln!("{line}")
+    })?;
     let json = to_json(&records);
     let t = size.tile;
     let table = format!(

@@ -3,6 +3,7 @@
 pub mod eye;
 pub mod integrands;
 pub mod perceived;
+pub mod pictures;
 pub mod render;
 pub mod scenes;
 pub mod spectrum;

@@ -110,9 +110,17 @@ pub fn spectrum_xt(mask: &Mask, dim: usize) -> Result<Vec<f64>> {
     Ok(out)
 }
 
-/// A spectrum as an 8-bit grey image, DC in the centre, log scale from 1/100 to
-/// 10 times white noise's level.
-pub fn spectrum_png(spectrum: &[f64], rows: usize, cols: usize) -> Result<Vec<u8>> {
+/// Power spectrum of a rows x cols grid (both powers of two), mean removed,
+/// DC at index 0, unnormalised.
+pub fn power_2d(grid: &[f64], rows: usize, cols: usize) -> Vec<f64> {
+    let mut out = vec![0.0; rows * cols];
+    add_power_2d(grid, rows, cols, &mut out);
+    out
+}
+
+/// A spectrum's pixels, DC in the centre, log scale from 1/100 to 10 times
+/// white noise's level (8-bit grey).
+pub fn spectrum_pixels(spectrum: &[f64], rows: usize, cols: usize) -> Vec<u8> {
     let mut pixels = vec![0u8; rows * cols];
     for r in 0..rows {
         for c in 0..cols {
@@ -121,6 +129,16 @@ pub fn spectrum_png(spectrum: &[f64], rows: usize, cols: usize) -> Result<Vec<u8
             pixels[r * cols + c] = (level * 255.0).round() as u8;
         }
     }
+    pixels
+}
+
+/// A spectrum as an 8-bit grey PNG (see `spectrum_pixels`).
+pub fn spectrum_png(spectrum: &[f64], rows: usize, cols: usize) -> Result<Vec<u8>> {
+    grey_png(&spectrum_pixels(spectrum, rows, cols), rows, cols)
+}
+
+/// 8-bit grey pixels (row-major) as PNG bytes.
+pub fn grey_png(pixels: &[u8], rows: usize, cols: usize) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     {
         let mut encoder = png::Encoder::new(&mut bytes, cols as u32, rows as u32);

@@ -16,6 +16,7 @@ use crate::baselines::fast::{fast_mask, FastSpec, Filter};
 use crate::baselines::stbn::stbn_mask_with;
 use crate::error::{Error, Result};
 use crate::eval::eye::Eye;
+use crate::eval::pictures::scene_pictures;
 use crate::eval::render::{references, render, taa, MaskSampler, Shot};
 use crate::eval::scenes::Scene;
 use crate::io::atomic::AtomicFile;
@@ -70,7 +71,7 @@ impl EvalSize {
             tile: Tile::new(64, 64, 16, 1, 2).expect("valid tile"),
             iterations: 1000,
             passes: 32,
-            shot: Shot { image: 128, frames: 96 },
+            shot: Shot { image: 96, frames: 80 },
             warmup: 32,
             renders: 3,
             reference_samples: 1024,
@@ -175,6 +176,7 @@ pub fn run_eval(
     sigmas: &[f64],
     scenes: &[Scene],
     cache: &Path,
+    pictures: Option<&Path>,
     mut log: impl FnMut(&str),
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
@@ -182,8 +184,10 @@ pub fn run_eval(
     for &scene in scenes {
         let refs = references(scene, size.shot, size.reference_samples, Some(cache))?;
         log(&format!("reference of {} ready", scene.name()));
-        for &sigma in sigmas {
+        for (sigma_index, &sigma) in sigmas.iter().enumerate() {
             let eye = Eye::new(sigma, 60.0);
+            // One render per method for the pictures (first sigma only).
+            let mut kept = Vec::new();
             if n <= 2 * eye.margin {
                 return Err(Error::invalid(format!("image {n} too small for the eye's sigma {sigma}")));
             }
@@ -206,6 +210,9 @@ pub fn run_eval(
                         sums[k].0 += p / size.renders as f64;
                         sums[k].1 += rel / size.renders as f64;
                     }
+                    if pictures.is_some() && sigma_index == 0 && r == 0 {
+                        kept.push((image, with_taa));
+                    }
                 }
                 for (k, &(prelmse, relmse)) in sums.iter().enumerate() {
                     records.push(Record {
@@ -223,6 +230,12 @@ pub fn run_eval(
                     sums[0].0,
                     sums[1].0
                 ));
+            }
+            if let (Some(dir), false) = (pictures, kept.is_empty()) {
+                std::fs::create_dir_all(dir)
+                    .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", dir.display())))?;
+                let refs = (&reference.frames[0][..], &reference.frames[1][..]);
+                scene_pictures(dir, scene.name(), n, &eye, refs, &kept)?;
             }
         }
     }
