@@ -14,6 +14,9 @@ use crate::eval::eye::Eye;
 use crate::eval::spectrum::{grey_png, power_2d, spectrum_pixels};
 use crate::io::atomic::AtomicFile;
 
+/// Frames of one render: without TAA, and with.
+pub type Frames = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// Gap between cells of a strip, pixels.
 const GAP: usize = 2;
 
@@ -48,7 +51,7 @@ pub fn scene_pictures(
     n: usize,
     eye: &Eye,
     reference: (&[Vec<f64>], &[Vec<f64>]),
-    renders: &[(Vec<Vec<f64>>, Vec<Vec<f64>>)],
+    renders: &[Frames],
 ) -> Result<()> {
     let last = reference.0.len() - 1;
     // Crops of the largest power of two up to 64 pixels (spectra need one).

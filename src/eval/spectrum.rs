@@ -145,7 +145,7 @@ pub fn grey_png(pixels: &[u8], rows: usize, cols: usize) -> Result<Vec<u8>> {
         encoder.set_color(png::ColorType::Grayscale);
         encoder.set_depth(png::BitDepth::Eight);
         let mut writer = encoder.write_header().map_err(|e| Error::invalid(format!("PNG: {e}")))?;
-        writer.write_image_data(&pixels).map_err(|e| Error::invalid(format!("PNG: {e}")))?;
+        writer.write_image_data(pixels).map_err(|e| Error::invalid(format!("PNG: {e}")))?;
     }
     Ok(bytes)
 }
