@@ -57,11 +57,11 @@ impl EvalSize {
     pub fn quick() -> Self {
         Self {
             tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"),
-            iterations: 300,
+            iterations: 500,
             passes: 8,
             shot: Shot { image: 64, frames: 48 },
             warmup: 16,
-            renders: 2,
+            renders: 3,
             reference_samples: 256,
         }
     }
