@@ -61,6 +61,12 @@ struct EvalArgs {
     /// Only these scenes (comma-separated names) [default: all].
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
+    /// Iterations of fsot's masks [default: 500 with --quick, else 1000].
+    #[arg(long, allow_negative_numbers = true)]
+    iterations: Option<u32>,
+    /// Passes of the swap methods' masks [default: 8 with --quick, else 32].
+    #[arg(long, allow_negative_numbers = true)]
+    passes: Option<u32>,
 }
 
 #[derive(Args)]
@@ -467,7 +473,19 @@ fn eval_command(args: EvalArgs) -> Result<()> {
     let md = AtomicFile::create(&args.out.join("results.md"))?;
     let js = AtomicFile::create(&args.out.join("results.json"))?;
     let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
-    let size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
+    let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
+    if let Some(i) = args.iterations {
+        if !(1..=1_000_000).contains(&i) {
+            return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
+        }
+        size.iterations = i;
+    }
+    if let Some(p) = args.passes {
+        if !(1..=100_000).contains(&p) {
+            return Err(Error::invalid(format!("--passes must be in 1..=100000, got {p}")));
+        }
+        size.passes = p;
+    }
     let start = Instant::now();
     let pictures = args.out.join("pictures");
     let records = run_eval(&size, &args.sigma, &scenes, &cache_dir(&args.out), Some(&pictures), |line| {

@@ -30,6 +30,11 @@ pub enum Scene {
     VeachMis,
 }
 
+/// Frames per cycle of the scenes' motion: objects move by at most about a
+/// pixel per frame at 128 pixels (TAA here has no reprojection, so faster motion
+/// would measure ghosting more than sampling).
+pub const CYCLE: f64 = 256.0;
+
 pub const SCENES: [Scene; 6] = [
     Scene::LightPick,
     Scene::SoftShadow,
@@ -62,7 +67,7 @@ impl Scene {
 
     /// One sample of pixel (px, py) in [0, 1)^2 at frame f, numbers u in [0, 1)^dims.
     pub fn shade(&self, px: f64, py: f64, f: f64, u: &[f64]) -> f64 {
-        let phase = f / 64.0; // one cycle of the animation every 64 frames
+        let phase = f / CYCLE; // one cycle of the animation every CYCLE frames
         match self {
             Scene::LightPick => light_pick(px, py, phase, u[0]),
             Scene::SoftShadow => soft_shadow(px, py, phase, u),
@@ -199,7 +204,7 @@ fn defocus_motion(x: f64, y: f64, f: f64, u: &[f64]) -> f64 {
     let (lx, ly) = (r * lc, r * ls);
     // Shutter: the disc moves during the frame.
     let t = f + u[2];
-    let disc = (0.5 + 0.3 * (TAU * t / 64.0).sin(), 0.5 + 0.1 * (TAU * t / 32.0).cos());
+    let disc = (0.5 + 0.3 * (TAU * t / CYCLE).sin(), 0.5 + 0.1 * (TAU * 2.0 * t / CYCLE).cos());
     // The disc is in focus (no lens offset); the background is at twice the
     // focus distance (offset scaled by 1 - 2 = -1).
     let (dx, dy) = (x - disc.0, y - disc.1);
@@ -341,7 +346,7 @@ mod tests {
     fn light_pick_is_unbiased_in_closed_form() {
         // Its mean over u is a + b exactly; the stratified reference agrees.
         let (x, y, f) = (0.3, 0.7, 5.0);
-        let phase = f / 64.0;
+        let phase = f / CYCLE;
         let a = 0.6 + 0.4 * (TAU * (x + 0.3 * phase)).sin();
         let b = 0.5 + 0.5 * (TAU * (y - 0.5 * phase) + 1.0).cos();
         let mut s = crate::rng::Stream::new(1);

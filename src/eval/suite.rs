@@ -59,8 +59,8 @@ impl EvalSize {
             tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"),
             iterations: 500,
             passes: 8,
-            shot: Shot { image: 64, frames: 48 },
-            warmup: 16,
+            shot: Shot { image: 64, frames: 80 },
+            warmup: 48,
             renders: 3,
             reference_samples: 256,
         }
@@ -71,8 +71,8 @@ impl EvalSize {
             tile: Tile::new(64, 64, 16, 1, 2).expect("valid tile"),
             iterations: 1000,
             passes: 32,
-            shot: Shot { image: 96, frames: 80 },
-            warmup: 32,
+            shot: Shot { image: 96, frames: 96 },
+            warmup: 48,
             renders: 3,
             reference_samples: 1024,
         }
