@@ -13,25 +13,10 @@
 use fsot::eval::perceived::{ratio_to_white, TestSetup};
 use fsot::kernel::KernelSpec;
 use fsot::mask::Mask;
-use fsot::problem::Tile;
 use fsot::score::{score, SCORE_SLICES};
 
 fn read_peer_png(path: &str) -> Result<Mask, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{path}: {e}"))?;
-    let mut reader = png::Decoder::new(file).read_info().map_err(|e| format!("{path}: {e}"))?;
-    let mut buf = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut buf).map_err(|e| format!("{path}: {e}"))?;
-    if info.bit_depth != png::BitDepth::Eight {
-        return Err(format!("{path}: expected 8 bits per channel"));
-    }
-    // Grey, or grey stored in RGB(A): the first channel.
-    let stride = info.color_type.samples();
-    let (w, h) = (info.width as usize, info.height as usize);
-    let frames = h / w;
-    let tile = Tile::new(w, w, frames, 1, 1).map_err(|e| e.to_string())?;
-    // Row-major stacked frames match fsot's layout (frame-major, then rows).
-    let samples = buf[..w * h * stride].iter().step_by(stride).map(|&v| (v as f32 + 0.5) / 256.0).collect();
-    Ok(Mask { tile, samples, meta: vec![("method".into(), format!("published: {path}"))] })
+    fsot::io::stacked_png::read(std::path::Path::new(path)).map_err(|e| e.to_string())
 }
 
 fn main() {

@@ -61,6 +61,11 @@ struct EvalArgs {
     /// Only these scenes (comma-separated names) [default: all].
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
+    /// Also measure the published scalar masks found in this folder
+    /// (real_stbn.png, real_uniform_gauss_1.3435_exponential_0.1_0.1_product.png),
+    /// as `published-stbn` and `published-fast`.
+    #[arg(long)]
+    peers: Option<PathBuf>,
     /// Iterations of fsot's masks [default: 500 with --quick, else 1000].
     #[arg(long, allow_negative_numbers = true)]
     iterations: Option<u32>,
@@ -487,8 +492,18 @@ fn eval_command(args: EvalArgs) -> Result<()> {
         size.passes = p;
     }
     let start = Instant::now();
+    let mut published = Vec::new();
+    if let Some(dir) = &args.peers {
+        for (name, file) in [
+            ("published-stbn", "real_stbn.png"),
+            ("published-fast", "real_uniform_gauss_1.3435_exponential_0.1_0.1_product.png"),
+        ] {
+            published.push((name.to_string(), fsot::io::stacked_png::read(&dir.join(file))?));
+        }
+    }
     let pictures = args.out.join("pictures");
-    let records = run_eval(&size, &args.sigma, &scenes, &cache_dir(&args.out), Some(&pictures), |line| {
+    let cache = cache_dir(&args.out);
+    let records = run_eval(&size, &args.sigma, &scenes, &cache, Some(&pictures), &published, |line| {
         eprintln!("{line}")
     })?;
     let json = to_json(&records);

@@ -24,7 +24,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     let dir = tempfile::tempdir().unwrap();
     let scenes = [Scene::LightPick, Scene::DefocusMotion];
     let pictures = dir.path().join("pictures");
-    let records = run_eval(&tiny(), &[2.1], &scenes, dir.path(), Some(&pictures), |_| {}).unwrap();
+    let records = run_eval(&tiny(), &[2.1], &scenes, dir.path(), Some(&pictures), &[], |_| {}).unwrap();
     assert_eq!(records.len(), scenes.len() * METHODS.len() * 2);
     for r in &records {
         assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
@@ -57,7 +57,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     let md = to_markdown(&records);
     assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
     // A second run reads the masks and references from the cache: same figures.
-    let again = run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, |_| {}).unwrap();
+    let again = run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], |_| {}).unwrap();
     assert_eq!(records, again);
 }
 
@@ -68,7 +68,8 @@ fn a_blue_noise_mask_beats_white_noise_in_every_scene_under_taa() {
     let dir = tempfile::tempdir().unwrap();
     let mut size = tiny();
     size.iterations = 100;
-    let records = run_eval(&size, &[2.1], &fsot::eval::scenes::SCENES, dir.path(), None, |_| {}).unwrap();
+    let records =
+        run_eval(&size, &[2.1], &fsot::eval::scenes::SCENES, dir.path(), None, &[], |_| {}).unwrap();
     for scene in fsot::eval::scenes::SCENES {
         let get = |m: &str| {
             records.iter().find(|r| r.scene == scene.name() && r.method == m && r.taa).unwrap().prelmse

@@ -177,6 +177,7 @@ pub fn run_eval(
     scenes: &[Scene],
     cache: &Path,
     pictures: Option<&Path>,
+    extra: &[(String, Mask)],
     mut log: impl FnMut(&str),
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
@@ -197,8 +198,13 @@ pub fn run_eval(
                 |frames: &Vec<Vec<f64>>| (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect();
             let reference =
                 SceneReference { seen: [seen(&refs), seen(&taa_frames)], frames: [refs.clone(), taa_frames] };
-            for method in METHODS {
-                let mask = method_mask(method, sigma, size, cache)?;
+            let names: Vec<&str> =
+                METHODS.iter().copied().chain(extra.iter().map(|e| e.0.as_str())).collect();
+            for method in names {
+                let mask = match extra.iter().find(|e| e.0 == method) {
+                    Some((_, m)) => m.clone(),
+                    None => method_mask(method, sigma, size, cache)?,
+                };
                 let mut sums = [(0.0, 0.0); 2];
                 for r in 0..size.renders {
                     let sampler = MaskSampler::new(&mask, scene.dims(), 100 + r as u64);
@@ -266,9 +272,13 @@ pub fn to_markdown(records: &[Record]) -> String {
     sigmas.sort_by(|a, b| b.total_cmp(a));
     sigmas.dedup();
     let mut scenes: Vec<&str> = Vec::new();
+    let mut methods: Vec<&str> = Vec::new();
     for r in records {
         if !scenes.contains(&r.scene.as_str()) {
             scenes.push(&r.scene);
+        }
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
         }
     }
     for &sigma in &sigmas {
@@ -277,8 +287,8 @@ pub fn to_markdown(records: &[Record]) -> String {
                 "\n### pRelMSE, sigma {sigma}, {} (white: absolute; others: ratio to white)\n\n",
                 if taa { "with TAA" } else { "without TAA" }
             );
-            out += &format!("| scene | {} |\n", METHODS.join(" | "));
-            out += &format!("| --- |{}\n", " ---: |".repeat(METHODS.len()));
+            out += &format!("| scene | {} |\n", methods.join(" | "));
+            out += &format!("| --- |{}\n", " ---: |".repeat(methods.len()));
             for scene in &scenes {
                 let get = |m: &str| {
                     records
@@ -286,11 +296,12 @@ pub fn to_markdown(records: &[Record]) -> String {
                         .find(|r| r.scene == *scene && r.method == m && r.taa == taa && r.sigma == sigma)
                 };
                 let Some(white) = get("white") else { continue };
-                let best = METHODS[1..]
+                let best = methods
                     .iter()
+                    .filter(|m| **m != "white")
                     .filter_map(|m| get(m).map(|r| r.prelmse))
                     .fold(f64::INFINITY, f64::min);
-                let cells: Vec<String> = METHODS
+                let cells: Vec<String> = methods
                     .iter()
                     .map(|m| match get(m) {
                         Some(r) if *m == "white" => format!("{:.3e}", r.prelmse),

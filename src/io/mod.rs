@@ -3,3 +3,4 @@
 pub mod atomic;
 pub mod exr;
 pub mod png;
+pub mod stacked_png;
