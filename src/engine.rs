@@ -104,10 +104,28 @@ impl Engine {
         }
     }
 
+    /// Runs at most `max` iterations (at least one): one on the CPU, a batch of
+    /// up to `max` on the GPU; returns their objective estimates.
+    pub fn step_up_to(&mut self, max: u32) -> Result<Vec<f64>> {
+        match self {
+            Engine::Cpu(r) => Ok(vec![r.step()]),
+            Engine::Gpu(r) => r.step_batch(max.max(1)),
+        }
+    }
+
     pub fn mask(&self) -> Result<Mask> {
         match self {
             Engine::Cpu(r) => Ok(r.mask()),
             Engine::Gpu(r) => r.mask(),
+        }
+    }
+
+    /// What the Vulkan validation layer reported (empty on the CPU path or with
+    /// the layer off).
+    pub fn validation_messages(&self) -> Vec<String> {
+        match self {
+            Engine::Cpu(_) => Vec::new(),
+            Engine::Gpu(r) => r.validation_messages(),
         }
     }
 

@@ -76,8 +76,19 @@ struct EvalArgs {
 
 #[derive(Args)]
 struct BenchArgs {
+    /// One suite only; without it: convergence of the CPU path and of Vulkan on
+    /// the same problem, and time to quality.
     #[command(subcommand)]
-    suite: BenchSuite,
+    suite: Option<BenchSuite>,
+    /// Small problem: about a minute on 2 cores.
+    #[arg(long)]
+    quick: bool,
+    /// Also write the figures as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Folder for convergence.md, convergence.csv, convergence.png and the cache.
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
 }
 
 #[derive(Subcommand)]
@@ -427,7 +438,8 @@ fn score_command(args: ScoreArgs) -> Result<()> {
 
 fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
-        BenchSuite::Sort { n, repeats, device } => {
+        None => bench_suites(&args),
+        Some(BenchSuite::Sort { n, repeats, device }) => {
             let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
             let ctx =
                 fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
@@ -449,6 +461,124 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// The convergence and time-to-quality suites, CPU path against Vulkan.
+fn bench_suites(args: &BenchArgs) -> Result<()> {
+    use fsot::bench::convergence::{convergence, time_to, SceneJudge};
+    use fsot::bench::plot::line_plot;
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", args.out.display())))?;
+    let md = AtomicFile::create(&args.out.join("convergence.md"))?;
+    let csv = AtomicFile::create(&args.out.join("convergence.csv"))?;
+    let plot = AtomicFile::create(&args.out.join("convergence.png"))?;
+    let json = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
+    let (tile, kernel, checkpoints): (Tile, &str, Vec<u32>) = if args.quick {
+        (Tile::new(32, 32, 16, 1, 2)?, "taa", vec![8, 16, 32, 64, 128, 192])
+    } else {
+        (Tile::new(64, 64, 16, 1, 2)?, "perceptual-taa", vec![10, 20, 50, 100, 200, 500, 1000])
+    };
+    let spec = KernelSpec::from_name(kernel, DEFAULT_SIGMA, None, DEFAULT_ALPHA, DEFAULT_FPS)?;
+    let seed = 7;
+    eprintln!(
+        "scene judge: soft shadow, 64 x 64, 80 frames, TAA (reference cached in {})",
+        args.out.display()
+    );
+    let judge = SceneJudge::new(tile, Some(&args.out.join("cache")))?;
+    let mut points = Vec::new();
+    let mut notes = Vec::new();
+    for choice in [BackendChoice::Cpu, BackendChoice::Vulkan] {
+        match convergence(choice, tile, spec, seed, &checkpoints, &judge) {
+            Ok(p) => {
+                eprintln!("{} on {}: {} checkpoints", p[0].backend, p[0].machine, p.len());
+                points.extend(p);
+            }
+            Err(e) if choice == BackendChoice::Vulkan => notes.push(format!("vulkan not measured: {e}")),
+            Err(e) => return Err(e),
+        }
+    }
+    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
+    backends.dedup();
+    let mut table = format!(
+        "# fsot bench{}\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
+         planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
+         eye sigma 2.1, / white noise. Seconds: optimisation only.\n\n\
+         | backend | machine | iteration | seconds | objective | pRelMSE |\n| --- | --- | ---: | ---: | ---: | ---: |\n",
+        if args.quick { " --quick" } else { "" },
+        tile.describe(),
+        spec.describe()
+    );
+    let mut rows = String::from("backend,machine,iteration,seconds,objective_ratio,prelmse_ratio\n");
+    for p in &points {
+        table += &format!(
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
+            p.backend, p.machine, p.iteration, p.seconds, p.objective_ratio, p.prelmse_ratio
+        );
+        rows += &format!(
+            "{},\"{}\",{},{:.6},{:.6},{:.6}\n",
+            p.backend,
+            p.machine.replace('"', "'"),
+            p.iteration,
+            p.seconds,
+            p.objective_ratio,
+            p.prelmse_ratio
+        );
+    }
+    table += "\n## Time to quality (seconds; - where not reached)\n\n\
+              | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 |\n\
+              | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    for b in &backends {
+        let mine: Vec<_> = points.iter().filter(|p| &p.backend == b).cloned().collect();
+        let cell = |v: Option<f64>| v.map(|s| format!("{s:.3}")).unwrap_or_else(|| "-".into());
+        let obj: Vec<String> =
+            [0.8, 0.6, 0.5].iter().map(|&l| cell(time_to(&mine, l, |p| p.objective_ratio))).collect();
+        let pr: Vec<String> =
+            [0.6, 0.4, 0.3].iter().map(|&l| cell(time_to(&mine, l, |p| p.prelmse_ratio))).collect();
+        table += &format!("| {b} | {} | {} |\n", obj.join(" | "), pr.join(" | "));
+    }
+    let total = |b: &str| points.iter().filter(|p| p.backend == b).map(|p| p.seconds).fold(0.0, f64::max);
+    if backends.len() == 2 {
+        table += &format!(
+            "\nVulkan / CPU, seconds to the last checkpoint, this run: {:.2}\n",
+            total("vulkan") / total("cpu").max(1e-9)
+        );
+    }
+    for n in &notes {
+        table += &format!("\n{n}\n");
+    }
+    table +=
+        "\nPlot (convergence.png): x seconds (log), y ratio to white noise; blue CPU objective, orange CPU \
+              pRelMSE, green Vulkan objective, red Vulkan pRelMSE.\n";
+    let mut series = Vec::new();
+    for b in &backends {
+        let mine: Vec<_> = points.iter().filter(|p| &p.backend == b && p.seconds > 0.0).collect();
+        series.push(mine.iter().map(|p| (p.seconds, p.objective_ratio)).collect());
+        series.push(mine.iter().map(|p| (p.seconds, p.prelmse_ratio)).collect());
+    }
+    let records: Vec<String> = points
+        .iter()
+        .map(|p| {
+            format!(
+                "  {{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
+                 \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}}}",
+                p.backend,
+                p.machine.replace('"', "'"),
+                p.iteration,
+                p.seconds,
+                p.objective_ratio,
+                p.prelmse_ratio
+            )
+        })
+        .collect();
+    let json_text = format!("[\n{}\n]\n", records.join(",\n"));
+    plot.commit(&line_plot(&series, 640, 400)?)?;
+    md.commit(table.as_bytes())?;
+    csv.commit(rows.as_bytes())?;
+    if let Some(j) = json {
+        j.commit(json_text.as_bytes())?;
+    }
+    println!("{table}");
+    Ok(())
 }
 
 fn eval_command(args: EvalArgs) -> Result<()> {

@@ -1,0 +1,183 @@
+//! Error against run time and iterations, per backend, on one problem and seed:
+//! checkpoints of one run (its schedule planned for the last checkpoint), each
+//! judged by `fsot score`'s objective (ratio to white noise) and by the pRelMSE
+//! of one evaluation scene under TAA (ratio to the mean of four white-noise
+//! masks). Time counts the
+//! optimisation only; judging is done with the clock stopped.
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use crate::engine::{BackendChoice, Engine, Started};
+use crate::error::Result;
+use crate::eval::eye::Eye;
+use crate::eval::render::{references, render, taa, MaskSampler, Shot};
+use crate::eval::scenes::Scene;
+use crate::gpu::optimizer::GpuOptions;
+use crate::kernel::KernelSpec;
+use crate::mask::Mask;
+use crate::optimize::Settings;
+use crate::problem::Tile;
+use crate::score::{score, SCORE_SLICES};
+
+/// One checkpoint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    pub backend: String,
+    pub machine: String,
+    pub iteration: u32,
+    pub seconds: f64,
+    /// `fsot score` objective / white noise's.
+    pub objective_ratio: f64,
+    /// pRelMSE of the scene under TAA / white noise's.
+    pub prelmse_ratio: f64,
+}
+
+/// The scene judge: a soft shadow, 64 x 64, TAA, the eye at sigma 2.1.
+pub struct SceneJudge {
+    scene: Scene,
+    shot: Shot,
+    warmup: usize,
+    reference: Vec<Vec<f64>>,
+    seen_reference: Vec<Vec<f64>>,
+    eye: Eye,
+    white: f64,
+}
+
+impl SceneJudge {
+    pub fn new(tile: Tile, cache: Option<&Path>) -> Result<Self> {
+        let scene = Scene::SoftShadow;
+        let shot = Shot { image: 64, frames: 80 };
+        let warmup = 48;
+        let reference = taa(&references(scene, shot, 256, cache)?, crate::eval::suite::TAA_ALPHA);
+        let eye = Eye::new(2.1, 60.0);
+        let seen_reference = (warmup..shot.frames).map(|f| eye.filter(&reference, f, shot.image)).collect();
+        let mut judge = Self { scene, shot, warmup, reference, seen_reference, eye, white: 1.0 };
+        judge.white = (0..4).map(|s| judge.prelmse(&Mask::white(tile, 50 + s))).sum::<f64>() / 4.0;
+        Ok(judge)
+    }
+
+    /// pRelMSE of the scene rendered with the mask, under TAA (mean of three
+    /// renders with different shifts: the soft shadow's error sits in few pixels,
+    /// so one render is noisy).
+    pub fn prelmse(&self, mask: &Mask) -> f64 {
+        (7..10).map(|seed| self.prelmse_once(mask, seed)).sum::<f64>() / 3.0
+    }
+
+    fn prelmse_once(&self, mask: &Mask, seed: u64) -> f64 {
+        let n = self.shot.image;
+        let frames =
+            taa(&render(self.scene, self.shot, &MaskSampler::new(mask, self.scene.dims(), seed)), 0.1);
+        let error: Vec<Vec<f64>> = frames
+            .iter()
+            .zip(&self.reference)
+            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
+            .collect();
+        let (mut sum, mut count) = (0.0, 0usize);
+        for f in self.warmup..self.shot.frames {
+            let seen = self.eye.filter(&error, f, n);
+            for (e, r) in seen.iter().zip(&self.seen_reference[f - self.warmup]) {
+                sum += e * e / (r * r + crate::eval::suite::EPSILON);
+                count += 1;
+            }
+        }
+        sum / count as f64
+    }
+
+    pub fn ratio(&self, mask: &Mask) -> f64 {
+        self.prelmse(mask) / self.white
+    }
+}
+
+/// Runs the problem on one backend to the last checkpoint, judging each.
+pub fn convergence(
+    choice: BackendChoice,
+    tile: Tile,
+    spec: KernelSpec,
+    seed: u64,
+    checkpoints: &[u32],
+    judge: &SceneJudge,
+) -> Result<Vec<Point>> {
+    let last = *checkpoints.iter().max().unwrap_or(&1);
+    let mut settings = Settings::new(spec, seed);
+    settings.iterations = last;
+    let gpu = GpuOptions { deterministic: false, profile: false, transport: None };
+    let Started { mut engine, note } = Engine::start(choice, tile, settings, None, None, gpu)?;
+    let backend = if engine.is_gpu() { "vulkan" } else { "cpu" }.to_string();
+    let machine = if engine.is_gpu() {
+        note.trim_start_matches("backend: vulkan on ").to_string()
+    } else {
+        super::machine::cpu_description()
+    };
+    let mut points = Vec::new();
+    let mut elapsed = Duration::ZERO;
+    let judge_at = |engine: &Engine, elapsed: Duration| -> Result<Point> {
+        let mask = engine.mask()?;
+        Ok(Point {
+            backend: backend.clone(),
+            machine: machine.clone(),
+            iteration: engine.iteration(),
+            seconds: elapsed.as_secs_f64(),
+            objective_ratio: score(&mask, spec, SCORE_SLICES).ratio(),
+            prelmse_ratio: judge.ratio(&mask),
+        })
+    };
+    points.push(judge_at(&engine, elapsed)?);
+    let mut sorted: Vec<u32> = checkpoints.iter().copied().filter(|&c| c > 0).collect();
+    sorted.sort_unstable();
+    sorted.dedup();
+    for c in sorted {
+        let start = Instant::now();
+        while engine.iteration() < c {
+            engine.step_up_to(c - engine.iteration())?;
+        }
+        elapsed += start.elapsed();
+        points.push(judge_at(&engine, elapsed)?);
+    }
+    let messages = engine.validation_messages();
+    if !messages.is_empty() {
+        return Err(crate::error::Error::invalid(format!(
+            "the Vulkan validation layer reported {} message(s), the first: {}",
+            messages.len(),
+            messages[0]
+        )));
+    }
+    Ok(points)
+}
+
+/// Seconds to reach `level` (a ratio) by linear interpolation between
+/// checkpoints, or None if never reached.
+pub fn time_to(points: &[Point], level: f64, value: impl Fn(&Point) -> f64) -> Option<f64> {
+    let first = points.iter().position(|p| value(p) <= level)?;
+    if first == 0 {
+        return Some(points[0].seconds);
+    }
+    let (a, b) = (&points[first - 1], &points[first]);
+    let t = (value(a) - level) / (value(a) - value(b));
+    Some(a.seconds + t * (b.seconds - a.seconds))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(seconds: f64, v: f64) -> Point {
+        Point {
+            backend: "cpu".into(),
+            machine: String::new(),
+            iteration: 0,
+            seconds,
+            objective_ratio: v,
+            prelmse_ratio: v,
+        }
+    }
+
+    #[test]
+    fn time_to_a_level_interpolates_between_checkpoints() {
+        let points = [p(0.0, 1.0), p(1.0, 0.8), p(3.0, 0.4)];
+        assert_eq!(time_to(&points, 0.9, |p| p.objective_ratio), Some(0.5));
+        assert_eq!(time_to(&points, 0.6, |p| p.objective_ratio), Some(2.0));
+        assert_eq!(time_to(&points, 0.3, |p| p.objective_ratio), None);
+        assert_eq!(time_to(&points, 1.5, |p| p.objective_ratio), Some(0.0));
+    }
+}

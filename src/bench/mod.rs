@@ -1,0 +1,8 @@
+//! Benchmarks that print figures (run time, throughput, error against time);
+//! results are recorded in BENCHMARKS.md with the commands that produced them.
+pub mod convergence;
+pub mod machine;
+pub mod plot;
+pub mod sort;
+
+pub use sort::{bench_sort, SortBench};
