@@ -106,6 +106,23 @@ enum BenchSuite {
         #[arg(long)]
         device: Option<String>,
     },
+    /// One configuration of the scaling suite (run by `fsot bench` in a child
+    /// process, so its peak memory is its own).
+    #[command(hide = true)]
+    ScalingOne {
+        /// W x H x T.
+        #[arg(long)]
+        size: String,
+        /// Dimensions per sample.
+        #[arg(long)]
+        dims: usize,
+        /// Samples per pixel.
+        #[arg(long)]
+        spp: usize,
+        /// Timed iterations.
+        #[arg(long)]
+        iterations: u32,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -439,6 +456,13 @@ fn score_command(args: ScoreArgs) -> Result<()> {
 fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
         None => bench_suites(&args),
+        Some(BenchSuite::ScalingOne { size, dims, spp, iterations }) => {
+            use fsot::bench::scaling::{format_line, measure, peak_resident_bytes};
+            let (w, h, t) = Tile::parse_size(&size)?;
+            let (slices, seconds) = measure(Tile::new(w, h, t, spp, dims)?, iterations)?;
+            println!("{}", format_line(slices, seconds, peak_resident_bytes().unwrap_or(0)));
+            Ok(())
+        }
         Some(BenchSuite::Sort { n, repeats, device }) => {
             let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
             let ctx =
@@ -555,7 +579,7 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
         series.push(mine.iter().map(|p| (p.seconds, p.objective_ratio)).collect());
         series.push(mine.iter().map(|p| (p.seconds, p.prelmse_ratio)).collect());
     }
-    let records: Vec<String> = points
+    let mut records: Vec<String> = points
         .iter()
         .map(|p| {
             format!(
@@ -570,6 +594,53 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
             )
         })
         .collect();
+    // Scaling: each configuration in a child process.
+    let configs: Vec<(usize, usize, usize, usize, usize)> = if args.quick {
+        vec![(32, 32, 8, 2, 1), (64, 64, 16, 2, 1), (32, 32, 8, 1, 1), (32, 32, 8, 8, 1), (32, 32, 8, 2, 4)]
+    } else {
+        let mut c = vec![(32, 32, 8, 2, 1), (64, 64, 16, 2, 1), (128, 128, 32, 2, 1), (256, 256, 64, 2, 1)];
+        c.extend((1..=8).filter(|&d| d != 2).map(|d| (64, 64, 16, d, 1)));
+        c.extend([2, 4, 8, 16].iter().map(|&spp| (32, 32, 8, 2, spp)));
+        c
+    };
+    let exe =
+        std::env::current_exe().map_err(|e| Error::invalid(format!("cannot find this program: {e}")))?;
+    table += &format!(
+        "\n## Scaling (CPU path, {}; perceptual-taa, time per iteration and the child process's peak memory)\n\n\
+         | tile | slices per iteration | ms per iteration | peak memory (MB) |\n| --- | ---: | ---: | ---: |\n",
+        fsot::bench::machine::cpu_description()
+    );
+    for (w, h, t, d, spp) in configs {
+        let tile = Tile::new(w, h, t, spp, d)?;
+        let iterations = if tile.values() > 1 << 22 { "3" } else { "10" };
+        let out = std::process::Command::new(&exe)
+            .args(["bench", "scaling-one", "--size", &format!("{w}x{h}x{t}"), "--dims", &d.to_string()])
+            .args(["--spp", &spp.to_string(), "--iterations", iterations])
+            .output()
+            .map_err(|e| Error::invalid(format!("cannot run the scaling child: {e}")))?;
+        if !out.status.success() {
+            return Err(Error::invalid(format!(
+                "scaling child failed: {}",
+                String::from_utf8_lossy(&out.stderr)
+            )));
+        }
+        let scale = fsot::bench::scaling::parse_line(tile, &String::from_utf8_lossy(&out.stdout))?;
+        eprintln!("scaling {}: {:.2} ms per iteration", tile.describe(), scale.seconds_per_iteration * 1e3);
+        table += &format!(
+            "| {} | {} | {:.2} | {:.1} |\n",
+            tile.describe(),
+            scale.slices,
+            scale.seconds_per_iteration * 1e3,
+            scale.peak_bytes as f64 / 1048576.0
+        );
+        records.push(format!(
+            "  {{\"suite\": \"scaling\", \"tile\": \"{}\", \"slices\": {}, \"seconds_per_iteration\": {:e}, \"peak_bytes\": {}}}",
+            tile.describe(),
+            scale.slices,
+            scale.seconds_per_iteration,
+            scale.peak_bytes
+        ));
+    }
     let json_text = format!("[\n{}\n]\n", records.join(",\n"));
     plot.commit(&line_plot(&series, 640, 400)?)?;
     md.commit(table.as_bytes())?;

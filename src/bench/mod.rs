@@ -3,6 +3,7 @@
 pub mod convergence;
 pub mod machine;
 pub mod plot;
+pub mod scaling;
 pub mod sort;
 
 pub use sort::{bench_sort, SortBench};
