@@ -56,7 +56,7 @@ impl EvalSize {
     /// A few minutes on 2 cores.
     pub fn quick() -> Self {
         Self {
-            tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"),
+            tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"), // ok: a constant, valid tile
             iterations: 500,
             passes: 8,
             shot: Shot { image: 64, frames: 80 },
@@ -68,7 +68,7 @@ impl EvalSize {
 
     pub fn full() -> Self {
         Self {
-            tile: Tile::new(64, 64, 16, 1, 2).expect("valid tile"),
+            tile: Tile::new(64, 64, 16, 1, 2).expect("valid tile"), // ok: a constant, valid tile
             iterations: 1000,
             passes: 32,
             shot: Shot { image: 96, frames: 96 },
