@@ -641,6 +641,53 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
             scale.peak_bytes
         ));
     }
+    // Kernels: the GPU radix sort against the CPU sort, against input size.
+    let sizes: Vec<u32> = if args.quick {
+        vec![1 << 16, 1 << 18, 1 << 20]
+    } else {
+        (16..=24).step_by(2).map(|k| 1u32 << k).collect()
+    };
+    match fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions {
+        validation: std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false),
+        device: None,
+    }) {
+        Ok(ctx) => {
+            let is_cpu_device = ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU;
+            let ceiling = if is_cpu_device {
+                let b = fsot::bench::machine::host_copy_bandwidth();
+                format!("host memory, measured by a parallel copy: {:.1} GB/s", b * 1e-9)
+            } else {
+                "the device's memory bandwidth (../shared/notes/performance.md)".to_string()
+            };
+            table += &format!(
+                "\n## Sort throughput against size ({}; ceiling: {ceiling})\n\n\
+                 Effective bandwidth: 4 passes, each reading and writing 8 bytes per pair.\n\n\
+                 | pairs | vulkan ms | vulkan G pairs/s | effective GB/s | cpu ms ({}) | cpu G pairs/s |\n\
+                 | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+                ctx.info().name,
+                fsot::bench::machine::cpu_description()
+            );
+            for &n in &sizes {
+                let b = fsot::bench::bench_sort(&ctx, n, if args.quick { 3 } else { 5 })?;
+                let gbs = 4.0 * 16.0 * n as f64 / b.gpu_seconds * 1e-9;
+                eprintln!("sort {n}: {:.3} G pairs/s", b.gpu_pairs_per_second() * 1e-9);
+                table += &format!(
+                    "| {n} | {:.3} | {:.3} | {gbs:.1} | {:.3} | {:.3} |\n",
+                    b.gpu_seconds * 1e3,
+                    b.gpu_pairs_per_second() * 1e-9,
+                    b.cpu_seconds * 1e3,
+                    b.cpu_pairs_per_second() * 1e-9
+                );
+                records.push(format!(
+                    "  {{\"suite\": \"sort\", \"device\": \"{}\", \"pairs\": {n}, \"gpu_seconds\": {:e}, \"cpu_seconds\": {:e}}}",
+                    b.device.replace('"', "'"),
+                    b.gpu_seconds,
+                    b.cpu_seconds
+                ));
+            }
+        }
+        Err(e) => table += &format!("\nSort suite not run: no Vulkan device ({e}).\n"),
+    }
     let json_text = format!("[\n{}\n]\n", records.join(",\n"));
     plot.commit(&line_plot(&series, 640, 400)?)?;
     md.commit(table.as_bytes())?;
