@@ -498,9 +498,9 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
     let plot = AtomicFile::create(&args.out.join("convergence.png"))?;
     let json = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let (tile, kernel, checkpoints): (Tile, &str, Vec<u32>) = if args.quick {
-        (Tile::new(32, 32, 16, 1, 2)?, "taa", vec![8, 16, 32, 64, 128, 192])
+        (Tile::new(32, 32, 16, 1, 2)?, "taa", vec![2, 4, 8, 16, 32, 64, 128, 192])
     } else {
-        (Tile::new(64, 64, 16, 1, 2)?, "perceptual-taa", vec![10, 20, 50, 100, 200, 500, 1000])
+        (Tile::new(64, 64, 16, 1, 2)?, "perceptual-taa", vec![2, 5, 10, 20, 50, 100, 200, 500, 1000])
     };
     let spec = KernelSpec::from_name(kernel, DEFAULT_SIGMA, None, DEFAULT_ALPHA, DEFAULT_FPS)?;
     let seed = 7;
@@ -527,30 +527,41 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
         "# fsot bench{}\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
          planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
          eye sigma 2.1, / white noise. Seconds: optimisation only.\n\n\
-         | backend | machine | iteration | seconds | objective | pRelMSE |\n| --- | --- | ---: | ---: | ---: | ---: |\n",
+         | backend | machine | iteration | seconds | objective | pRelMSE | perceived |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
         if args.quick { " --quick" } else { "" },
         tile.describe(),
         spec.describe()
     );
-    let mut rows = String::from("backend,machine,iteration,seconds,objective_ratio,prelmse_ratio\n");
+    let mut rows =
+        String::from("backend,machine,iteration,seconds,objective_ratio,prelmse_ratio,perceived_ratio\n");
     for p in &points {
         table += &format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} |\n",
-            p.backend, p.machine, p.iteration, p.seconds, p.objective_ratio, p.prelmse_ratio
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |\n",
+            p.backend,
+            p.machine,
+            p.iteration,
+            p.seconds,
+            p.objective_ratio,
+            p.prelmse_ratio,
+            p.perceived_ratio
         );
         rows += &format!(
-            "{},\"{}\",{},{:.6},{:.6},{:.6}\n",
+            "{},\"{}\",{},{:.6},{:.6},{:.6},{:.6}\n",
             p.backend,
             p.machine.replace('"', "'"),
             p.iteration,
             p.seconds,
             p.objective_ratio,
-            p.prelmse_ratio
+            p.prelmse_ratio,
+            p.perceived_ratio
         );
     }
     table += "\n## Time to quality (seconds; - where not reached)\n\n\
-              | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 |\n\
-              | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+              The public implementation of the paper needs about 1000 iterations (9 minutes on 2 cores) to \
+              reach about 0.65 x white noise on the perceived test (the core issue's figure).\n\n\
+              | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
+              | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
     for b in &backends {
         let mine: Vec<_> = points.iter().filter(|p| &p.backend == b).cloned().collect();
         let cell = |v: Option<f64>| v.map(|s| format!("{s:.3}")).unwrap_or_else(|| "-".into());
@@ -558,7 +569,9 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
             [0.8, 0.6, 0.5].iter().map(|&l| cell(time_to(&mine, l, |p| p.objective_ratio))).collect();
         let pr: Vec<String> =
             [0.6, 0.4, 0.3].iter().map(|&l| cell(time_to(&mine, l, |p| p.prelmse_ratio))).collect();
-        table += &format!("| {b} | {} | {} |\n", obj.join(" | "), pr.join(" | "));
+        let pe: Vec<String> =
+            [0.65, 0.55].iter().map(|&l| cell(time_to(&mine, l, |p| p.perceived_ratio))).collect();
+        table += &format!("| {b} | {} | {} | {} |\n", obj.join(" | "), pr.join(" | "), pe.join(" | "));
     }
     let total = |b: &str| points.iter().filter(|p| p.backend == b).map(|p| p.seconds).fold(0.0, f64::max);
     if backends.len() == 2 {
@@ -584,13 +597,14 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
         .map(|p| {
             format!(
                 "  {{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
-                 \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}}}",
+                 \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \"perceived_ratio\": {:e}}}",
                 p.backend,
                 p.machine.replace('"', "'"),
                 p.iteration,
                 p.seconds,
                 p.objective_ratio,
-                p.prelmse_ratio
+                p.prelmse_ratio,
+                p.perceived_ratio
             )
         })
         .collect();

@@ -1,6 +1,7 @@
 //! Error against run time and iterations, per backend, on one problem and seed:
 //! checkpoints of one run (its schedule planned for the last checkpoint), each
-//! judged by `fsot score`'s objective (ratio to white noise) and by the pRelMSE
+//! judged by `fsot score`'s objective (ratio to white noise), by the core
+//! issue's independent perceived-error test, and by the pRelMSE
 //! of one evaluation scene under TAA (ratio to the mean of four white-noise
 //! masks). Time counts the
 //! optimisation only; judging is done with the clock stopped.
@@ -11,6 +12,7 @@ use std::time::{Duration, Instant};
 use crate::engine::{BackendChoice, Engine, Started};
 use crate::error::Result;
 use crate::eval::eye::Eye;
+use crate::eval::perceived::{perceived_error, TestSetup};
 use crate::eval::render::{references, render, taa, MaskSampler, Shot};
 use crate::eval::scenes::Scene;
 use crate::gpu::optimizer::GpuOptions;
@@ -31,6 +33,9 @@ pub struct Point {
     pub objective_ratio: f64,
     /// pRelMSE of the scene under TAA / white noise's.
     pub prelmse_ratio: f64,
+    /// The independent perceived-error test of the core issue (animated
+    /// integrands, TAA, the eye; `eval::perceived`) / white noise's.
+    pub perceived_ratio: f64,
 }
 
 /// The scene judge: a soft shadow, 64 x 64, TAA, the eye at sigma 2.1.
@@ -42,6 +47,7 @@ pub struct SceneJudge {
     seen_reference: Vec<Vec<f64>>,
     eye: Eye,
     white: f64,
+    perceived_white: f64,
 }
 
 impl SceneJudge {
@@ -52,8 +58,13 @@ impl SceneJudge {
         let reference = taa(&references(scene, shot, 256, cache)?, crate::eval::suite::TAA_ALPHA);
         let eye = Eye::new(2.1, 60.0);
         let seen_reference = (warmup..shot.frames).map(|f| eye.filter(&reference, f, shot.image)).collect();
-        let mut judge = Self { scene, shot, warmup, reference, seen_reference, eye, white: 1.0 };
+        let mut judge =
+            Self { scene, shot, warmup, reference, seen_reference, eye, white: 1.0, perceived_white: 1.0 };
         judge.white = (0..4).map(|s| judge.prelmse(&Mask::white(tile, 50 + s))).sum::<f64>() / 4.0;
+        judge.perceived_white = (0..3)
+            .map(|s| perceived_error(&Mask::white(tile, 1000 + s), &TestSetup::default(), 1))
+            .sum::<f64>()
+            / 3.0;
         Ok(judge)
     }
 
@@ -86,6 +97,12 @@ impl SceneJudge {
 
     pub fn ratio(&self, mask: &Mask) -> f64 {
         self.prelmse(mask) / self.white
+    }
+
+    /// The independent test's ratio to white noise (as `ratio_to_white`, with
+    /// the white-noise figure computed once).
+    pub fn perceived_ratio(&self, mask: &Mask) -> f64 {
+        perceived_error(mask, &TestSetup::default(), 1) / self.perceived_white
     }
 }
 
@@ -120,6 +137,7 @@ pub fn convergence(
             seconds: elapsed.as_secs_f64(),
             objective_ratio: score(&mask, spec, SCORE_SLICES).ratio(),
             prelmse_ratio: judge.ratio(&mask),
+            perceived_ratio: judge.perceived_ratio(&mask),
         })
     };
     points.push(judge_at(&engine, elapsed)?);
@@ -169,6 +187,7 @@ mod tests {
             seconds,
             objective_ratio: v,
             prelmse_ratio: v,
+            perceived_ratio: v,
         }
     }
 
