@@ -235,3 +235,29 @@ fn swap_methods_refuse_bad_settings() {
         assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
     }
 }
+
+#[test]
+fn a_run_killed_mid_way_leaves_the_existing_output_untouched_and_nothing_else() {
+    // A long run over an existing file, killed (SIGKILL: no chance to clean up)
+    // after a second and a half of its work.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--backend", "cpu", "--size", "64x64x16", "--iterations", "100000"])
+        .args(["--out", "existing.exr"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "the run ended before it was killed");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["existing.exr".to_string()], "files left behind");
+}

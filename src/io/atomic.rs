@@ -9,12 +9,13 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// A reserved output: creating it checks that the target's folder is writable
-/// (before any long work); `commit` writes and renames; dropping it uncommitted
-/// removes the temporary file and leaves the target untouched.
+/// (before any long work) by creating and removing the temporary file, so a run
+/// killed during its long work leaves nothing behind; `commit` writes the
+/// temporary file, syncs it and renames it over the target; dropping it
+/// uncommitted leaves the target untouched.
 pub struct AtomicFile {
     target: PathBuf,
     temp: PathBuf,
-    file: Option<File>,
 }
 
 impl AtomicFile {
@@ -33,9 +34,9 @@ impl AtomicFile {
             .file_name()
             .ok_or_else(|| Error::invalid(format!("output {} has no file name", target.display())))?;
         let temp = dir.join(format!(".{}.fsot-{}.tmp", name.to_string_lossy(), std::process::id()));
-        let file =
-            File::create(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
-        Ok(Self { target: target.to_path_buf(), temp, file: Some(file) })
+        File::create(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
+        fs::remove_file(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
+        Ok(Self { target: target.to_path_buf(), temp })
     }
 
     pub fn target(&self) -> &Path {
@@ -44,8 +45,8 @@ impl AtomicFile {
 
     /// Writes `bytes` to the temporary file, syncs it, renames it over the target.
     pub fn commit(mut self, bytes: &[u8]) -> Result<()> {
-        let mut file = self.file.take().expect("file present until commit"); // ok: commit consumes self
         let ctx = || format!("writing {}", self.temp.display());
+        let mut file = File::create(&self.temp).map_err(|e| Error::io(ctx(), e))?;
         file.write_all(bytes).map_err(|e| Error::io(ctx(), e))?;
         file.sync_all().map_err(|e| Error::io(ctx(), e))?;
         drop(file);
@@ -57,8 +58,10 @@ impl AtomicFile {
 }
 
 impl Drop for AtomicFile {
+    /// After a failed commit: the partial temporary file goes (the target was
+    /// never touched).
     fn drop(&mut self) {
-        if !self.temp.as_os_str().is_empty() {
+        if !self.temp.as_os_str().is_empty() && self.temp.exists() {
             let _ = fs::remove_file(&self.temp);
         }
     }
