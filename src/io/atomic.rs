@@ -28,7 +28,8 @@ impl AtomicFile {
             _ => PathBuf::from("."),
         };
         if !dir.is_dir() {
-            return Err(Error::invalid(format!("output folder {} does not exist", dir.display())));
+            let why = if dir.exists() { "is not a folder" } else { "does not exist" };
+            return Err(Error::invalid(format!("output folder {} {why}", dir.display())));
         }
         let name = target
             .file_name()
