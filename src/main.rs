@@ -491,8 +491,7 @@ fn bench_command(args: BenchArgs) -> Result<()> {
 fn bench_suites(args: &BenchArgs) -> Result<()> {
     use fsot::bench::convergence::{convergence, time_to, SceneJudge};
     use fsot::bench::plot::line_plot;
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", args.out.display())))?;
+    fsot::io::atomic::make_folder(&args.out)?;
     let md = AtomicFile::create(&args.out.join("convergence.md"))?;
     let csv = AtomicFile::create(&args.out.join("convergence.csv"))?;
     let plot = AtomicFile::create(&args.out.join("convergence.png"))?;
@@ -533,29 +532,10 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
         tile.describe(),
         spec.describe()
     );
-    let mut rows =
-        String::from("backend,machine,iteration,seconds,objective_ratio,prelmse_ratio,perceived_ratio\n");
+    let mut rows = format!("{}\n", fsot::bench::convergence::Point::CSV_HEADER);
     for p in &points {
-        table += &format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |\n",
-            p.backend,
-            p.machine,
-            p.iteration,
-            p.seconds,
-            p.objective_ratio,
-            p.prelmse_ratio,
-            p.perceived_ratio
-        );
-        rows += &format!(
-            "{},\"{}\",{},{:.6},{:.6},{:.6},{:.6}\n",
-            p.backend,
-            p.machine.replace('"', "'"),
-            p.iteration,
-            p.seconds,
-            p.objective_ratio,
-            p.prelmse_ratio,
-            p.perceived_ratio
-        );
+        table += &format!("{}\n", p.markdown_row());
+        rows += &format!("{}\n", p.csv_row());
     }
     table += "\n## Time to quality (seconds; - where not reached)\n\n\
               The public implementation of the paper needs about 1000 iterations (9 minutes on 2 cores) to \
@@ -592,22 +572,7 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
         series.push(mine.iter().map(|p| (p.seconds, p.objective_ratio)).collect());
         series.push(mine.iter().map(|p| (p.seconds, p.prelmse_ratio)).collect());
     }
-    let mut records: Vec<String> = points
-        .iter()
-        .map(|p| {
-            format!(
-                "  {{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
-                 \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \"perceived_ratio\": {:e}}}",
-                p.backend,
-                p.machine.replace('"', "'"),
-                p.iteration,
-                p.seconds,
-                p.objective_ratio,
-                p.prelmse_ratio,
-                p.perceived_ratio
-            )
-        })
-        .collect();
+    let mut records: Vec<String> = points.iter().map(|p| format!("  {}", p.json())).collect();
     // Scaling: each configuration in a child process.
     let configs: Vec<(usize, usize, usize, usize, usize)> = if args.quick {
         vec![(32, 32, 8, 2, 1), (64, 64, 16, 2, 1), (32, 32, 8, 1, 1), (32, 32, 8, 8, 1), (32, 32, 8, 2, 4)]
@@ -734,8 +699,7 @@ fn eval_command(args: EvalArgs) -> Result<()> {
             })
             .collect::<Result<_>>()?
     };
-    std::fs::create_dir_all(&args.out)
-        .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", args.out.display())))?;
+    fsot::io::atomic::make_folder(&args.out)?;
     // Reserve the outputs before the long work: a bad path fails now.
     let md = AtomicFile::create(&args.out.join("results.md"))?;
     let js = AtomicFile::create(&args.out.join("results.json"))?;

@@ -38,6 +38,55 @@ pub struct Point {
     pub perceived_ratio: f64,
 }
 
+impl Point {
+    pub const CSV_HEADER: &'static str =
+        "backend,machine,iteration,seconds,objective_ratio,prelmse_ratio,perceived_ratio";
+
+    fn machine_quoted(&self) -> String {
+        self.machine.replace('"', "'")
+    }
+
+    pub fn markdown_row(&self) -> String {
+        format!(
+            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            self.backend,
+            self.machine,
+            self.iteration,
+            self.seconds,
+            self.objective_ratio,
+            self.prelmse_ratio,
+            self.perceived_ratio
+        )
+    }
+
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{},\"{}\",{},{:.6},{:.6},{:.6},{:.6}",
+            self.backend,
+            self.machine_quoted(),
+            self.iteration,
+            self.seconds,
+            self.objective_ratio,
+            self.prelmse_ratio,
+            self.perceived_ratio
+        )
+    }
+
+    pub fn json(&self) -> String {
+        format!(
+            "{{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
+             \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \"perceived_ratio\": {:e}}}",
+            self.backend,
+            self.machine_quoted(),
+            self.iteration,
+            self.seconds,
+            self.objective_ratio,
+            self.prelmse_ratio,
+            self.perceived_ratio
+        )
+    }
+}
+
 /// The scene judge: a soft shadow, 64 x 64, TAA, the eye at sigma 2.1.
 pub struct SceneJudge {
     scene: Scene,

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::eval::scenes::{reference, Scene};
 use crate::io::atomic::AtomicFile;
 use crate::mask::Mask;
@@ -123,9 +123,7 @@ pub fn references(scene: Scene, shot: Shot, samples: usize, cache: Option<&Path>
         .collect();
     if let Some(path) = &path {
         if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| {
-                Error::invalid(format!("cannot make the cache folder {}: {e}", dir.display()))
-            })?;
+            crate::io::atomic::make_folder(dir)?;
         }
         let bytes: Vec<u8> = frames.iter().flatten().flat_map(|&v| (v as f32).to_le_bytes()).collect();
         AtomicFile::create(path)?.commit(&bytes)?;

@@ -130,8 +130,7 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> R
         }
         other => return Err(Error::invalid(format!("unknown method `{other}`"))),
     };
-    std::fs::create_dir_all(cache)
-        .map_err(|e| Error::invalid(format!("cannot make the cache folder {}: {e}", cache.display())))?;
+    crate::io::atomic::make_folder(cache)?;
     crate::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)
 }
@@ -238,8 +237,7 @@ pub fn run_eval(
                 ));
             }
             if let (Some(dir), false) = (pictures, kept.is_empty()) {
-                std::fs::create_dir_all(dir)
-                    .map_err(|e| Error::invalid(format!("cannot make the folder {}: {e}", dir.display())))?;
+                crate::io::atomic::make_folder(dir)?;
                 let refs = (&reference.frames[0][..], &reference.frames[1][..]);
                 scene_pictures(dir, scene.name(), n, &eye, refs, &kept)?;
             }

@@ -8,6 +8,11 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
+/// Makes a folder (and its parents) for outputs, with a clear error.
+pub fn make_folder(dir: &Path) -> Result<()> {
+    fs::create_dir_all(dir).map_err(|e| Error::io(format!("cannot make the folder {}", dir.display()), e))
+}
+
 /// A reserved output: creating it checks that the target's folder is writable
 /// (before any long work) by creating and removing the temporary file, so a run
 /// killed during its long work leaves nothing behind; `commit` writes the

@@ -19,7 +19,7 @@ pub fn quantize(v: f32) -> u16 {
 
 /// Writes the slices into `dir` (created if missing). Returns the file names.
 pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(format!("cannot create {}", dir.display()), e))?;
+    crate::io::atomic::make_folder(dir)?;
     let tile = mask.tile;
     let simple = tile.spp == 1 && tile.dims <= 4;
     let mut names = Vec::new();
