@@ -1,5 +1,7 @@
 #version 450
-// Radix pass 1 of 3: per-block digit counts.
+// Radix pass 1 of 3: per-block digit counts. The loop is unrolled with no early
+// exit, so the block's loads are issued together.
+#extension GL_EXT_control_flow_attributes : require
 #include "radix_common.glsl"
 
 layout(std430, set = 0, binding = 1) readonly buffer Keys { uint keys[]; };
@@ -13,7 +15,7 @@ void main() {
     for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) { s_hist[d] = 0u; }
     barrier();
     uint base = block * block_size();
-    for (uint it = 0u; it < ITEMS && base < count; ++it) {
+    [[unroll]] for (uint it = 0u; it < ITEMS; ++it) {
         uint i = base + it * gl_WorkGroupSize.x + tid;
         if (i < count) {
             atomicAdd(s_hist[(keys[i] >> pc.shift) & 255u], 1u);
