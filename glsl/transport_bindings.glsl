@@ -22,6 +22,7 @@ layout(std430, set = 0, binding = 9) writeonly buffer LargeSeg { uint large_seg[
 layout(push_constant) uniform Push { TransportPush pc; };
 
 #include "accumulate.glsl"
+#include "cost.glsl"
 
 // Class size (samples) of a slice: taps whose threshold exceeds its level
 // (thresholds decrease), times spp.

@@ -20,6 +20,7 @@ layout(std430, set = 0, binding = 5) readonly buffer LargeProj { float large_pro
 layout(push_constant) uniform Push { TransportPush pc; };
 
 #include "accumulate.glsl"
+#include "cost.glsl"
 
 shared float s_part[gl_WorkGroupSize.x];
 

@@ -106,6 +106,20 @@ enum BenchSuite {
         #[arg(long)]
         device: Option<String>,
     },
+    /// Contributions per second of the GPU gradient scatter (fixed point and float
+    /// atomics) and of the CPU path's, into N/16 accumulators.
+    Scatter {
+        /// Contributions to add.
+        #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
+        n: u32,
+        /// Timed runs (median reported), after two warm-up runs.
+        #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
+        repeats: u32,
+        /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
+        /// the first discrete GPU].
+        #[arg(long)]
+        device: Option<String>,
+    },
     /// One configuration of the scaling suite (run by `fsot bench` in a child
     /// process, so its peak memory is its own).
     #[command(hide = true)]
@@ -484,7 +498,38 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             );
             Ok(())
         }
+        Some(BenchSuite::Scatter { n, repeats, device }) => {
+            let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
+            let ctx =
+                fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
+            let b = fsot::bench::bench_scatter(&ctx, n, repeats)?;
+            println!("{}", scatter_line(&b));
+            Ok(())
+        }
     }
+}
+
+/// One scatter measurement in words.
+fn scatter_line(b: &fsot::bench::ScatterBench) -> String {
+    let rate = |s: f64| b.n as f64 / s * 1e-9;
+    let float = match (b.float_seconds, b.float_error) {
+        (Some(s), Some(e)) => {
+            format!("float atomics {:.3} ms = {:.3} G adds/s (max error {e:.1e}); ", s * 1e3, rate(s))
+        }
+        _ => "no float atomics; ".to_string(),
+    };
+    format!(
+        "scatter {} contributions into {} accumulators on {}: fixed point {:.3} ms = {:.3} G adds/s (max error {:.1e}); {float}cpu {:.3} ms = {:.3} G adds/s ({} threads)",
+        b.n,
+        b.targets,
+        b.device,
+        b.fixed_seconds * 1e3,
+        rate(b.fixed_seconds),
+        b.fixed_error,
+        b.cpu_seconds * 1e3,
+        rate(b.cpu_seconds),
+        b.cpu_threads
+    )
 }
 
 /// The convergence and time-to-quality suites, CPU path against Vulkan.
@@ -664,8 +709,42 @@ fn bench_suites(args: &BenchArgs) -> Result<()> {
                     b.cpu_seconds
                 ));
             }
+            table += &format!(
+                "\n## Scatter throughput against size ({}; ceiling as above)\n\n\
+                 N contributions at random into N/16 accumulators, as the optimizer's gradient scatter. \
+                 Effective bandwidth: the least bytes a scatter moves (index and value read, \
+                 each 8-byte accumulator read and written once) over the time.\n\n\
+                 | contributions | fixed point ms | G adds/s | effective GB/s | float atomics ms | G adds/s | cpu ms ({}) | cpu G adds/s |\n\
+                 | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+                ctx.info().name,
+                fsot::bench::machine::cpu_description()
+            );
+            for &n in &sizes {
+                let b = fsot::bench::bench_scatter(&ctx, n, if args.quick { 3 } else { 5 })?;
+                eprintln!("{}", scatter_line(&b));
+                let rate = |s: f64| n as f64 / s * 1e-9;
+                let (float_ms, float_rate) = match b.float_seconds {
+                    Some(s) => (format!("{:.3}", s * 1e3), format!("{:.3}", rate(s))),
+                    None => ("-".to_string(), "-".to_string()),
+                };
+                table += &format!(
+                    "| {n} | {:.3} | {:.3} | {:.1} | {float_ms} | {float_rate} | {:.3} | {:.3} |\n",
+                    b.fixed_seconds * 1e3,
+                    rate(b.fixed_seconds),
+                    b.bytes() / b.fixed_seconds * 1e-9,
+                    b.cpu_seconds * 1e3,
+                    rate(b.cpu_seconds)
+                );
+                records.push(format!(
+                    "  {{\"suite\": \"scatter\", \"device\": \"{}\", \"contributions\": {n}, \"fixed_seconds\": {:e}, \"float_seconds\": {}, \"cpu_seconds\": {:e}}}",
+                    b.device.replace('"', "'"),
+                    b.fixed_seconds,
+                    b.float_seconds.map(|s| format!("{s:e}")).unwrap_or_else(|| "null".into()),
+                    b.cpu_seconds
+                ));
+            }
         }
-        Err(e) => table += &format!("\nSort suite not run: no Vulkan device ({e}).\n"),
+        Err(e) => table += &format!("\nSort and scatter suites not run: no Vulkan device ({e}).\n"),
     }
     let json_text = format!("[\n{}\n]\n", records.join(",\n"));
     plot.commit(&line_plot(&series, 640, 400)?)?;

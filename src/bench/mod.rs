@@ -4,6 +4,8 @@ pub mod convergence;
 pub mod machine;
 pub mod plot;
 pub mod scaling;
+pub mod scatter;
 pub mod sort;
 
+pub use scatter::{bench_scatter, ScatterBench};
 pub use sort::{bench_sort, SortBench};

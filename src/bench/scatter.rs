@@ -1,0 +1,225 @@
+//! The gradient scatter on its own: `n` contributions added into `n / 16`
+//! accumulators at random indices (the shape of the optimizer's scatter, where each
+//! sample receives a contribution from many slices), on the GPU with the transport
+//! passes' helper (`glsl/scatter_add_body.glsl`) in fixed point and, where the
+//! device has them, float atomics; on the CPU with the CPU path's accumulator.
+//! Every result is checked against a sum in f64.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::cpu::{Accumulator, FIXED_SCALE};
+use crate::error::{Error, Result};
+use crate::gpu::buffer::{Buffer, Location};
+use crate::gpu::context::Context;
+use crate::gpu::pipeline::{barrier, submit_and_wait, ComputePipeline};
+use crate::gpu::shaders;
+use crate::gpu::sort::{as_bytes, copy_range, from_bytes};
+use crate::gpu::timer::Timer;
+use crate::rng::{derive, Stream};
+
+/// Contributions per accumulator.
+pub const FAN_IN: u32 = 16;
+const WORKGROUP: u32 = 256;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScatterBench {
+    pub n: u32,
+    pub targets: u32,
+    pub device: String,
+    /// Median GPU seconds of one scatter: fixed point (int64 atomics).
+    pub fixed_seconds: f64,
+    /// The same with float atomics, where the device has them.
+    pub float_seconds: Option<f64>,
+    /// Median CPU seconds (the CPU path's fixed-point accumulator, all threads).
+    pub cpu_seconds: f64,
+    pub cpu_threads: usize,
+    /// Largest |GPU - f64 sum| over the accumulators: fixed point, float.
+    pub fixed_error: f64,
+    pub float_error: Option<f64>,
+}
+
+impl ScatterBench {
+    /// Bytes a scatter must move at least: each contribution's index and value read
+    /// once, each accumulator read and written once (8 bytes, fixed point).
+    pub fn bytes(&self) -> f64 {
+        self.n as f64 * 8.0 + self.targets as f64 * 16.0
+    }
+}
+
+/// The contributions: uniform random accumulators, values in (-2^-10, 2^-10) like
+/// the optimizer's per-slice displacements.
+pub fn contributions(n: u32) -> (Vec<u32>, Vec<f32>) {
+    let targets = (n / FAN_IN).max(1);
+    let mut rng = Stream::new(derive(0x5ca7, n));
+    let idx = (0..n).map(|_| rng.below(targets)).collect();
+    let val = (0..n).map(|_| (rng.next_f32() * 2.0 - 1.0) * (1.0 / 1024.0)).collect();
+    (idx, val)
+}
+
+/// The sums in f64, one thread (the reference).
+pub fn reference_sums(idx: &[u32], val: &[f32], targets: u32) -> Vec<f64> {
+    let mut sums = vec![0.0f64; targets as usize];
+    for (&i, &v) in idx.iter().zip(val) {
+        sums[i as usize] += v as f64;
+    }
+    sums
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn worst(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+/// The contributions on the device.
+struct DeviceInput {
+    idx: Buffer,
+    val: Buffer,
+    n: u32,
+    targets: u32,
+}
+
+/// One GPU mode: the median time of `repeats` scatters (after two warm-ups, the
+/// accumulators cleared before each) and the sums of the last one.
+
+fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Result<(f64, Vec<f64>)> {
+    let DeviceInput { idx, val, n, targets } = input;
+    let (n, targets) = (*n, *targets);
+    let spirv = if float { shaders::SCATTER_ADD_FLOAT } else { shaders::SCATTER_ADD };
+    let width = if float { 4 } else { 8 };
+    let acc_bytes = targets as u64 * width;
+    let acc = Buffer::new(ctx, acc_bytes, Location::Device, "scatter-acc")?;
+    let pipeline = ComputePipeline::new(ctx, spirv, 3, 4, &[WORKGROUP])?;
+    pipeline.bind(&[idx, val, &acc])?;
+    let runs = repeats + 2;
+    let timer = Timer::new(ctx, 2 * runs)?;
+    let groups = n.div_ceil(WORKGROUP);
+    submit_and_wait(ctx, |cmd| {
+        timer.reset(cmd);
+        for r in 0..runs {
+            unsafe { ctx.device().cmd_fill_buffer(cmd, acc.raw, 0, acc_bytes, 0) };
+            barrier(ctx, cmd);
+            timer.stamp(cmd, 2 * r);
+            pipeline.dispatch(cmd, [groups, 1, 1], &n.to_ne_bytes());
+            barrier(ctx, cmd);
+            timer.stamp(cmd, 2 * r + 1);
+        }
+    })?;
+    let ns = timer.read_ns(2 * runs)?;
+    let seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
+    let down = Buffer::new(ctx, acc_bytes, Location::Readback, "scatter-readback")?;
+    submit_and_wait(ctx, |cmd| {
+        copy_range(ctx, cmd, &acc, &down, acc_bytes);
+        barrier(ctx, cmd);
+    })?;
+    let bytes = down.read()?;
+    let sums = if float {
+        from_bytes::<f32>(bytes).into_iter().map(f64::from).collect()
+    } else {
+        from_bytes::<i64>(bytes).into_iter().map(|q| q as f64 / FIXED_SCALE).collect()
+    };
+    Ok((seconds, sums))
+}
+
+/// Scatters `n` contributions `repeats` times on the GPU (each mode) and on the
+/// CPU; errors if a result strays from the f64 sums by more than the stated bounds
+/// (fixed point: half a unit of 2^-40 per contribution, the only rounding; float:
+/// 2^-20, far above the float rounding of sums of a few dozen values below 2^-10,
+/// so it only catches lost or doubled contributions).
+pub fn bench_scatter(ctx: &Context, n: u32, repeats: u32) -> Result<ScatterBench> {
+    if n == 0 || repeats == 0 {
+        return Err(Error::invalid("the scatter needs at least one contribution and one repeat"));
+    }
+    if !ctx.info().int64_atomics {
+        return Err(Error::invalid(format!("{} has no 64-bit atomics", ctx.info().name)));
+    }
+    let targets = (n / FAN_IN).max(1);
+    let (idx, val) = contributions(n);
+    let reference = reference_sums(&idx, &val, targets);
+    let bytes = n as u64 * 4;
+    let idx_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-targets")?;
+    let val_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-values")?;
+    {
+        let mut up = Buffer::new(ctx, bytes, Location::Upload, "scatter-upload")?;
+        up.write(as_bytes(&idx))?;
+        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &idx_buf, bytes))?;
+        up.write(as_bytes(&val))?;
+        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &val_buf, bytes))?;
+    }
+    let input = DeviceInput { idx: idx_buf, val: val_buf, n, targets };
+    let (fixed_seconds, fixed_sums) = gpu_mode(ctx, &input, repeats, false)?;
+    let fixed_error = worst(&fixed_sums, &reference);
+    let float = if ctx.info().float_atomic_add {
+        let (s, sums) = gpu_mode(ctx, &input, repeats, true)?;
+        Some((s, worst(&sums, &reference)))
+    } else {
+        None
+    };
+    // Each contribution is rounded to a multiple of 2^-40 once; integer sums are exact.
+    let max_fan_in = {
+        let mut count = vec![0u32; targets as usize];
+        idx.iter().for_each(|&i| count[i as usize] += 1);
+        count.into_iter().max().unwrap_or(0) as f64
+    };
+    let fixed_bound = max_fan_in * 0.5 / FIXED_SCALE;
+    if fixed_error > fixed_bound {
+        return Err(Error::invalid(format!(
+            "the GPU's fixed-point scatter is off by {fixed_error:e} (bound {fixed_bound:e})"
+        )));
+    }
+    if let Some((_, e)) = float {
+        if e > 1.0 / (1u64 << 20) as f64 {
+            return Err(Error::invalid(format!("the GPU's float scatter is off by {e:e}")));
+        }
+    }
+    // The CPU path's accumulator: contributions in parallel chunks, atomics.
+    let cpu_acc = Accumulator::new(targets as usize);
+    let mut cpu_times = Vec::new();
+    let mut cpu_sums = Vec::new();
+    for _ in 0..3 {
+        let start = Instant::now();
+        idx.par_chunks(1 << 14).zip(val.par_chunks(1 << 14)).for_each(|(i, v)| {
+            for (&i, &v) in i.iter().zip(v) {
+                cpu_acc.add(i as usize, v as f64);
+            }
+        });
+        cpu_times.push(start.elapsed().as_secs_f64());
+        cpu_sums = (0..targets as usize).map(|t| cpu_acc.take(t)).collect();
+    }
+    let cpu_error = worst(&cpu_sums, &reference);
+    if cpu_error > fixed_bound {
+        return Err(Error::invalid(format!("the CPU scatter is off by {cpu_error:e}")));
+    }
+    Ok(ScatterBench {
+        n,
+        targets,
+        device: format!("{} ({})", ctx.info().name, ctx.info().driver),
+        fixed_seconds,
+        float_seconds: float.map(|f| f.0),
+        cpu_seconds: median(cpu_times),
+        cpu_threads: rayon::current_num_threads(),
+        fixed_error,
+        float_error: float.map(|f| f.1),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contributions_have_the_benchmarked_shape() {
+        let (idx, val) = contributions(1 << 12);
+        assert_eq!(idx.len(), 1 << 12);
+        assert!(idx.iter().all(|&i| i < (1 << 12) / FAN_IN));
+        assert!(val.iter().all(|v| v.abs() < 1.0 / 1024.0));
+        // Every accumulator is hit about FAN_IN times on average.
+        let sums = reference_sums(&idx, &vec![1.0; idx.len()], (1 << 12) / FAN_IN);
+        assert_eq!(sums.iter().sum::<f64>(), (1 << 12) as f64);
+    }
+}
