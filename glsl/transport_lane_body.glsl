@@ -7,7 +7,9 @@
 #include "transport_bindings.glsl"
 
 layout(local_size_x_id = 0) in;
-#define FSOT_LANE_MAX 2048u
+// Largest class sorted in one invocation: 2048 where the driver accepts 32 KiB of
+// private memory per invocation (the host tries smaller sizes where it does not).
+layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 
 // Private arrays: the projections in class order, one counter per bucket, and

@@ -30,8 +30,12 @@ use crate::slice::{level_thresholds, slice_key};
 /// (`FSOT_LOCAL_MAX` in transport_body.glsl).
 pub const LOCAL_MAX: u32 = 2048;
 /// Classes up to this many samples are sorted by one invocation in the per-lane
-/// transport (`FSOT_LANE_MAX` in transport_lane_body.glsl).
+/// transport (`FSOT_LANE_MAX` in transport_lane_body.glsl, a specialization
+/// constant): the first of these sizes whose pipeline the driver builds (its
+/// private arrays take 16 bytes per sample per invocation; an NVIDIA driver
+/// refused 2048, lavapipe takes it).
 pub const LANE_MAX: u32 = 2048;
+pub const LANE_SIZES: [u32; 4] = [LANE_MAX, 1024, 512, 256];
 /// Largest dimension the GPU path handles (its exact targets are the closed form
 /// for d <= 2).
 pub const GPU_MAX_DIMS: usize = 2;
@@ -261,8 +265,38 @@ impl GpuRun {
         // Large classes: only when the kernel can make a class bigger than shared
         // memory holds. Capacity: three times the expected elements per iteration
         // plus four largest classes; overflows are counted and reported.
+        let workgroup = shape.workgroup;
+        let tpush = std::mem::size_of::<TransportPush>() as u32;
+        let transport_spv = match (shape.per_lane, float_acc) {
+            (true, true) => shaders::TRANSPORT_LANE_FLOAT,
+            (true, false) => shaders::TRANSPORT_LANE,
+            (false, true) => shaders::TRANSPORT_FLOAT,
+            (false, false) => shaders::TRANSPORT,
+        };
+        let (transport, local_max) = if shape.per_lane {
+            let mut built = None;
+            let mut refusal = None;
+            for lane in LANE_SIZES {
+                let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, lane];
+                match ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec) {
+                    Ok(p) => {
+                        built = Some((p, lane));
+                        break;
+                    }
+                    Err(e @ Error::Vulkan { .. }) => refusal = Some(e),
+                    Err(e) => return Err(e),
+                }
+            }
+            match (built, refusal) {
+                (Some(b), _) => b,
+                (None, Some(e)) => return Err(e),
+                (None, None) => unreachable!("LANE_SIZES is not empty"),
+            }
+        } else {
+            let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32];
+            (ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?, LOCAL_MAX)
+        };
         let max_class = kernel.taps.len() as u64 * tile.spp as u64;
-        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
         let needs_large = max_class > local_max as u64;
         let large_capacity = if needs_large {
             let mut expected = 0.0;
@@ -302,15 +336,6 @@ impl GpuRun {
             (None, None) => unreachable!("placeholders exist when there is no sort"),
         };
 
-        let workgroup = shape.workgroup;
-        let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32];
-        let tpush = std::mem::size_of::<TransportPush>() as u32;
-        let transport_spv = match (shape.per_lane, float_acc) {
-            (true, true) => shaders::TRANSPORT_LANE_FLOAT,
-            (true, false) => shaders::TRANSPORT_LANE,
-            (false, true) => shaders::TRANSPORT_FLOAT,
-            (false, false) => shaders::TRANSPORT,
-        };
         let transport_buffers = [
             &samples,
             &taps,
@@ -323,8 +348,6 @@ impl GpuRun {
             &large_proj,
             &large_seg,
         ];
-        let transport =
-            ComputePipeline::new(ctx, transport_spv, transport_buffers.len() as u32, tpush, &spec)?;
         transport.bind(&transport_buffers)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
         let update =
