@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
 # The GPU measurements recorded in BENCHMARKS.md, in one run on a lent NVIDIA
 # machine (see ../shared/gpu/README.md). Prepare on the development machine:
-#   ../shared/gpu/fetch-vulkan-loader.sh      (plus vulkan-validationlayers into .gl/)
+#   ../shared/gpu/fetch-vulkan-loader.sh
+#   (cd .gl && apt-get download vulkan-validationlayers)   # for the GPU tests
 #   cargo build --release && cargo test --release --no-run
-#   cp target/release/fsot target/release/deps/gpu_{sort,optimizer,toolchain}-* .gl/bin/
-# then run this script from the repository root on the GPU machine, with OUT set.
+#   mkdir -p .gl/bin && cp target/release/fsot .gl/bin/
+#   for t in gpu_toolchain gpu_sort gpu_optimizer bench; do
+#     cp "$(ls -t target/release/deps/$t-* | grep -v '\.d$' | head -1)" .gl/bin/$t; done
+#   strip .gl/bin/*
+# Other builds to compare (say, the sort before a change) go in as .gl/bin/fsot-NAME;
+# their sort is measured beside this one's. Then run this script from the
+# repository root on the GPU machine, with OUT set.
 set -u
 for f in .gl/*.deb; do dpkg -x "$f" / >/dev/null 2>&1; done
 ldconfig
@@ -12,25 +18,32 @@ OUT=${OUT:-/tmp/fsot-out}
 mkdir -p "$OUT"
 B=.gl/bin
 export XDG_RUNTIME_DIR=/tmp
-ls /usr/share/vulkan/icd.d/ /usr/local/nvidia/share/vulkan/icd.d/ /etc/vulkan/icd.d/ 2>/dev/null
 if [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
-echo "VK_DRIVER_FILES=${VK_DRIVER_FILES:-}"
 step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeout 240 "$@"; }
 {
-  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.mem --format=csv
+  nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv
   lscpu | grep -E "Model name|^CPU\(s\)"
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
-  step $B/fsot bench sort --n 1048576 --repeats 50
-  step $B/fsot bench sort --n 16777216 --repeats 20
+  for n in 1048576 16777216; do
+    for v in $B/fsot $B/fsot-*; do
+      [ -x "$v" ] && step "$v" bench sort --n $n --repeats 30
+    done
+  done
+  step $B/fsot bench sort --n 4194304 --repeats 30
   step $B/fsot bench sort --n 33554432 --repeats 10
+  step $B/fsot bench scatter --n 1048576 --repeats 30
+  step $B/fsot bench scatter --n 16777216 --repeats 20
   step $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa.exr"
   step $B/fsot optimize --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa-det.exr"
   step $B/fsot optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile --out "$OUT/h100-32x32x16-taa.exr"
-  step $B/fsot optimize --backend vulkan --size 64x64x16 --profile --out "$OUT/h100-default.exr"
+  step $B/fsot score --kernel taa "$OUT/h100-32x32x16-taa.exr"
   [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --backend cpu --size 128x128x30 --dims 2 --kernel perceptual-taa --out "$OUT/cpu16-128x128x30-ptaa.exr"
-  step $B/fsot optimize --backend cpu --size 32x32x16 --dims 2 --kernel taa --seed 7 --out "$OUT/cpu16-32x32x16-taa.exr"
   echo; echo "### GPU tests on this device, validation layer on"
-  for t in $B/gpu_toolchain-* $B/gpu_sort-* $B/gpu_optimizer-*; do step "$t" --test-threads 1; done
+  for t in gpu_toolchain gpu_sort gpu_optimizer bench; do
+    [ -x "$B/$t" ] && step "$B/$t" --test-threads 1
+  done
+  step $B/fsot bench --quick --json "$OUT/bench-quick.json" --out "$OUT/bench-quick"
+  step $B/fsot bench --json "$OUT/bench-full.json" --out "$OUT/bench-full"
 } 2>&1 | tee "$OUT/log.txt"
