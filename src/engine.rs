@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::gpu::context::{Context, ContextOptions};
 use crate::gpu::optimizer::{GpuOptions, GpuRun};
 use crate::mask::Mask;
-use crate::optimize::{Run, Settings};
+use crate::optimize::{Run, RunState, Settings};
 use crate::problem::Tile;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,6 +110,22 @@ impl Engine {
         match self {
             Engine::Cpu(r) => Ok(vec![r.step()]),
             Engine::Gpu(r) => r.step_batch(max.max(1)),
+        }
+    }
+
+    /// Where the run stands, for a checkpoint.
+    pub fn state(&self) -> Result<RunState> {
+        match self {
+            Engine::Cpu(r) => Ok(r.state()),
+            Engine::Gpu(r) => r.state(),
+        }
+    }
+
+    /// Continues from a checkpoint's state (made by either backend).
+    pub fn restore(&mut self, saved: &RunState) -> Result<()> {
+        match self {
+            Engine::Cpu(r) => r.restore(saved),
+            Engine::Gpu(r) => r.restore(saved),
         }
     }
 

@@ -2,6 +2,7 @@
 //! optimal transport.
 pub mod baselines;
 pub mod bench;
+pub mod checkpoint;
 pub mod cpu;
 pub mod engine;
 pub mod error;

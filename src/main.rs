@@ -285,6 +285,18 @@ struct OptimizeArgs {
     /// (1 - W) x temporal loss).
     #[arg(long, default_value = "product")]
     fast_combine: String,
+    /// Save the run's state (samples, optimizer state) to this file every
+    /// --checkpoint-every iterations and on Ctrl-C; removed when the run completes.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Iterations between checkpoints.
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
+    checkpoint_every: u32,
+    /// Continue from --checkpoint: run the command that wrote it again, with
+    /// --resume added. On the CPU path the result is bit-identical to an
+    /// uninterrupted run.
+    #[arg(long)]
+    resume: bool,
     /// Output EXR file.
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
@@ -314,6 +326,7 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        Err(Error::Interrupted) => ExitCode::from(130),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE
@@ -357,6 +370,9 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         }
     }
     if args.method != Method::Fsot {
+        if args.checkpoint.is_some() || args.resume {
+            return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
+        }
         return make_baseline(&args, tile, spec, out);
     }
     let choice = match args.backend {
@@ -367,10 +383,34 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = args.iterations;
     settings.slices = args.slices;
+    let fingerprint = fsot::checkpoint::fingerprint(&tile, &settings);
+    let saved = match (&args.checkpoint, args.resume) {
+        (None, true) => {
+            return Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)"))
+        }
+        (Some(_), _) if args.checkpoint_every == 0 => {
+            return Err(Error::invalid("--checkpoint-every must be at least 1"))
+        }
+        (Some(p), false) if p.exists() => {
+            return Err(Error::invalid(format!(
+                "checkpoint {} exists: continue it with --resume, or remove it to start over",
+                p.display()
+            )))
+        }
+        (Some(p), true) => Some(fsot::checkpoint::read(p, &fingerprint, &tile)?),
+        _ => None,
+    };
+    if let Some(p) = &args.checkpoint {
+        AtomicFile::create(p)?; // a checkpoint that cannot be written fails now
+    }
     let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile, transport: None };
     let Started { mut engine, note } =
         Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
     eprintln!("{note}");
+    if let (Some(state), Some(p)) = (&saved, &args.checkpoint) {
+        engine.restore(state)?;
+        eprintln!("resumed from {} at iteration {}", p.display(), state.iteration);
+    }
     eprintln!(
         "optimizing {} for kernel {}: {} iterations x {} slices",
         tile.describe(),
@@ -390,12 +430,55 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    bar.set_position(engine.iteration() as u64);
+    // Ctrl-C from here on stops between iterations, after saving a checkpoint.
+    let interrupted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let flag = interrupted.clone();
+        ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::SeqCst))
+            .map_err(|e| Error::invalid(format!("cannot catch Ctrl-C: {e}")))?;
+    }
+    let save = |engine: &Engine, path: &std::path::Path| -> Result<()> {
+        fsot::checkpoint::write(path, &fingerprint, &engine.state()?)
+    };
+    let every = args.checkpoint_every.max(1);
+    let mut next_checkpoint = engine.iteration() + every;
     let start = Instant::now();
     while !engine.finished() {
-        let costs = engine.step()?;
+        if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
+            bar.finish_and_clear();
+            match &args.checkpoint {
+                Some(p) => {
+                    save(&engine, p)?;
+                    eprintln!(
+                        "interrupted at iteration {} of {}: state saved to {}; continue with the same command and --resume",
+                        engine.iteration(),
+                        args.iterations,
+                        p.display()
+                    );
+                }
+                None => eprintln!(
+                    "interrupted at iteration {} of {}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
+                    engine.iteration(),
+                    args.iterations,
+                    args.out.display()
+                ),
+            }
+            return Err(Error::Interrupted);
+        }
+        let costs = match &args.checkpoint {
+            Some(_) => engine.step_up_to(next_checkpoint.saturating_sub(engine.iteration()))?,
+            None => engine.step()?,
+        };
         bar.inc(costs.len() as u64);
         if let Some(c) = costs.last() {
             bar.set_message(format!("{c:.3e}"));
+        }
+        if let Some(p) = &args.checkpoint {
+            if engine.iteration() >= next_checkpoint && !engine.finished() {
+                save(&engine, p)?;
+                next_checkpoint = engine.iteration() + every;
+            }
         }
     }
     bar.finish_and_clear();
@@ -406,6 +489,13 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
     if let Some(dir) = &args.png {
         let files = fsot::io::png::write(&mask, dir)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    if let Some(p) = &args.checkpoint {
+        if p.exists() {
+            std::fs::remove_file(p).map_err(|e| {
+                Error::io(format!("the run is complete, but removing {} failed", p.display()), e)
+            })?;
+        }
     }
     let backend = if engine.is_gpu() { "vulkan" } else { "cpu" };
     println!(

@@ -31,6 +31,34 @@ impl Settings {
     }
 }
 
+/// Where a run stands after some iterations: enough to continue it exactly
+/// (`checkpoint.rs` stores it). `second` is empty unless the rule is Adam.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunState {
+    pub iteration: u32,
+    pub samples: Vec<f32>,
+    pub first: Vec<f32>,
+    pub second: Vec<f32>,
+}
+
+impl RunState {
+    /// Checks the state against a run's tile, rule and length.
+    pub fn check(&self, tile: &Tile, settings: &Settings) -> Result<()> {
+        let n = tile.values();
+        let adam = matches!(settings.rule, StepRule::Adam { .. });
+        if self.samples.len() != n || self.first.len() != n || self.second.len() != if adam { n } else { 0 } {
+            return Err(Error::invalid("the saved state does not match this run's tile or step rule"));
+        }
+        if self.iteration > settings.iterations {
+            return Err(Error::invalid(format!(
+                "the saved state is at iteration {} of a run of {}",
+                self.iteration, settings.iterations
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// An optimization in progress on the CPU.
 pub struct Run {
     pub tile: Tile,
@@ -111,6 +139,28 @@ impl Run {
         );
         self.iteration += 1;
         cost
+    }
+
+    /// Where the run stands.
+    pub fn state(&self) -> RunState {
+        RunState {
+            iteration: self.iteration,
+            samples: self.samples.clone(),
+            first: self.state.first.clone(),
+            second: self.state.second.clone(),
+        }
+    }
+
+    /// Continues from a saved state: the following iterations are those the
+    /// saved run would have taken.
+    pub fn restore(&mut self, saved: &RunState) -> Result<()> {
+        saved.check(&self.tile, &self.settings)?;
+        self.iteration = saved.iteration;
+        self.samples.clone_from(&saved.samples);
+        self.state.first.clone_from(&saved.first);
+        self.state.second.clone_from(&saved.second);
+        self.state.steps = saved.iteration;
+        Ok(())
     }
 
     /// The mask with its provenance.

@@ -261,3 +261,74 @@ fn a_run_killed_mid_way_leaves_the_existing_output_untouched_and_nothing_else() 
         .collect();
     assert_eq!(names, vec!["existing.exr".to_string()], "files left behind");
 }
+
+fn read_samples(path: &Path) -> Vec<u32> {
+    fsot::io::exr::read(path).unwrap().samples.iter().map(|v| v.to_bits()).collect()
+}
+
+#[test]
+fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let run: Vec<&str> = vec![
+        "optimize",
+        "--backend",
+        "cpu",
+        "--size",
+        "16x16x8",
+        "--kernel",
+        "taa",
+        "--seed",
+        "5",
+        "--iterations",
+        "4000",
+    ];
+    let straight = fsot(&[&run[..], &["--out", "straight.exr"]].concat(), dir.path());
+    assert!(straight.status.success(), "{}", stderr(&straight));
+
+    std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
+    let with_checkpoint = [&run[..], &["--checkpoint", "run.ckpt", "--checkpoint-every", "50"]].concat();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(&with_checkpoint)
+        .args(["--out", "existing.exr"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Interrupt once the first checkpoint is on disk, as a user's Ctrl-C would.
+    let ckpt = dir.path().join("run.ckpt");
+    let started = std::time::Instant::now();
+    while !ckpt.exists() {
+        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let pid = child.id().to_string();
+    assert!(Command::new("kill").args(["-INT", &pid]).status().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{message}");
+    assert!(message.contains("interrupted at iteration") && message.contains("--resume"), "{message}");
+    assert!(!message.contains("panicked"), "{message}");
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+    assert!(ckpt.exists());
+
+    // The same command again without --resume refuses to overwrite the checkpoint.
+    let again = fsot(&[&with_checkpoint[..], &["--out", "existing.exr"]].concat(), dir.path());
+    assert!(!again.status.success() && stderr(&again).contains("--resume"), "{}", stderr(&again));
+    // A different run cannot resume it.
+    let mut other = with_checkpoint.clone();
+    other[8] = "6"; // the seed
+    let wrong = fsot(&[&other[..], &["--out", "existing.exr", "--resume"]].concat(), dir.path());
+    assert!(!wrong.status.success() && stderr(&wrong).contains("different run"), "{}", stderr(&wrong));
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+
+    let resumed = fsot(&[&with_checkpoint[..], &["--out", "existing.exr", "--resume"]].concat(), dir.path());
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert!(stderr(&resumed).contains("resumed from"), "{}", stderr(&resumed));
+    assert!(!ckpt.exists(), "the checkpoint of a completed run is removed");
+    assert_eq!(
+        read_samples(&dir.path().join("existing.exr")),
+        read_samples(&dir.path().join("straight.exr")),
+        "resumed and uninterrupted runs differ"
+    );
+}

@@ -205,6 +205,38 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
 }
 
 #[test]
+fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let s = settings("taa", 70, 4);
+    let options = GpuOptions { deterministic: true, profile: false, transport: None };
+    let mut straight = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    while !straight.finished() {
+        straight.step_batch(u32::MAX).unwrap();
+    }
+    // Stopped at 45 (not a multiple of the 32-iteration batch), saved, restored
+    // into a fresh run through the checkpoint file format.
+    let mut first = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    while first.iteration() < 45 {
+        first.step_batch(45 - first.iteration()).unwrap();
+    }
+    let fp = fsot::checkpoint::fingerprint(&tile, &s);
+    let bytes = fsot::checkpoint::encode(&fp, &first.state().unwrap());
+    drop(first);
+    let saved = fsot::checkpoint::decode(&bytes, &fp, &tile).unwrap();
+    assert_eq!(saved.iteration, 45);
+    let mut resumed = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    resumed.restore(&saved).unwrap();
+    while !resumed.finished() {
+        resumed.step_batch(u32::MAX).unwrap();
+    }
+    let a = straight.samples().unwrap();
+    let b = resumed.samples().unwrap();
+    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "resumed run differs");
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
 fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();

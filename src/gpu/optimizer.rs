@@ -20,7 +20,7 @@ use super::timer::Timer;
 use crate::error::{Error, Result};
 use crate::kernel::Kernel;
 use crate::mask::Mask;
-use crate::optimize::{run_mask, slices_and_hits, Settings};
+use crate::optimize::{run_mask, slices_and_hits, RunState, Settings};
 use crate::optimizer::{schedule, StepRule};
 use crate::problem::Tile;
 use crate::rng::seed_key;
@@ -97,8 +97,8 @@ pub struct GpuRun {
     sort: Option<RadixSort>,
     timer: Option<Timer>,
     samples: Buffer,
-    _first: Buffer,
-    _second: Buffer,
+    first: Buffer,
+    second: Buffer,
     _acc: Buffer,
     _taps: Buffer,
     costs: Buffer,
@@ -408,8 +408,8 @@ impl GpuRun {
             sort,
             timer,
             samples,
-            _first: first,
-            _second: second,
+            first,
+            second,
             _acc: acc,
             _taps: taps,
             costs,
@@ -641,6 +641,44 @@ impl GpuRun {
             barrier(&self.ctx, cmd);
         })?;
         Ok(from_bytes(&self.readback.read()?[..bytes as usize]))
+    }
+
+    /// Where the run stands (samples and optimizer state read back).
+    pub fn state(&self) -> Result<RunState> {
+        let values = self.tile.values() as u64;
+        let adam = matches!(self.settings.rule, StepRule::Adam { .. });
+        let read = |buffer: &Buffer| -> Result<Vec<f32>> {
+            submit_and_wait(&self.ctx, |cmd| {
+                copy_range(&self.ctx, cmd, buffer, &self.readback, values * 4);
+                barrier(&self.ctx, cmd);
+            })?;
+            Ok(from_bytes(&self.readback.read()?[..(values * 4) as usize]))
+        };
+        let samples = read(&self.samples)?;
+        let first = read(&self.first)?;
+        let second = if adam { read(&self.second)? } else { Vec::new() };
+        Ok(RunState { iteration: self.iteration, samples, first, second })
+    }
+
+    /// Continues from a saved state (uploaded to the device).
+    pub fn restore(&mut self, saved: &RunState) -> Result<()> {
+        saved.check(&self.tile, &self.settings)?;
+        let bytes = self.tile.values() as u64 * 4;
+        let mut staging = Buffer::new(&self.ctx, bytes, Location::Upload, "restore-staging")?;
+        let parts: [(&[f32], &Buffer); 3] =
+            [(&saved.samples, &self.samples), (&saved.first, &self.first), (&saved.second, &self.second)];
+        for (values, target) in parts {
+            if values.is_empty() {
+                continue;
+            }
+            staging.write(as_bytes(values))?;
+            submit_and_wait(&self.ctx, |cmd| {
+                copy_range(&self.ctx, cmd, &staging, target, bytes);
+                barrier(&self.ctx, cmd);
+            })?;
+        }
+        self.iteration = saved.iteration;
+        Ok(())
     }
 
     pub fn mask(&self) -> Result<Mask> {
