@@ -287,7 +287,7 @@ fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_b
 
     std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
     let with_checkpoint = [&run[..], &["--checkpoint", "run.ckpt", "--checkpoint-every", "50"]].concat();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
         .args(&with_checkpoint)
         .args(["--out", "existing.exr"])
         .current_dir(dir.path())

@@ -86,7 +86,6 @@ struct DeviceInput {
 
 /// One GPU mode: the median time of `repeats` scatters (after two warm-ups, the
 /// accumulators cleared before each) and the sums of the last one.
-
 fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Result<(f64, Vec<f64>)> {
     let DeviceInput { idx, val, n, targets } = input;
     let (n, targets) = (*n, *targets);
