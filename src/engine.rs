@@ -11,7 +11,8 @@ use crate::problem::Tile;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendChoice {
     /// A Vulkan GPU when there is one (not a CPU implementation such as
-    /// lavapipe, which is slower than the CPU path), else the CPU path.
+    /// lavapipe, which is slower than the CPU path, unless the user names that
+    /// device), else the CPU path; a GPU that fails mid-run hands over to the CPU.
     Auto,
     Cpu,
     Vulkan,
@@ -67,10 +68,14 @@ impl Engine {
             // Any reason the GPU path cannot take the run (no device, d > 2, a tile
             // too large for a binding) falls back to the CPU path, which reports
             // input that is wrong everywhere itself.
-            BackendChoice::Auto => match try_gpu(true) {
-                Ok(s) => Ok(s),
-                Err(e) => cpu(format!(" (no Vulkan GPU used: {e})")),
-            },
+            // A device the user named (--device, FSOT_DEVICE) is taken whatever its
+            // type; otherwise only a GPU.
+            BackendChoice::Auto => {
+                match try_gpu(device.is_none() && std::env::var_os("FSOT_DEVICE").is_none()) {
+                    Ok(s) => Ok(s),
+                    Err(e) => cpu(format!(" (no Vulkan GPU used: {e})")),
+                }
+            }
         }
     }
 

@@ -19,18 +19,36 @@ pub enum Error {
         source: std::io::Error,
     },
     /// A Vulkan call failed; `call` names it.
-    #[error("Vulkan: {call} failed: {result}")]
+    #[error("Vulkan: {call} failed: {result}{}", vulkan_hint(*.result))]
     Vulkan { call: &'static str, result: ash::vk::Result },
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
-    #[error("GPU memory: {0}")]
+    #[error("GPU memory: {0} (a smaller tile, or --backend cpu, will fit)")]
     Allocation(#[from] gpu_allocator::AllocationError),
     #[error("interrupted")]
     Interrupted,
 }
 
+/// What a Vulkan result means for the user.
+fn vulkan_hint(result: ash::vk::Result) -> &'static str {
+    use ash::vk::Result as R;
+    match result {
+        R::ERROR_DEVICE_LOST => {
+            " (the GPU was lost: a driver reset, a hang or a removed device; nothing was written)"
+        }
+        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile, or --backend cpu, will fit)",
+        R::ERROR_OUT_OF_HOST_MEMORY => " (out of host memory)",
+        _ => "",
+    }
+}
+
 impl Error {
+    /// The GPU failed in a way the CPU path does not share: worth a fall-back.
+    pub fn is_device_failure(&self) -> bool {
+        matches!(self, Error::Vulkan { .. } | Error::Allocation(_) | Error::VulkanUnavailable(_))
+    }
+
     pub fn invalid(msg: impl Into<String>) -> Self {
         Error::Invalid(msg.into())
     }

@@ -466,9 +466,31 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
             }
             return Err(Error::Interrupted);
         }
-        let costs = match &args.checkpoint {
-            Some(_) => engine.step_up_to(next_checkpoint.saturating_sub(engine.iteration()))?,
-            None => engine.step()?,
+        let stepped = match &args.checkpoint {
+            Some(_) => engine.step_up_to(next_checkpoint.saturating_sub(engine.iteration())),
+            None => engine.step(),
+        };
+        let costs = match stepped {
+            Ok(c) => c,
+            // With --backend auto a GPU that fails mid-run hands over to the CPU
+            // path, from the last checkpoint when there is one.
+            Err(e) if choice == BackendChoice::Auto && engine.is_gpu() && e.is_device_failure() => {
+                bar.suspend(|| eprintln!("warning: the GPU failed at iteration {}: {e}", engine.iteration()));
+                let cpu = Engine::start(BackendChoice::Cpu, tile, settings, init.as_ref(), None, gpu)?;
+                engine = cpu.engine;
+                let from = match args.checkpoint.as_ref().filter(|p| p.exists()) {
+                    Some(p) => {
+                        engine.restore(&fsot::checkpoint::read(p, &fingerprint, &tile)?)?;
+                        format!("its checkpoint {} (iteration {})", p.display(), engine.iteration())
+                    }
+                    None => "the start".to_string(),
+                };
+                bar.suspend(|| eprintln!("{}; continuing from {from}", cpu.note));
+                bar.set_position(engine.iteration() as u64);
+                next_checkpoint = engine.iteration() + every;
+                continue;
+            }
+            Err(e) => return Err(e),
         };
         bar.inc(costs.len() as u64);
         if let Some(c) = costs.last() {

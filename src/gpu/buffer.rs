@@ -38,6 +38,9 @@ impl Buffer {
                 ctx.info().max_storage_buffer_range
             )));
         }
+        if location == Location::Device && super::fault::refuse_device_allocation(size) {
+            return Err(Error::Allocation(gpu_allocator::AllocationError::OutOfMemory));
+        }
         let device = ctx.device();
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC

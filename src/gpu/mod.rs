@@ -5,6 +5,7 @@
 
 pub mod buffer;
 pub mod context;
+pub(crate) mod fault;
 pub mod layout;
 pub mod optimizer;
 pub mod pipeline;

@@ -267,10 +267,13 @@ pub fn submit_and_wait(ctx: &Context, record: impl FnOnce(vk::CommandBuffer)) ->
             check("vkCreateFence", unsafe { device.create_fence(&vk::FenceCreateInfo::default(), None) })?;
         let cmds = [cmd];
         let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
-        let waited = check("vkQueueSubmit", unsafe { device.queue_submit(ctx.shared.queue, &submit, fence) })
-            .and_then(|_| {
-                check("vkWaitForFences", unsafe { device.wait_for_fences(&[fence], true, u64::MAX) })
-            });
+        let submitted = match super::fault::submission() {
+            Some(injected) => Err(injected),
+            None => unsafe { device.queue_submit(ctx.shared.queue, &submit, fence) },
+        };
+        let waited = check("vkQueueSubmit", submitted).and_then(|_| {
+            check("vkWaitForFences", unsafe { device.wait_for_fences(&[fence], true, u64::MAX) })
+        });
         unsafe { device.destroy_fence(fence, None) };
         waited
     })();

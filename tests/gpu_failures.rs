@@ -1,0 +1,106 @@
+//! What users see when Vulkan fails (failures injected with FSOT_FAULT, see
+//! src/gpu/fault.rs, or a missing driver): `--backend vulkan` stops with a clear
+//! error and writes nothing; `--backend auto` says so and finishes on the CPU path.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn skip() -> bool {
+    std::env::var("FSOT_SKIP_GPU_TESTS").map(|v| v == "1").unwrap_or(false)
+}
+
+fn fsot(dir: &Path, env: &[(&str, &str)], args: &[&str]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_fsot"));
+    c.args(["optimize", "--size", "16x16x8", "--kernel", "taa", "--iterations", "120"]);
+    c.args(args).current_dir(dir);
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    c.output().unwrap()
+}
+
+fn text(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned() + &String::from_utf8_lossy(&o.stdout)
+}
+
+fn setup() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
+    dir
+}
+
+fn untouched(dir: &Path) -> bool {
+    std::fs::read(dir.join("existing.exr")).unwrap() == b"the user's mask"
+}
+
+#[test]
+fn a_lost_device_stops_a_vulkan_run_with_a_clear_error_and_nothing_written() {
+    if skip() {
+        return;
+    }
+    let dir = setup();
+    let o = fsot(
+        dir.path(),
+        &[("FSOT_FAULT", "device-lost:3")],
+        &["--backend", "vulkan", "--out", "existing.exr"],
+    );
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("the GPU was lost") && !t.contains("panicked"), "{t}");
+    assert!(untouched(dir.path()));
+}
+
+#[test]
+fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
+    if skip() {
+        return;
+    }
+    let dir = setup();
+    // Device 0 named explicitly, so that auto takes it even where it is lavapipe.
+    let o = fsot(
+        dir.path(),
+        &[("FSOT_FAULT", "device-lost:6")],
+        &["--backend", "auto", "--device", "0", "--checkpoint", "c.ckpt", "--checkpoint-every", "20"],
+    );
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("warning: the GPU failed at iteration"), "{t}");
+    assert!(t.contains("continuing from its checkpoint"), "{t}");
+    assert!(t.contains("120 iterations") && t.contains("(cpu)"), "{t}");
+    let mask = fsot::io::exr::read(&dir.path().join("mask.exr")).unwrap();
+    assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+    assert!(!dir.path().join("c.ckpt").exists());
+}
+
+#[test]
+fn out_of_device_memory_is_an_error_for_vulkan_and_a_fall_back_for_auto() {
+    if skip() {
+        return;
+    }
+    let dir = setup();
+    let env = [("FSOT_FAULT", "device-memory:1024")];
+    let o = fsot(dir.path(), &env, &["--backend", "vulkan", "--out", "existing.exr"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("GPU memory") && t.contains("--backend cpu"), "{t}");
+    assert!(untouched(dir.path()));
+    let o = fsot(dir.path(), &env, &["--backend", "auto", "--device", "0"]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("backend: cpu") && t.contains("no Vulkan GPU used: GPU memory"), "{t}");
+}
+
+#[test]
+fn without_a_vulkan_driver_vulkan_fails_clearly_and_auto_uses_the_cpu() {
+    let dir = setup();
+    let env = [("VK_ICD_FILENAMES", "/nonexistent/icd.json"), ("VK_DRIVER_FILES", "/nonexistent/icd.json")];
+    let o = fsot(dir.path(), &env, &["--backend", "vulkan", "--out", "existing.exr"]);
+    let t = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{t}");
+    assert!(t.contains("Vulkan") && !t.contains("panicked"), "{t}");
+    assert!(untouched(dir.path()));
+    let o = fsot(dir.path(), &env, &["--backend", "auto"]);
+    let t = text(&o);
+    assert!(o.status.success(), "{t}");
+    assert!(t.contains("backend: cpu") && t.contains("no Vulkan GPU used"), "{t}");
+}
