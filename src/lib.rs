@@ -17,5 +17,6 @@ pub mod problem;
 pub mod rng;
 pub mod score;
 pub mod slice;
+pub mod stress;
 pub mod targets;
 pub mod transport;

@@ -36,6 +36,10 @@ enum Command {
     /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
     /// slices, beside that of white noise of the same shape.
     Score(ScoreArgs),
+    /// The numerical stress suite: long runs, float32 GPU against the float64 CPU
+    /// path, a million contributions into one value, extreme settings and shapes,
+    /// ties, determinism. Exits non-zero if any check fails.
+    Stress(StressArgs),
     /// Benchmarks that print figures.
     Bench(BenchArgs),
     /// Render animated scenes with every method's mask, with and without TAA,
@@ -306,6 +310,23 @@ struct OptimizeArgs {
 }
 
 #[derive(Args)]
+struct StressArgs {
+    /// CI size (seconds) instead of the (100k-iteration runs, minutes).
+    #[arg(long)]
+    quick: bool,
+    /// CPU only, even where a Vulkan device is present.
+    #[arg(long)]
+    cpu_only: bool,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else the
+    /// first discrete GPU, else any device, lavapipe included].
+    #[arg(long)]
+    device: Option<String>,
+    /// Markdown table of the figures.
+    #[arg(long, default_value = "stress.md")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
 struct ScoreArgs {
     /// The mask to score (EXR).
     mask: PathBuf,
@@ -321,6 +342,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Optimize(args) => optimize(*args),
         Command::Score(args) => score_command(args),
+        Command::Stress(args) => stress_command(args),
         Command::Bench(args) => bench_command(args),
         Command::Eval(args) => eval_command(args),
     };
@@ -557,6 +579,50 @@ fn optimize(args: OptimizeArgs) -> Result<()> {
             return Err(Error::invalid("the Vulkan validation layer reported errors"));
         }
     }
+    Ok(())
+}
+
+fn stress_command(args: StressArgs) -> Result<()> {
+    use fsot::stress::{run_stress, to_markdown, StressSize};
+    let out = AtomicFile::create(&args.out)?;
+    let ctx = if args.cpu_only {
+        None
+    } else {
+        let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
+        match fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions {
+            validation,
+            device: args.device.clone(),
+        }) {
+            Ok(c) => Some(c),
+            Err(e) => {
+                eprintln!("no Vulkan device, CPU checks only: {e}");
+                None
+            }
+        }
+    };
+    let size = if args.quick { StressSize::quick() } else { StressSize::full() };
+    let mut machine = fsot::bench::machine::cpu_description();
+    if let Some(c) = &ctx {
+        machine += &format!("; Vulkan: {} ({})", c.info().name, c.info().driver);
+    }
+    eprintln!("stress suite on {machine}");
+    let checks = run_stress(size, ctx.as_ref(), &mut |c| {
+        eprintln!("[{}] {}: {}: {}", if c.passed { "ok" } else { "FAILED" }, c.group, c.name, c.figure)
+    })?;
+    if let Some(c) = &ctx {
+        let messages = c.validation_messages();
+        if !messages.is_empty() {
+            return Err(Error::invalid(format!("validation layer: {}", messages[0])));
+        }
+    }
+    let table = to_markdown(&checks, &machine);
+    out.commit(table.as_bytes())?;
+    let failed = checks.iter().filter(|c| !c.passed).count();
+    println!("{table}");
+    if failed > 0 {
+        return Err(Error::invalid(format!("{failed} of {} stress checks failed", checks.len())));
+    }
+    eprintln!("all {} checks held; table in {}", checks.len(), args.out.display());
     Ok(())
 }
 

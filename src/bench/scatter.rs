@@ -84,6 +84,46 @@ struct DeviceInput {
     targets: u32,
 }
 
+fn upload(ctx: &Context, idx: &[u32], val: &[f32], targets: u32) -> Result<DeviceInput> {
+    let n = idx.len() as u32;
+    let bytes = n as u64 * 4;
+    let idx_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-targets")?;
+    let val_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-values")?;
+    let mut up = Buffer::new(ctx, bytes, Location::Upload, "scatter-upload")?;
+    up.write(as_bytes(idx))?;
+    submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &idx_buf, bytes))?;
+    up.write(as_bytes(val))?;
+    submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &val_buf, bytes))?;
+    Ok(DeviceInput { idx: idx_buf, val: val_buf, n, targets })
+}
+
+/// Errors of `n` contributions (uniform in (-1e-3, 1e-3)) all added into one
+/// accumulator, against their exact sum.
+#[derive(Clone, Copy, Debug)]
+pub struct OneTarget {
+    pub fixed_error: f64,
+    pub float_error: Option<f64>,
+}
+
+/// The stress suite's hot-spot case: every contribution into accumulator 0.
+pub fn scatter_into_one(ctx: &Context, n: u32) -> Result<OneTarget> {
+    if n == 0 || !ctx.info().int64_atomics {
+        return Err(Error::invalid("the scatter needs contributions and 64-bit atomics"));
+    }
+    let mut rng = Stream::new(derive(0xacc, n));
+    let val: Vec<f32> = (0..n).map(|_| (rng.next_f32() * 2.0 - 1.0) * 1e-3).collect();
+    let idx = vec![0u32; n as usize];
+    let exact: f64 = {
+        // Summed in 2^-64 fixed point (i128): off by less than 2^-64 per value.
+        let q: i128 = val.iter().map(|&v| (v as f64 * 2f64.powi(64)) as i128).sum();
+        q as f64 / 2f64.powi(64)
+    };
+    let input = upload(ctx, &idx, &val, 1)?;
+    let (_, fixed) = gpu_mode(ctx, &input, 1, false)?;
+    let float = if ctx.info().float_atomic_add { Some(gpu_mode(ctx, &input, 1, true)?.1[0]) } else { None };
+    Ok(OneTarget { fixed_error: (fixed[0] - exact).abs(), float_error: float.map(|f| (f - exact).abs()) })
+}
+
 /// One GPU mode: the median time of `repeats` scatters (after two warm-ups, the
 /// accumulators cleared before each) and the sums of the last one.
 fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Result<(f64, Vec<f64>)> {
@@ -140,17 +180,7 @@ pub fn bench_scatter(ctx: &Context, n: u32, repeats: u32) -> Result<ScatterBench
     let targets = (n / FAN_IN).max(1);
     let (idx, val) = contributions(n);
     let reference = reference_sums(&idx, &val, targets);
-    let bytes = n as u64 * 4;
-    let idx_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-targets")?;
-    let val_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-values")?;
-    {
-        let mut up = Buffer::new(ctx, bytes, Location::Upload, "scatter-upload")?;
-        up.write(as_bytes(&idx))?;
-        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &idx_buf, bytes))?;
-        up.write(as_bytes(&val))?;
-        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &val_buf, bytes))?;
-    }
-    let input = DeviceInput { idx: idx_buf, val: val_buf, n, targets };
+    let input = upload(ctx, &idx, &val, targets)?;
     let (fixed_seconds, fixed_sums) = gpu_mode(ctx, &input, repeats, false)?;
     let fixed_error = worst(&fixed_sums, &reference);
     let float = if ctx.info().float_atomic_add {
