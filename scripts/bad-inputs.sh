@@ -4,8 +4,10 @@
 set -uo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
+cargo build --release --quiet --example bad_masks || exit 1
 cargo build --release --quiet || exit 1
 fsot="$PWD/target/release/fsot"
+bad_masks="$PWD/target/release/examples/bad_masks"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 cd "$work"
@@ -13,6 +15,10 @@ printf 'keep me' > existing.exr
 printf 'not an exr at all' > garbage.exr
 head -c 100 /dev/urandom > noise.exr
 mkdir readonly && chmod 555 readonly
+"$bad_masks" . || exit 1                     # nan.exr, outside.exr
+"$fsot" optimize --size 4x4x2 --iterations 2 --out small.exr >/dev/null 2>&1 || exit 1
+head -c 300 small.exr > truncated.exr
+printf 'FSOTCKP1 but not really a checkpoint' > bad.ckpt
 failures=0
 check() {
     local name=$1; shift
@@ -45,6 +51,16 @@ check "threads 0"          "${o[@]}" --size 4x4x2 --threads 0
 check "missing init"       "${o[@]}" --init missing.exr
 check "garbage init"       "${o[@]}" --init garbage.exr
 check "random-bytes init"  "${o[@]}" --init noise.exr
+check "truncated init"     "${o[@]}" --init truncated.exr
+check "wrong-shape init"   "${o[@]}" --init small.exr --size 8x8x2
+check "NaN in init"        "${o[@]}" --init nan.exr
+check "init value 1.5"     "${o[@]}" --init outside.exr
+check "resume, no file"    "${o[@]}" --size 4x4x2 --resume
+check "resume missing"     "${o[@]}" --size 4x4x2 --checkpoint none.ckpt --resume
+check "resume garbage"     "${o[@]}" --size 4x4x2 --checkpoint bad.ckpt --resume
+check "checkpoint exists"  "${o[@]}" --size 4x4x2 --checkpoint bad.ckpt
+check "checkpoint every 0" "${o[@]}" --size 4x4x2 --checkpoint new.ckpt --checkpoint-every 0
+check "stress bad out"     stress --quick --out garbage.exr/s.md
 # A read-only folder stops everyone but root; a path under a file stops root too.
 if [ "$(id -u)" -ne 0 ]; then
     check "unwritable output" optimize --size 4x4x2 --iterations 3 --out readonly/m.exr
@@ -57,5 +73,22 @@ check "passes 0"           "${o[@]}" --size 4x4x2 --method fast --passes 0
 check "score garbage"      score garbage.exr
 check "eval bad scene"     eval --quick --scenes nope --out evalout
 check "eval bad sigma"     eval --quick --sigma -1 --out evalout
+# Interrupted after a few seconds of work: Ctrl-C (SIGINT), SIGTERM, SIGKILL.
+for sig in INT TERM KILL; do
+    "$fsot" optimize --backend cpu --size 64x64x16 --iterations 100000 --out existing.exr >/dev/null 2>err.txt &
+    pid=$!
+    sleep 3
+    kill -s $sig $pid
+    wait $pid
+    rc=$?
+    verdict=ok
+    if grep -q panicked err.txt; then verdict="FAIL: panic"; fi
+    if [ "$(cat existing.exr)" != "keep me" ]; then verdict="FAIL: existing output changed"; fi
+    if [ -n "$(ls -A | grep -v -x -E 'existing.exr|garbage.exr|noise.exr|readonly|nan.exr|outside.exr|small.exr|truncated.exr|bad.ckpt|err.txt')" ]; then
+        verdict="FAIL: left files behind"
+    fi
+    [ "$verdict" = ok ] || failures=$((failures + 1))
+    printf '%-28s rc=%-3s %-6s %s\n' "interrupted by SIG$sig" "$rc" "$verdict" "$(tail -n 1 err.txt | cut -c1-110)"
+done
 echo "$failures failure(s)"
 [ "$failures" -eq 0 ]
