@@ -7,8 +7,8 @@
 #include "transport_bindings.glsl"
 
 layout(local_size_x_id = 0) in;
-// Largest class sorted in one invocation: 2048 where the driver accepts 32 KiB of
-// private memory per invocation (the host tries smaller sizes where it does not).
+// Largest class sorted in one invocation (set by the host: LANE_MAX); 32 KiB of
+// private memory per invocation at 2048.
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 

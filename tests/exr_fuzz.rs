@@ -40,8 +40,12 @@ fn mutation() -> impl Strategy<Value = Mutation> {
     prop_oneof![
         (any::<usize>(), 1u8..=255).prop_map(|(at, bits)| Mutation::Flip { at, bits }),
         any::<usize>().prop_map(|at| Mutation::Truncate { at }),
-        (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16)).prop_map(|(at, junk)| Mutation::Splice { at, junk }),
-        (any::<usize>(), prop_oneof![Just(0u32), Just(u32::MAX), Just(0x7fc0_0000), Just(0x3f80_0000), any::<u32>()])
+        (any::<usize>(), prop::collection::vec(any::<u8>(), 1..16))
+            .prop_map(|(at, junk)| Mutation::Splice { at, junk }),
+        (
+            any::<usize>(),
+            prop_oneof![Just(0u32), Just(u32::MAX), Just(0x7fc0_0000), Just(0x3f80_0000), any::<u32>()]
+        )
             .prop_map(|(at, value)| Mutation::Overwrite { at, value }),
     ]
 }

@@ -12,6 +12,19 @@ use fsot::score::score;
 use fsot::slice::SliceSampler;
 use fsot::transport::{transport_slice, Scratch};
 
+/// The per-lane transport is for CPU implementations (lavapipe); a GPU must refuse
+/// it with a clear error. True when `transport` is refused here (checked).
+fn refused_here(ctx: &fsot::gpu::context::Context, transport: TransportKind) -> bool {
+    if transport != TransportKind::PerLane || ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU {
+        return false;
+    }
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
+    let err = GpuRun::new(ctx, tile, settings("taa", 5, 1), None, options).err().expect("per-lane on a GPU");
+    assert!(err.to_string().contains("CPU implementations"), "{err}");
+    true
+}
+
 fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
     let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
     s.iterations = iterations;
@@ -48,6 +61,9 @@ fn compare_one_iteration_with(tile: Tile, kernel: &str, deterministic: bool, tra
 
 fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: TransportKind) {
     let Some(ctx) = common::gpu_context() else { return };
+    if refused_here(&ctx, transport) {
+        return;
+    }
     let tile = mask.tile;
     let mut s = settings(kernel, 10, 21);
     s.slices = Some(300);
@@ -114,6 +130,9 @@ fn large_classes_with(transport: TransportKind) {
     // other and may rank the other way round on the GPU; such a point must then
     // get exactly its neighbour's target.
     let Some(ctx) = common::gpu_context() else { return };
+    if refused_here(&ctx, transport) {
+        return;
+    }
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let mut s = settings("taa", 400, 5);
     s.slices = Some(1);
@@ -196,6 +215,9 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
         g.samples().unwrap()
     };
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        if refused_here(&ctx, transport) {
+            continue;
+        }
         let a = run(transport);
         let b = run(transport);
         assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "{transport:?}");

@@ -5,18 +5,22 @@
 #   (cd .gl && apt-get download vulkan-validationlayers)   # for the GPU tests
 #   cargo build --release && cargo test --release --no-run
 #   mkdir -p .gl/bin && cp target/release/fsot .gl/bin/
-#   for t in gpu_toolchain gpu_sort gpu_optimizer bench; do
+#   for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_failures stress bench; do
 #     cp "$(ls -t target/release/deps/$t-* | grep -v '\.d$' | head -1)" .gl/bin/$t; done
 #   strip .gl/bin/*
 # Other builds to compare (say, the sort before a change) go in as .gl/bin/fsot-NAME;
 # their sort is measured beside this one's. Then run this script from the
-# repository root on the GPU machine, with OUT set.
+# repository root on the GPU machine, with OUT set. Arguments pick sections (sort,
+# optimize, tests, bench, stress); none runs them all.
 set -u
+want() { [ $# -eq 0 ] && return 0; for a in "${ARGS[@]}"; do [ "$a" = "$1" ] && return 0; done; [ ${#ARGS[@]} -eq 0 ]; }
+ARGS=("$@")
 for f in .gl/*.deb; do dpkg -x "$f" / >/dev/null 2>&1; done
 ldconfig
 OUT=${OUT:-/tmp/fsot-out}
 mkdir -p "$OUT"
 B=.gl/bin
+BUILT_FSOT=${BUILT_FSOT:-/work/main/target/release/fsot}
 export XDG_RUNTIME_DIR=/tmp
 if [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
   export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
@@ -26,6 +30,7 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv
   lscpu | grep -E "Model name|^CPU\(s\)"
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
+  if want sort; then
   for n in 1048576 16777216; do
     for v in $B/fsot $B/fsot-*; do
       [ -x "$v" ] && step "$v" bench sort --n $n --repeats 30
@@ -35,15 +40,27 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   step $B/fsot bench sort --n 33554432 --repeats 10
   step $B/fsot bench scatter --n 1048576 --repeats 30
   step $B/fsot bench scatter --n 16777216 --repeats 20
+  fi
+  if want optimize; then
   step $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa.exr"
   step $B/fsot optimize --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa-det.exr"
   step $B/fsot optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile --out "$OUT/h100-32x32x16-taa.exr"
   step $B/fsot score --kernel taa "$OUT/h100-32x32x16-taa.exr"
   [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --backend cpu --size 128x128x30 --dims 2 --kernel perceptual-taa --out "$OUT/cpu16-128x128x30-ptaa.exr"
+  fi
+  if want tests; then
   echo; echo "### GPU tests on this device, validation layer on"
-  for t in gpu_toolchain gpu_sort gpu_optimizer bench; do
+  # Tests that run the command line look for it where it was built.
+  mkdir -p "$(dirname "$BUILT_FSOT")" 2>/dev/null && cp $B/fsot "$BUILT_FSOT"
+  for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_failures stress bench; do
     [ -x "$B/$t" ] && step "$B/$t" --test-threads 1
   done
+  fi
+  if want bench; then
   step $B/fsot bench --quick --json "$OUT/bench-quick.json" --out "$OUT/bench-quick"
   step $B/fsot bench --json "$OUT/bench-full.json" --out "$OUT/bench-full"
+  fi
+  if want stress; then
+  FSOT_VALIDATION=1 step $B/fsot stress --out "$OUT/stress.md"
+  fi
 } 2>&1 | tee "$OUT/log.txt"

@@ -31,11 +31,10 @@ use crate::slice::{level_thresholds, slice_key};
 pub const LOCAL_MAX: u32 = 2048;
 /// Classes up to this many samples are sorted by one invocation in the per-lane
 /// transport (`FSOT_LANE_MAX` in transport_lane_body.glsl, a specialization
-/// constant): the first of these sizes whose pipeline the driver builds (its
-/// private arrays take 16 bytes per sample per invocation; an NVIDIA driver
-/// refused 2048, lavapipe takes it).
+/// constant; its private arrays take 16 bytes per sample per invocation, which
+/// lavapipe takes and an NVIDIA driver refuses: the per-lane transport is for CPU
+/// implementations only).
 pub const LANE_MAX: u32 = 2048;
-pub const LANE_SIZES: [u32; 4] = [LANE_MAX, 1024, 512, 256];
 /// Largest dimension the GPU path handles (its exact targets are the closed form
 /// for d <= 2).
 pub const GPU_MAX_DIMS: usize = 2;
@@ -229,6 +228,15 @@ impl GpuRun {
             Some(TransportKind::PerLane) if kernel_max_class > LOOP_BUDGET / 2 => {
                 return Err(Error::invalid("the per-lane transport cannot take classes this large"))
             }
+            // Built for CPU implementations only: on an H100 (driver 580) its
+            // pipeline compiles only with smaller private arrays and then gives
+            // wrong displacements for tied keys (bench/results/h100-run.log).
+            Some(TransportKind::PerLane) if info.device_type != vk::PhysicalDeviceType::CPU => {
+                return Err(Error::invalid(format!(
+                    "the per-lane transport is for CPU implementations of Vulkan, not {}",
+                    info.name
+                )))
+            }
             Some(TransportKind::PerLane) => shape.per_lane = true,
             Some(TransportKind::Workgroup) => shape.per_lane = false,
             None => {}
@@ -274,24 +282,8 @@ impl GpuRun {
             (false, false) => shaders::TRANSPORT,
         };
         let (transport, local_max) = if shape.per_lane {
-            let mut built = None;
-            let mut refusal = None;
-            for lane in LANE_SIZES {
-                let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, lane];
-                match ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec) {
-                    Ok(p) => {
-                        built = Some((p, lane));
-                        break;
-                    }
-                    Err(e @ Error::Vulkan { .. }) => refusal = Some(e),
-                    Err(e) => return Err(e),
-                }
-            }
-            match (built, refusal) {
-                (Some(b), _) => b,
-                (None, Some(e)) => return Err(e),
-                (None, None) => unreachable!("LANE_SIZES is not empty"),
-            }
+            let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, LANE_MAX];
+            (ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?, LANE_MAX)
         } else {
             let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32];
             (ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?, LOCAL_MAX)
