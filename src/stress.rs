@@ -364,6 +364,38 @@ pub fn run_stress(
         }
     }
 
+    // A tile whose accumulators exceed one binding (maxStorageBufferRange: 128 MiB
+    // on lavapipe): a clear error before any work, not a crash or a wrong result.
+    if let Some(ctx) = ctx {
+        let range = ctx.info().max_storage_buffer_range;
+        let start = Instant::now();
+        if range <= 512 << 20 {
+            // 8 bytes per value (fixed-point accumulators), one value more than fits.
+            let values = range / 8 + 1;
+            let width = 4096u64;
+            let tile = Tile::new(width as usize, values.div_ceil(width) as usize, 1, 1, 1)?;
+            let s = settings(taa, 1, 1);
+            let options = GpuOptions { deterministic: true, ..GpuOptions::default() };
+            let result = GpuRun::new(ctx, tile, s, None, options);
+            let message = result.err().map(|e| e.to_string()).unwrap_or_default();
+            let check = Check {
+                group: "extremes",
+                name: format!("{} (more than one binding of {} MiB), vulkan", tile.describe(), range >> 20),
+                figure: if message.is_empty() { "accepted".into() } else { format!("refused: {message}") },
+                bound: "refused, naming maxStorageBufferRange".into(),
+                passed: message.contains("maxStorageBufferRange"),
+                seconds: start.elapsed().as_secs_f64(),
+            };
+            push(check, &mut checks);
+        } else {
+            eprintln!(
+                "(a tile larger than one binding not tried: {} binds {} MiB)",
+                ctx.info().name,
+                range >> 20
+            );
+        }
+    }
+
     // Determinism.
     let tile = Tile::new(16, 16, 8, 2, 2)?;
     let s = settings(taa, 60, 5);
