@@ -95,35 +95,29 @@ struct BenchArgs {
     out: PathBuf,
 }
 
+/// One GPU kernel measured on its own.
+#[derive(Args)]
+struct KernelBench {
+    /// Input size.
+    #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
+    n: u32,
+    /// Timed runs (median reported), after two warm-up runs.
+    #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
+    repeats: u32,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
+    /// the first discrete GPU].
+    #[arg(long)]
+    device: Option<String>,
+}
+
 #[derive(Subcommand)]
 enum BenchSuite {
-    /// Pairs per second of the Vulkan radix sort and of the CPU sort, same keys.
-    Sort {
-        /// Pairs to sort (32-bit keys, 32-bit payloads).
-        #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
-        n: u32,
-        /// Timed runs (median reported), after two warm-up runs.
-        #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
-        repeats: u32,
-        /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
-        /// the first discrete GPU].
-        #[arg(long)]
-        device: Option<String>,
-    },
+    /// Pairs per second of the Vulkan radix sort and of the CPU sort, same keys
+    /// (N: pairs of 32-bit keys and 32-bit payloads).
+    Sort(KernelBench),
     /// Contributions per second of the GPU gradient scatter (fixed point and float
-    /// atomics) and of the CPU path's, into N/16 accumulators.
-    Scatter {
-        /// Contributions to add.
-        #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
-        n: u32,
-        /// Timed runs (median reported), after two warm-up runs.
-        #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
-        repeats: u32,
-        /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
-        /// the first discrete GPU].
-        #[arg(long)]
-        device: Option<String>,
-    },
+    /// atomics) and of the CPU path's (N contributions into N/16 accumulators).
+    Scatter(KernelBench),
     /// One configuration of the scaling suite (run by `fsot bench` in a child
     /// process, so its peak memory is its own).
     #[command(hide = true)]
@@ -655,7 +649,7 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             println!("{}", format_line(slices, seconds, peak_resident_bytes().unwrap_or(0)));
             Ok(())
         }
-        Some(BenchSuite::Sort { n, repeats, device }) => {
+        Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
             let ctx =
                 fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
@@ -676,7 +670,7 @@ fn bench_command(args: BenchArgs) -> Result<()> {
             );
             Ok(())
         }
-        Some(BenchSuite::Scatter { n, repeats, device }) => {
+        Some(BenchSuite::Scatter(KernelBench { n, repeats, device })) => {
             let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
             let ctx =
                 fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;

@@ -31,22 +31,10 @@ fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
     s
 }
 
-/// The CPU path's summed displacement per coordinate for one iteration's slices.
+/// The CPU path's summed displacement per coordinate for one iteration's slices
+/// (f64).
 fn cpu_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
-    let tile = mask.tile;
-    let kernel = Kernel::new(s.kernel, &tile);
-    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let mut out = vec![0.0f64; tile.values()];
-    let mut scratch = Scratch::default();
-    for i in 0..slices {
-        let slice = sampler.draw(iteration, i);
-        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut scratch, |p, delta| {
-            for k in 0..tile.dims {
-                out[p as usize * tile.dims + k] += delta * slice.theta[k];
-            }
-        });
-    }
-    out
+    fsot::stress::reference_displacements(mask, s, slices, iteration)
 }
 
 fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
