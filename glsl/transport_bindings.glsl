@@ -11,13 +11,16 @@ layout(std430, set = 0, binding = 2) buffer Acc { int64_t acc[]; };
 #endif
 layout(std430, set = 0, binding = 3) buffer Costs { int64_t costs[]; }; // per slot: squared (2^32 fixed), count
 layout(std430, set = 0, binding = 4) buffer LargeMeta { uint large_count; uint large_segments; uint large_overflow; uint large_pad; uvec4 segments[]; };
-// Large classes, element e: sort key and payload (the radix sort's input), point,
-// projection, and the segment (its first element) it belongs to.
+// Large classes, element e: sort key (its point, for the first of three stable
+// sorts: by point, by projection, by class, so equal projections keep the CPU's
+// point order) and payload (the radix sort's input), point, projection, the
+// segment (its first element) it belongs to, and the projection's sortable key.
 layout(std430, set = 0, binding = 5) writeonly buffer LargeKeys { uint large_keys[]; };
 layout(std430, set = 0, binding = 6) writeonly buffer LargeVals { uint large_vals[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer LargePoints { uint large_points[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer LargeProj { float large_proj[]; };
 layout(std430, set = 0, binding = 9) writeonly buffer LargeSeg { uint large_seg[]; };
+layout(std430, set = 0, binding = 10) writeonly buffer LargePKey { uint large_pkey[]; }; // sortable projection
 
 layout(push_constant) uniform Push { TransportPush pc; };
 
@@ -84,11 +87,12 @@ void fsot_write_large(FsotSlice s, uint off, uint i) {
     uint point = fsot_class_point(s, i);
     uint e = off + i;
     float proj = fsot_project(s, point);
-    large_keys[e] = fsot_float_key(proj);
+    large_keys[e] = point;
     large_vals[e] = e;
     large_points[e] = point;
     large_proj[e] = proj;
     large_seg[e] = off;
+    large_pkey[e] = fsot_float_key(proj);
 }
 
 bool fsot_before(float ka, uint va, float kb, uint vb) {

@@ -301,3 +301,15 @@ fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     drop(again);
     common::assert_no_validation_messages(&host);
 }
+
+#[test]
+fn large_classes_with_tied_keys_give_the_cpu_displacements() {
+    // Every sample at one place: every class of thousands of members ties on
+    // every key; the global sort path must break ties by point index, as the CPU.
+    let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
+    let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
+    assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
+    let mut mask = Mask::white(tile, 3);
+    mask.samples.iter_mut().for_each(|v| *v = 0.625);
+    compare_on_mask(&mask, "taa", true, TransportKind::Workgroup);
+}

@@ -86,6 +86,8 @@ pub struct GpuRun {
     shape: TransportShape,
     large_capacity: u32,
     seg_bits: u32,
+    /// Bits of a point index (the first large-class sort's key).
+    point_bits: u32,
     pub profile: Profile,
     overflowed: u64,
     // Pipelines before buffers: dropped first.
@@ -105,6 +107,7 @@ pub struct GpuRun {
     _large_points: Buffer,
     _large_proj: Buffer,
     _large_seg: Buffer,
+    _large_pkey: Buffer,
     _placeholders: Option<[Buffer; 2]>,
     readback: Buffer,
     ctx: Context,
@@ -228,9 +231,8 @@ impl GpuRun {
             Some(TransportKind::PerLane) if kernel_max_class > LOOP_BUDGET / 2 => {
                 return Err(Error::invalid("the per-lane transport cannot take classes this large"))
             }
-            // Built for CPU implementations only: on an H100 (driver 580) its
-            // pipeline compiles only with smaller private arrays and then gives
-            // wrong displacements for tied keys (bench/results/h100-run.log).
+            // Built for CPU implementations only: an H100's driver (580) refuses
+            // its pipeline at 2048 samples per invocation (bench/results/h100-run.log).
             Some(TransportKind::PerLane) if info.device_type != vk::PhysicalDeviceType::CPU => {
                 return Err(Error::invalid(format!(
                     "the per-lane transport is for CPU implementations of Vulkan, not {}",
@@ -283,10 +285,10 @@ impl GpuRun {
         };
         let (transport, local_max) = if shape.per_lane {
             let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, LANE_MAX];
-            (ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?, LANE_MAX)
+            (ComputePipeline::new(ctx, transport_spv, 11, tpush, &spec)?, LANE_MAX)
         } else {
             let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32];
-            (ComputePipeline::new(ctx, transport_spv, 10, tpush, &spec)?, LOCAL_MAX)
+            (ComputePipeline::new(ctx, transport_spv, 11, tpush, &spec)?, LOCAL_MAX)
         };
         let max_class = kernel.taps.len() as u64 * tile.spp as u64;
         let needs_large = max_class > local_max as u64;
@@ -306,12 +308,14 @@ impl GpuRun {
             0
         };
         let seg_bits = 32 - large_capacity.leading_zeros();
+        let point_bits = 32 - (tile.points() as u32).saturating_sub(1).leading_zeros();
         let meta_len = 16 + 16 * (large_capacity as u64 / (local_max as u64 + 1) + 1);
         let large_meta = Buffer::new(ctx, meta_len, Location::Device, "large-meta")?;
         let large_len = (large_capacity.max(1) as u64) * 4;
         let large_points = Buffer::new(ctx, large_len, Location::Device, "large-points")?;
         let large_proj = Buffer::new(ctx, large_len, Location::Device, "large-proj")?;
         let large_seg = Buffer::new(ctx, large_len, Location::Device, "large-seg")?;
+        let large_pkey = Buffer::new(ctx, large_len, Location::Device, "large-projection-keys")?;
         let sort =
             if needs_large { Some(RadixSort::new(ctx, large_capacity, Some(&large_meta))?) } else { None };
         // Without large classes the bindings still need buffers (never written).
@@ -339,6 +343,7 @@ impl GpuRun {
             &large_points,
             &large_proj,
             &large_seg,
+            &large_pkey,
         ];
         transport.bind(&transport_buffers)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
@@ -347,8 +352,10 @@ impl GpuRun {
         update.bind(&[&samples, &acc, &first, &second])?;
         let (gather, transport_large) = match &sort {
             Some(s) => {
-                let g = ComputePipeline::new(ctx, shaders::LARGE_GATHER, 4, 0, &[256])?;
-                g.bind(&[&large_meta, &s.keys[0], &s.vals[0], &large_seg])?;
+                // Set 0 keys by segment, set 1 by projection.
+                let g = ComputePipeline::with_sets(ctx, shaders::LARGE_GATHER, 4, 0, &[256], 2)?;
+                g.bind_set(0, &[&large_meta, &s.keys[0], &s.vals[0], &large_seg])?;
+                g.bind_set(1, &[&large_meta, &s.keys[0], &s.vals[0], &large_pkey])?;
                 let spv = if float_acc { shaders::TRANSPORT_LARGE_FLOAT } else { shaders::TRANSPORT_LARGE };
                 // 128 invocations whatever the device: a class may hold
                 // taps x spp samples, and each invocation loops over n / WG.
@@ -391,6 +398,7 @@ impl GpuRun {
             shape,
             large_capacity,
             seg_bits,
+            point_bits: point_bits.max(1),
             profile: Profile::default(),
             overflowed: 0,
             transport,
@@ -409,6 +417,7 @@ impl GpuRun {
             _large_points: large_points,
             _large_proj: large_proj,
             _large_seg: large_seg,
+            _large_pkey: large_pkey,
             _placeholders: placeholders,
             readback,
             ctx: ctx.clone(),
@@ -460,8 +469,13 @@ impl GpuRun {
         if let (Some(sort), Some(gather), Some(large)) = (&self.sort, &self.gather, &self.transport_large) {
             // The sort sizes its dispatches from the count the transport left on
             // the GPU (indirect), and writes the sizes of the two passes below.
-            sort.record(cmd, 32, None);
+            // Three stable sorts: by point, by projection, by class; so each
+            // class ends in projection order with ties in point order (the CPU's).
+            sort.record(cmd, self.point_bits, None);
             let Some(args) = &sort.args else { return };
+            gather.dispatch_indirect_set(cmd, 1, &args.buffer, ARG_GATHER, &[]);
+            barrier(&self.ctx, cmd);
+            sort.record(cmd, 32, None);
             gather.dispatch_indirect_set(cmd, 0, &args.buffer, ARG_GATHER, &[]);
             barrier(&self.ctx, cmd);
             sort.record(cmd, self.seg_bits, None);
