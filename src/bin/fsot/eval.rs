@@ -1,0 +1,87 @@
+//! `fsot eval`: the evaluation over animated scenes.
+
+use super::*;
+
+pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
+    use fsot::eval::scenes::SCENES;
+    use fsot::eval::suite::{cache_dir, run_eval, to_json, to_markdown, EvalSize};
+    for &s in &args.sigma {
+        if !(s.is_finite() && s > 0.0 && s <= 8.0) {
+            return Err(Error::invalid(format!("--sigma must be in (0, 8], got {s}")));
+        }
+    }
+    let scenes: Vec<_> = if args.scenes.is_empty() {
+        SCENES.to_vec()
+    } else {
+        args.scenes
+            .iter()
+            .map(|name| {
+                SCENES.iter().copied().find(|s| s.name() == name).ok_or_else(|| {
+                    let names: Vec<_> = SCENES.iter().map(|s| s.name()).collect();
+                    Error::invalid(format!("unknown scene `{name}` (one of {})", names.join(", ")))
+                })
+            })
+            .collect::<Result<_>>()?
+    };
+    fsot::io::atomic::make_folder(&args.out)?;
+    // Reserve the outputs before the long work: a bad path fails now.
+    let md = AtomicFile::create(&args.out.join("results.md"))?;
+    let js = AtomicFile::create(&args.out.join("results.json"))?;
+    let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
+    let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
+    if let Some(i) = args.iterations {
+        if !(1..=1_000_000).contains(&i) {
+            return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
+        }
+        size.iterations = i;
+    }
+    if let Some(p) = args.passes {
+        if !(1..=100_000).contains(&p) {
+            return Err(Error::invalid(format!("--passes must be in 1..=100000, got {p}")));
+        }
+        size.passes = p;
+    }
+    let start = Instant::now();
+    let mut published = Vec::new();
+    if let Some(dir) = &args.peers {
+        for (name, file) in [
+            ("published-stbn", "real_stbn.png"),
+            ("published-fast", "real_uniform_gauss_1.3435_exponential_0.1_0.1_product.png"),
+        ] {
+            published.push((name.to_string(), fsot::io::stacked_png::read(&dir.join(file))?));
+        }
+    }
+    let pictures = args.out.join("pictures");
+    let cache = cache_dir(&args.out);
+    let records = run_eval(&size, &args.sigma, &scenes, &cache, Some(&pictures), &published, |line| {
+        eprintln!("{line}")
+    })?;
+    let json = to_json(&records);
+    let t = size.tile;
+    let table = format!(
+        "# fsot eval{}\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
+         {} warm-up, {} renders per cell, references {} samples per pixel; TAA alpha 0.1; eps 0.01. Run time {:.0} s.\n{}",
+        if args.quick { " --quick" } else { "" },
+        t.width,
+        t.height,
+        t.frames,
+        t.dims,
+        size.iterations,
+        size.passes,
+        size.shot.image,
+        size.shot.image,
+        size.shot.frames,
+        size.warmup,
+        size.renders,
+        size.reference_samples,
+        start.elapsed().as_secs_f64(),
+        to_markdown(&records)
+    );
+    md.commit(table.as_bytes())?;
+    js.commit(json.as_bytes())?;
+    if let Some(f) = extra {
+        f.commit(json.as_bytes())?;
+    }
+    println!("{table}");
+    Ok(())
+}

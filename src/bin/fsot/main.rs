@@ -1,0 +1,370 @@
+//! The `fsot` command line: its flags here, each command in its own file.
+
+mod bench;
+mod eval;
+mod optimize;
+mod score;
+mod stress;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use fsot::baselines::fast::{Combine, Filter};
+use fsot::engine::{BackendChoice, Engine, Started};
+use fsot::error::{Error, Result};
+use fsot::gpu::optimizer::GpuOptions;
+use fsot::io::atomic::AtomicFile;
+use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
+use fsot::mask::Mask;
+use fsot::optimize::Settings;
+use fsot::problem::Tile;
+use fsot::score::{score, SCORE_SLICES};
+
+#[derive(Parser)]
+#[command(
+    name = "fsot",
+    version,
+    about = "Perceptually optimized spatio-temporal sample masks (filtered sliced optimal transport)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Optimize a mask and write it as EXR (and optionally PNG slices).
+    Optimize(Box<OptimizeArgs>),
+    /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
+    /// slices, beside that of white noise of the same shape.
+    Score(ScoreArgs),
+    /// The numerical stress suite: long runs, float32 GPU against the float64 CPU
+    /// path, a million contributions into one value, extreme settings and shapes,
+    /// ties, determinism. Exits non-zero if any check fails.
+    Stress(StressArgs),
+    /// Benchmarks that print figures.
+    Bench(BenchArgs),
+    /// Render animated scenes with every method's mask, with and without TAA,
+    /// and measure the perceptual error (pRelMSE) and RelMSE.
+    Eval(EvalArgs),
+}
+
+#[derive(Args)]
+struct EvalArgs {
+    /// Small tiles, images and sample counts: a few minutes on 2 cores.
+    #[arg(long)]
+    quick: bool,
+    /// Also write the records as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Folder for the tables (results.md, results.json) and the cache of masks
+    /// and references.
+    #[arg(long, default_value = "eval-out")]
+    out: PathBuf,
+    /// Eye sigmas to evaluate (the seed's tables: 2.1 and 1.9).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![2.1, 1.9], allow_negative_numbers = true)]
+    sigma: Vec<f64>,
+    /// Only these scenes (comma-separated names) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    scenes: Vec<String>,
+    /// Also measure the published scalar masks found in this folder
+    /// (real_stbn.png, real_uniform_gauss_1.3435_exponential_0.1_0.1_product.png),
+    /// as `published-stbn` and `published-fast`.
+    #[arg(long)]
+    peers: Option<PathBuf>,
+    /// Iterations of fsot's masks [default: 500 with --quick, else 1000].
+    #[arg(long, allow_negative_numbers = true)]
+    iterations: Option<u32>,
+    /// Passes of the swap methods' masks [default: 8 with --quick, else 32].
+    #[arg(long, allow_negative_numbers = true)]
+    passes: Option<u32>,
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    /// One suite only; without it: convergence of the CPU path and of Vulkan on
+    /// the same problem, and time to quality.
+    #[command(subcommand)]
+    suite: Option<BenchSuite>,
+    /// Small problem: about a minute on 2 cores.
+    #[arg(long)]
+    quick: bool,
+    /// Also write the figures as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Folder for convergence.md, convergence.csv, convergence.png and the cache.
+    #[arg(long, default_value = "bench-out")]
+    out: PathBuf,
+}
+
+/// One GPU kernel measured on its own.
+#[derive(Args)]
+struct KernelBench {
+    /// Input size.
+    #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
+    n: u32,
+    /// Timed runs (median reported), after two warm-up runs.
+    #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
+    repeats: u32,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
+    /// the first discrete GPU].
+    #[arg(long)]
+    device: Option<String>,
+}
+
+#[derive(Subcommand)]
+enum BenchSuite {
+    /// Pairs per second of the Vulkan radix sort and of the CPU sort, same keys
+    /// (N: pairs of 32-bit keys and 32-bit payloads).
+    Sort(KernelBench),
+    /// Contributions per second of the GPU gradient scatter (fixed point and float
+    /// atomics) and of the CPU path's (N contributions into N/16 accumulators).
+    Scatter(KernelBench),
+    /// One configuration of the scaling suite (run by `fsot bench` in a child
+    /// process, so its peak memory is its own).
+    #[command(hide = true)]
+    ScalingOne {
+        /// W x H x T.
+        #[arg(long)]
+        size: String,
+        /// Dimensions per sample.
+        #[arg(long)]
+        dims: usize,
+        /// Samples per pixel.
+        #[arg(long)]
+        spp: usize,
+        /// Timed iterations.
+        #[arg(long)]
+        iterations: u32,
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum KernelName {
+    /// Frames independent (Salaün et al. 2022 per frame).
+    Spatial,
+    /// Symmetric temporal Gaussian (akin to STBN).
+    Gaussian,
+    /// TAA: exponential moving average with blend weight --alpha.
+    Taa,
+    /// FovVideoVDP temporal response at --fps.
+    Perceptual,
+    /// TAA, then the eye: the paper's full model.
+    PerceptualTaa,
+}
+
+impl KernelName {
+    fn as_str(&self) -> &'static str {
+        match self {
+            KernelName::Spatial => "spatial",
+            KernelName::Gaussian => "gaussian",
+            KernelName::Taa => "taa",
+            KernelName::Perceptual => "perceptual",
+            KernelName::PerceptualTaa => "perceptual-taa",
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Method {
+    /// fsot's optimizer (filtered sliced optimal transport) under --kernel.
+    Fsot,
+    /// Independent uniform samples (seeded).
+    White,
+    /// Spatiotemporal blue noise (Wolfe et al. 2022): energy = 2-D Gaussian in
+    /// the frame + 1-D Gaussian over time, sigma --sigma and --sigma-t (default
+    /// 1.9); scalar masks (d = 1) by void-and-cluster, vector masks by
+    /// simulated annealing of swaps (--passes).
+    Stbn,
+    /// Filter-adapted masks (FAST, Donnelly et al. 2024): greedy swaps for the
+    /// filter --fast-spatial x --fast-temporal (--fast-combine), --passes.
+    Fast,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    /// Vulkan when a device is there, else the CPU (says which).
+    Auto,
+    /// The multi-threaded CPU path (the reference).
+    Cpu,
+    /// Vulkan compute.
+    Vulkan,
+}
+
+#[derive(Args, Clone)]
+struct KernelArgs {
+    /// Temporal filter of the kernel.
+    #[arg(long, value_enum, default_value = "perceptual-taa")]
+    kernel: KernelName,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels [default: 2.1; for --method
+    /// stbn, its energy's sigma, default 1.9].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma: Option<f64>,
+    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma_t: Option<f64>,
+    /// TAA blend weight of the current frame, in (0, 1].
+    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
+    alpha: f64,
+    /// Frame rate for the perceptual filter.
+    #[arg(long, default_value_t = DEFAULT_FPS, allow_negative_numbers = true)]
+    fps: f64,
+}
+
+impl KernelArgs {
+    fn spec(&self) -> Result<KernelSpec> {
+        KernelSpec::from_name(
+            self.kernel.as_str(),
+            self.sigma.unwrap_or(DEFAULT_SIGMA),
+            self.sigma_t,
+            self.alpha,
+            self.fps,
+        )
+    }
+}
+
+#[derive(Args)]
+struct OptimizeArgs {
+    /// Tile size W x H x T (pixels x pixels x frames) [default: 64x64x16, or the
+    /// --init file's].
+    #[arg(long)]
+    size: Option<String>,
+    /// Dimensions per sample, 1 to 8 [default: 2, or the --init file's].
+    #[arg(long, allow_negative_numbers = true)]
+    dims: Option<usize>,
+    /// Samples per pixel and frame, 1 to 64 [default: 1, or the --init file's].
+    #[arg(long, allow_negative_numbers = true)]
+    spp: Option<usize>,
+    /// How to make the mask.
+    #[arg(long, value_enum, default_value = "fsot")]
+    method: Method,
+    #[command(flatten)]
+    kernel: KernelArgs,
+    /// Iterations of the optimizer.
+    #[arg(long, default_value_t = fsot::optimize::DEFAULT_ITERATIONS, allow_negative_numbers = true)]
+    iterations: u32,
+    /// Slices per iteration [default: enough for each sample to be in 16 classes
+    /// per iteration].
+    #[arg(long, allow_negative_numbers = true)]
+    slices: Option<u32>,
+    /// Random seed: the same seed gives a bit-identical mask.
+    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
+    seed: u64,
+    /// Where to run.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: Backend,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else the
+    /// first discrete GPU].
+    #[arg(long)]
+    device: Option<String>,
+    /// Vulkan: accumulate in 64-bit fixed point, bit-identical run to run (the
+    /// CPU path always is).
+    #[arg(long)]
+    deterministic: bool,
+    /// Vulkan: print the time per pass (timestamp queries).
+    #[arg(long)]
+    profile: bool,
+    /// Worker threads for the CPU path [default: every core].
+    #[arg(long, allow_negative_numbers = true)]
+    threads: Option<usize>,
+    /// Start from this mask (EXR written by fsot or laid out the same way).
+    #[arg(long)]
+    init: Option<PathBuf>,
+    /// Swap methods (stbn with d >= 2, fast): passes of as many proposed swaps
+    /// as pixels.
+    #[arg(long, default_value_t = 32, allow_negative_numbers = true)]
+    passes: u32,
+    /// FAST spatial filter: none, gaussian:SIGMA, box:N or binomial:N.
+    #[arg(long, default_value = "gaussian:1.3435")]
+    fast_spatial: String,
+    /// FAST temporal filter: none, gaussian:SIGMA, box:N, binomial:N or
+    /// ema:ALPHA:BETA (blend alpha, history reset beta).
+    #[arg(long, default_value = "ema:0.1:0.1")]
+    fast_temporal: String,
+    /// FAST: `product` (one separable filter) or `sum:W` (W x spatial loss +
+    /// (1 - W) x temporal loss).
+    #[arg(long, default_value = "product")]
+    fast_combine: String,
+    /// Save the run's state (samples, optimizer state) to this file every
+    /// --checkpoint-every iterations and on Ctrl-C; removed when the run completes.
+    #[arg(long)]
+    checkpoint: Option<PathBuf>,
+    /// Iterations between checkpoints.
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
+    checkpoint_every: u32,
+    /// Continue from --checkpoint: run the command that wrote it again, with
+    /// --resume added. On the CPU path the result is bit-identical to an
+    /// uninterrupted run.
+    #[arg(long)]
+    resume: bool,
+    /// Output EXR file.
+    #[arg(long, default_value = "mask.exr")]
+    out: PathBuf,
+    /// Also write 16-bit PNG slices into this folder.
+    #[arg(long)]
+    png: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct StressArgs {
+    /// CI size (seconds) instead of the (100k-iteration runs, minutes).
+    #[arg(long)]
+    quick: bool,
+    /// CPU only, even where a Vulkan device is present.
+    #[arg(long)]
+    cpu_only: bool,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else the
+    /// first discrete GPU, else any device, lavapipe included].
+    #[arg(long)]
+    device: Option<String>,
+    /// Markdown table of the figures.
+    #[arg(long, default_value = "stress.md")]
+    out: PathBuf,
+}
+
+#[derive(Args)]
+struct ScoreArgs {
+    /// The mask to score (EXR).
+    mask: PathBuf,
+    #[command(flatten)]
+    kernel: KernelArgs,
+    /// Slices in the fixed scoring set.
+    #[arg(long, default_value_t = SCORE_SLICES)]
+    slices: u32,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Optimize(args) => optimize::optimize(*args),
+        Command::Score(args) => score::score_command(args),
+        Command::Stress(args) => stress::stress_command(args),
+        Command::Bench(args) => bench::bench_command(args),
+        Command::Eval(args) => eval::eval_command(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Error::Interrupted) => ExitCode::from(130),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(Error::invalid("--threads must be at least 1"));
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Error::invalid(format!("cannot start {n} threads: {e}")))?;
+    }
+    Ok(())
+}
