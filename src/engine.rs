@@ -38,9 +38,8 @@ impl Engine {
         device: Option<String>,
         gpu: GpuOptions,
     ) -> Result<Started> {
-        let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
         let try_gpu = |require_gpu_type: bool| -> Result<Started> {
-            let ctx = Context::new(&ContextOptions { validation, device: device.clone() })?;
+            let ctx = Context::new(&ContextOptions::from_env(device.clone()))?;
             let info = ctx.info().clone();
             if require_gpu_type && info.device_type == ash::vk::PhysicalDeviceType::CPU {
                 return Err(Error::VulkanUnavailable(format!(

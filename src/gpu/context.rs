@@ -24,6 +24,15 @@ pub struct ContextOptions {
     pub device: Option<String>,
 }
 
+impl ContextOptions {
+    /// The command line's options: `device` as given, the validation layer on
+    /// when the `FSOT_VALIDATION` variable is 1.
+    pub fn from_env(device: Option<String>) -> Self {
+        let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
+        Self { validation, device }
+    }
+}
+
 /// What fsot needs to know about the chosen device.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {

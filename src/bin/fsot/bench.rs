@@ -1,6 +1,7 @@
 //! `fsot bench`: the benchmark suites and the single-kernel measurements.
 
 use super::*;
+use fsot::gpu::context::{Context, ContextOptions};
 
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
@@ -13,9 +14,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
-            let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
-            let ctx =
-                fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
+            let ctx = Context::new(&ContextOptions::from_env(device))?;
             let b = fsot::bench::bench_sort(&ctx, n, repeats)?;
             println!(
                 "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",
@@ -34,9 +33,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
         Some(BenchSuite::Scatter(KernelBench { n, repeats, device })) => {
-            let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
-            let ctx =
-                fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions { validation, device })?;
+            let ctx = Context::new(&ContextOptions::from_env(device))?;
             let b = fsot::bench::bench_scatter(&ctx, n, repeats)?;
             println!("{}", scatter_line(&b));
             Ok(())
@@ -206,10 +203,7 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
     } else {
         (16..=24).step_by(2).map(|k| 1u32 << k).collect()
     };
-    match fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions {
-        validation: std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false),
-        device: None,
-    }) {
+    match Context::new(&ContextOptions::from_env(None)) {
         Ok(ctx) => {
             let is_cpu_device = ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU;
             let ceiling = if is_cpu_device {

@@ -8,11 +8,8 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     let ctx = if args.cpu_only {
         None
     } else {
-        let validation = std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false);
-        match fsot::gpu::context::Context::new(&fsot::gpu::context::ContextOptions {
-            validation,
-            device: args.device.clone(),
-        }) {
+        use fsot::gpu::context::{Context, ContextOptions};
+        match Context::new(&ContextOptions::from_env(args.device.clone())) {
             Ok(c) => Some(c),
             Err(e) => {
                 eprintln!("no Vulkan device, CPU checks only: {e}");
