@@ -39,25 +39,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     settings.iterations = args.iterations;
     settings.slices = args.slices;
     let fingerprint = fsot::checkpoint::fingerprint(&tile, &settings);
-    let saved = match (&args.checkpoint, args.resume) {
-        (None, true) => {
-            return Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)"))
-        }
-        (Some(_), _) if args.checkpoint_every == 0 => {
-            return Err(Error::invalid("--checkpoint-every must be at least 1"))
-        }
-        (Some(p), false) if p.exists() => {
-            return Err(Error::invalid(format!(
-                "checkpoint {} exists: continue it with --resume, or remove it to start over",
-                p.display()
-            )))
-        }
-        (Some(p), true) => Some(fsot::checkpoint::read(p, &fingerprint, &tile)?),
-        _ => None,
-    };
-    if let Some(p) = &args.checkpoint {
-        AtomicFile::create(p)?; // a checkpoint that cannot be written fails now
-    }
+    let saved = saved_state(&args, &fingerprint, &tile)?;
     let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile, transport: None };
     let Started { mut engine, note } =
         Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
@@ -186,31 +168,65 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         after.ratio()
     );
     if let Engine::Gpu(run) = &engine {
-        if run.overflowed() > 0 {
-            eprintln!(
-                "warning: {} large classes did not fit their buffer and were skipped",
-                run.overflowed()
-            );
+        gpu_report(run, args.profile)?;
+    }
+    Ok(())
+}
+
+/// The checkpoint rules: `--resume` needs `--checkpoint`, which must then hold a
+/// checkpoint of this very run; without `--resume` an existing checkpoint is left
+/// alone (an error), and the path must be writable before the work starts.
+fn saved_state(
+    args: &OptimizeArgs,
+    fingerprint: &str,
+    tile: &Tile,
+) -> Result<Option<fsot::optimize::RunState>> {
+    let Some(path) = &args.checkpoint else {
+        return match args.resume {
+            true => Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)")),
+            false => Ok(None),
+        };
+    };
+    if args.checkpoint_every == 0 {
+        return Err(Error::invalid("--checkpoint-every must be at least 1"));
+    }
+    let saved = match args.resume {
+        true => Some(fsot::checkpoint::read(path, fingerprint, tile)?),
+        false => None,
+    };
+    if !args.resume && path.exists() {
+        return Err(Error::invalid(format!(
+            "checkpoint {} exists: continue it with --resume, or remove it to start over",
+            path.display()
+        )));
+    }
+    AtomicFile::create(path)?; // a checkpoint that cannot be written fails now
+    Ok(saved)
+}
+
+/// After a Vulkan run: skipped large classes, the profile, validation messages.
+fn gpu_report(run: &fsot::gpu::optimizer::GpuRun, profile: bool) -> Result<()> {
+    if run.overflowed() > 0 {
+        eprintln!("warning: {} large classes did not fit their buffer and were skipped", run.overflowed());
+    }
+    if profile {
+        let p = &run.profile;
+        let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
+        println!(
+            "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
+            p.iterations,
+            per(p.transport_ns),
+            per(p.large_ns),
+            per(p.update_ns)
+        );
+    }
+    let messages = run.validation_messages();
+    if !messages.is_empty() {
+        eprintln!("{} validation messages:", messages.len());
+        for m in messages.iter().take(10) {
+            eprintln!("  {m}");
         }
-        if args.profile {
-            let p = &run.profile;
-            let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
-            println!(
-                "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
-                p.iterations,
-                per(p.transport_ns),
-                per(p.large_ns),
-                per(p.update_ns)
-            );
-        }
-        let messages = run.validation_messages();
-        if !messages.is_empty() {
-            eprintln!("{} validation messages:", messages.len());
-            for m in messages.iter().take(10) {
-                eprintln!("  {m}");
-            }
-            return Err(Error::invalid("the Vulkan validation layer reported errors"));
-        }
+        return Err(Error::invalid("the Vulkan validation layer reported errors"));
     }
     Ok(())
 }
