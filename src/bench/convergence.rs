@@ -28,7 +28,10 @@ pub struct Point {
     pub backend: String,
     pub machine: String,
     pub iteration: u32,
+    /// Host wall time of the optimisation (submissions and waits included).
     pub seconds: f64,
+    /// Vulkan: the GPU's own time, from timestamp queries around every pass.
+    pub gpu_seconds: Option<f64>,
     /// `fsot score` objective / white noise's.
     pub objective_ratio: f64,
     /// pRelMSE of the scene under TAA / white noise's.
@@ -40,19 +43,24 @@ pub struct Point {
 
 impl Point {
     pub const CSV_HEADER: &'static str =
-        "backend,machine,iteration,seconds,objective_ratio,prelmse_ratio,perceived_ratio";
+        "backend,machine,iteration,seconds,gpu_seconds,objective_ratio,prelmse_ratio,perceived_ratio";
 
     fn machine_quoted(&self) -> String {
         self.machine.replace('"', "'")
     }
 
+    fn gpu_cell(&self, digits: usize, none: &str) -> String {
+        self.gpu_seconds.map(|s| format!("{s:.digits$}")).unwrap_or_else(|| none.to_string())
+    }
+
     pub fn markdown_row(&self) -> String {
         format!(
-            "| {} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            "| {} | {} | {} | {:.3} | {} | {:.3} | {:.3} | {:.3} |",
             self.backend,
             self.machine,
             self.iteration,
             self.seconds,
+            self.gpu_cell(4, "-"),
             self.objective_ratio,
             self.prelmse_ratio,
             self.perceived_ratio
@@ -61,11 +69,12 @@ impl Point {
 
     pub fn csv_row(&self) -> String {
         format!(
-            "{},\"{}\",{},{:.6},{:.6},{:.6},{:.6}",
+            "{},\"{}\",{},{:.6},{},{:.6},{:.6},{:.6}",
             self.backend,
             self.machine_quoted(),
             self.iteration,
             self.seconds,
+            self.gpu_cell(6, ""),
             self.objective_ratio,
             self.prelmse_ratio,
             self.perceived_ratio
@@ -75,11 +84,13 @@ impl Point {
     pub fn json(&self) -> String {
         format!(
             "{{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
-             \"seconds\": {:e}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \"perceived_ratio\": {:e}}}",
+             \"seconds\": {:e}, \"gpu_seconds\": {}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \
+             \"perceived_ratio\": {:e}}}",
             self.backend,
             self.machine_quoted(),
             self.iteration,
             self.seconds,
+            self.gpu_seconds.map(|s| format!("{s:e}")).unwrap_or_else(|| "null".into()),
             self.objective_ratio,
             self.prelmse_ratio,
             self.perceived_ratio
@@ -167,7 +178,8 @@ pub fn convergence(
     let last = *checkpoints.iter().max().unwrap_or(&1);
     let mut settings = Settings::new(spec, seed);
     settings.iterations = last;
-    let gpu = GpuOptions { deterministic: false, profile: false, transport: None };
+    // Profiled: timestamps around every pass give the GPU's own time.
+    let gpu = GpuOptions { deterministic: false, profile: true, transport: None };
     let Started { mut engine, note } = Engine::start(choice, tile, settings, None, None, gpu)?;
     let backend = if engine.is_gpu() { "vulkan" } else { "cpu" }.to_string();
     let machine = if engine.is_gpu() {
@@ -179,11 +191,18 @@ pub fn convergence(
     let mut elapsed = Duration::ZERO;
     let judge_at = |engine: &Engine, elapsed: Duration| -> Result<Point> {
         let mask = engine.mask()?;
+        let gpu_seconds = match engine {
+            Engine::Gpu(r) => {
+                Some((r.profile.transport_ns + r.profile.large_ns + r.profile.update_ns) * 1e-9)
+            }
+            Engine::Cpu(_) => None,
+        };
         Ok(Point {
             backend: backend.clone(),
             machine: machine.clone(),
             iteration: engine.iteration(),
             seconds: elapsed.as_secs_f64(),
+            gpu_seconds,
             objective_ratio: score(&mask, spec, SCORE_SLICES).ratio(),
             prelmse_ratio: judge.ratio(&mask),
             perceived_ratio: judge.perceived_ratio(&mask),
@@ -234,6 +253,7 @@ mod tests {
             machine: String::new(),
             iteration: 0,
             seconds,
+            gpu_seconds: None,
             objective_ratio: v,
             prelmse_ratio: v,
             perceived_ratio: v,

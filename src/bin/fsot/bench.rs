@@ -102,9 +102,10 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
     let mut table = format!(
         "# fsot bench{}\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
          planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
-         eye sigma 2.1, / white noise. Seconds: optimisation only.\n\n\
-         | backend | machine | iteration | seconds | objective | pRelMSE | perceived |\n\
-         | --- | --- | ---: | ---: | ---: | ---: | ---: |\n",
+         eye sigma 2.1, / white noise. Seconds: optimisation only, host wall time; GPU s: the GPU's own \
+         time from timestamp queries (Vulkan).\n\n\
+         | backend | machine | iteration | seconds | GPU s | objective | pRelMSE | perceived |\n\
+         | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         if args.quick { " --quick" } else { "" },
         tile.describe(),
         spec.describe()
@@ -119,9 +120,24 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
               reach about 0.65 x white noise on the perceived test (the core issue's figure).\n\n\
               | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
               | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+    // Vulkan twice: host wall time, then the GPU's own time (timestamps).
+    let mut rows_by: Vec<(String, Vec<fsot::bench::convergence::Point>)> = Vec::new();
     for b in &backends {
         let mine: Vec<_> = points.iter().filter(|p| &p.backend == b).cloned().collect();
-        let cell = |v: Option<f64>| v.map(|s| format!("{s:.3}")).unwrap_or_else(|| "-".into());
+        if mine.iter().all(|p| p.gpu_seconds.is_some()) {
+            let gpu_time = mine.iter().map(|p| fsot::bench::convergence::Point {
+                seconds: p.gpu_seconds.unwrap_or(p.seconds),
+                ..p.clone()
+            });
+            rows_by.push((b.clone(), mine.clone()));
+            rows_by.push((format!("{b}, GPU time"), gpu_time.collect()));
+        } else {
+            rows_by.push((b.clone(), mine));
+        }
+    }
+    for (b, mine) in &rows_by {
+        let mine = mine.clone();
+        let cell = |v: Option<f64>| v.map(|s| format!("{s:.4}")).unwrap_or_else(|| "-".into());
         let obj: Vec<String> =
             [0.8, 0.6, 0.5].iter().map(|&l| cell(time_to(&mine, l, |p| p.objective_ratio))).collect();
         let pr: Vec<String> =
