@@ -24,7 +24,7 @@ pub enum Error {
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
-    #[error("GPU memory: {0} (a smaller tile, or --backend cpu, will fit)")]
+    #[error("GPU memory: {0} (a smaller tile, or --backend cpu, may fit)")]
     Allocation(#[from] gpu_allocator::AllocationError),
     #[error("interrupted")]
     Interrupted,
@@ -37,7 +37,7 @@ fn vulkan_hint(result: ash::vk::Result) -> &'static str {
         R::ERROR_DEVICE_LOST => {
             " (the GPU was lost: a driver reset, a hang or a removed device; nothing was written)"
         }
-        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile, or --backend cpu, will fit)",
+        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile, or --backend cpu, may fit)",
         R::ERROR_OUT_OF_HOST_MEMORY => " (out of host memory)",
         _ => "",
     }
