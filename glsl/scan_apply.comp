@@ -1,6 +1,7 @@
 #version 450
-// Scan level 3: each workgroup scans its chunk (exclusive) and adds the chunk's
-// offset from level 2.
+// Scan level 2 of 2: each workgroup sums the chunk totals before its own (a few
+// hundred at most, so every workgroup redoing it is cheaper than one more
+// dispatch and barrier), then scans its chunk (exclusive) from that offset.
 #include "scan_common.glsl"
 
 layout(std430, set = 0, binding = 1) buffer Data { uint data[]; };
@@ -17,8 +18,12 @@ void main() {
         local[it] = i < n ? data[i] : 0u;
         sum += local[it];
     }
+    uint before = 0u;
+    for (uint c = tid; c < gl_WorkGroupID.x; c += gl_WorkGroupSize.x) { before += partials[c]; }
+    uint offset;
+    workgroup_exclusive(before, offset);
     uint total;
-    uint run = workgroup_exclusive(sum, total) + partials[gl_WorkGroupID.x];
+    uint run = workgroup_exclusive(sum, total) + offset;
     for (uint it = 0u; it < ITEMS; ++it) {
         uint i = base + it;
         if (i < n) { data[i] = run; }

@@ -1,5 +1,5 @@
 #version 450
-// Scan level 1: each workgroup sums its chunk of the histogram.
+// Scan level 1 of 2: each workgroup sums its chunk of the histogram.
 #include "scan_common.glsl"
 
 layout(std430, set = 0, binding = 1) readonly buffer Data { uint data[]; };

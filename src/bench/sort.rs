@@ -22,7 +22,7 @@ pub struct SortBench {
     pub cpu_seconds: f64,
     pub cpu_threads: usize,
     /// One profiled sort, milliseconds summed over the 4 passes: histogram, scan
-    /// (3 dispatches), scatter.
+    /// (2 dispatches), scatter.
     pub stages_ms: [f64; 3],
     /// Pairs per block on this device.
     pub block: u32,
@@ -81,7 +81,7 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     let ns = timer.read_ns(2 * runs)?;
     let gpu_seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
     // One more run with a timestamp after every dispatch, for the breakdown.
-    let stages = Timer::new(ctx, 21)?;
+    let stages = Timer::new(ctx, 17)?;
     submit_and_wait(ctx, |cmd| {
         stages.reset(cmd);
         copy_range(ctx, cmd, &pristine_k, &sort.keys[0], bytes);
@@ -89,13 +89,13 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
         barrier(ctx, cmd);
         sort.record_timed(cmd, 32, Some(n), Some(&stages));
     })?;
-    let t = stages.read_ns(21)?;
+    let t = stages.read_ns(17)?;
     let mut stages_ms = [0.0f64; 3];
     for pass in 0..4usize {
-        let b = 5 * pass;
+        let b = 4 * pass;
         stages_ms[0] += (t[b + 1] - t[b]) * 1e-6;
-        stages_ms[1] += (t[b + 4] - t[b + 1]) * 1e-6;
-        stages_ms[2] += (t[b + 5] - t[b + 4]) * 1e-6;
+        stages_ms[1] += (t[b + 3] - t[b + 1]) * 1e-6;
+        stages_ms[2] += (t[b + 4] - t[b + 3]) * 1e-6;
     }
     // Check the last run against the CPU.
     let down = Buffer::new(ctx, bytes, Location::Readback, "bench-readback")?;

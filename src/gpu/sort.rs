@@ -1,6 +1,6 @@
 //! Global LSD radix sort of 32-bit keys with 32-bit payloads on the GPU.
 //!
-//! 8 bits per pass; each pass is histogram -> three-level exclusive scan ->
+//! 8 bits per pass; each pass is histogram -> two-dispatch exclusive scan ->
 //! stable scatter (`glsl/radix_*.comp`, `glsl/scan_*.comp`): reduce-then-scan, so
 //! no workgroup ever waits on another (correct on lavapipe, which does not
 //! guarantee forward progress between workgroups). Equal keys keep their input
@@ -86,7 +86,6 @@ pub struct RadixSort {
     _partials: Buffer,
     histogram: ComputePipeline,
     scan_reduce: ComputePipeline,
-    scan_partials: ComputePipeline,
     scan_apply: ComputePipeline,
     scatter: ComputePipeline,
     /// Present when the count comes from a GPU buffer: indirect dispatch sizes.
@@ -137,7 +136,6 @@ impl RadixSort {
         let push = std::mem::size_of::<RadixPush>() as u32;
         let histogram = ComputePipeline::with_sets(ctx, shaders::RADIX_HISTOGRAM, 3, push, &spec, 2)?;
         let scan_reduce = ComputePipeline::new(ctx, shaders::SCAN_REDUCE, 3, push, &spec)?;
-        let scan_partials = ComputePipeline::new(ctx, shaders::SCAN_PARTIALS, 2, push, &spec)?;
         let scan_apply = ComputePipeline::new(ctx, shaders::SCAN_APPLY, 3, push, &spec)?;
         let scatter = ComputePipeline::with_sets(ctx, shaders::RADIX_SCATTER, 6, push, &spec, 2)?;
         let info_buf: &Buffer = match (count, &own_info) {
@@ -150,7 +148,6 @@ impl RadixSort {
             scatter.bind_set(s, &[info_buf, &keys[s], &vals[s], &keys[1 - s], &vals[1 - s], &hist])?;
         }
         scan_reduce.bind(&[info_buf, &hist, &partials])?;
-        scan_partials.bind(&[info_buf, &partials])?;
         scan_apply.bind(&[info_buf, &hist, &partials])?;
         let args = match count {
             Some(c) => {
@@ -172,7 +169,6 @@ impl RadixSort {
             _partials: partials,
             histogram,
             scan_reduce,
-            scan_partials,
             scan_apply,
             scatter,
             args,
@@ -204,9 +200,9 @@ impl RadixSort {
         self.record_timed(cmd, bits, known, None)
     }
 
-    /// As `record`; with a timer, stamps 0..=5 x passes: before the first
-    /// dispatch, then after each of a pass's histogram, scan (3 dispatches) and
-    /// scatter.
+    /// As `record`; with a timer, stamps 0..=4 x passes: before the first
+    /// dispatch, then after each of a pass's histogram, scan reduce, scan apply
+    /// and scatter.
     pub fn record_timed(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
         let stamp = |i: u32| {
             if let Some(t) = timer {
@@ -244,19 +240,16 @@ impl RadixSort {
             };
             run(&self.histogram, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
-            stamp(1 + 5 * pass);
+            stamp(1 + 4 * pass);
             run(&self.scan_reduce, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
-            stamp(2 + 5 * pass);
-            self.scan_partials.dispatch(cmd, [1, 1, 1], p);
-            barrier(&self.ctx, cmd);
-            stamp(3 + 5 * pass);
+            stamp(2 + 4 * pass);
             run(&self.scan_apply, 0, chunks, ARG_CHUNKS);
             barrier(&self.ctx, cmd);
-            stamp(4 + 5 * pass);
+            stamp(3 + 4 * pass);
             run(&self.scatter, src, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
-            stamp(5 + 5 * pass);
+            stamp(4 + 4 * pass);
         }
         if passes % 2 == 1 {
             copy(&self.ctx, cmd, &self.keys[1], &self.keys[0]);
