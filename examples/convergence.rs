@@ -5,12 +5,13 @@
 //! cargo run --release --example convergence -- [kernel] [WxHxT] [rule: momentum|adam] [N...]
 use std::time::Instant;
 
+use fsot::cpu_backend::CpuRun;
 use fsot::eval::perceived::{ratio_to_white, TestSetup};
 use fsot::kernel::KernelSpec;
-use fsot::optimize::{Run, Settings};
-use fsot::optimizer::StepRule;
 use fsot::problem::Tile;
 use fsot::score::{score, SCORE_SLICES};
+use fsot::settings::Settings;
+use fsot::step_rule::StepRule;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -40,13 +41,13 @@ fn main() {
         let mut settings = Settings::new(spec, 7);
         settings.iterations = n;
         settings.rule = rule;
-        let mut run = Run::new(tile, settings, None).unwrap();
+        let mut run = CpuRun::new(tile, settings, None).unwrap();
         let start = Instant::now();
         while !run.finished() {
             run.step();
         }
         let seconds = start.elapsed().as_secs_f64();
-        let mask = run.mask();
+        let mask = fsot::backend::Backend::mask(&run).unwrap();
         let objective = score(&mask, spec, SCORE_SLICES).objective;
         let ratio = ratio_to_white(&mask, &setup, 4);
         println!("{n},{seconds:.3},{objective:.5e},{ratio:.4}");

@@ -1,14 +1,15 @@
 //! Diagnostic: GPU against CPU displacements slice by slice (one slice per
 //! iteration), printing the worst differences with their context.
-use fsot::gpu::context::{Context, ContextOptions};
-use fsot::gpu::optimizer::{GpuOptions, GpuRun};
+use fsot::backend::Backend;
+use fsot::gpu::{VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::mask::Mask;
-use fsot::optimize::Settings;
 use fsot::problem::Tile;
 use fsot::rng::seed_key;
+use fsot::settings::Settings;
 use fsot::slice::SliceSampler;
 use fsot::transport::{project, transport_slice, Scratch};
+use fsot::vk::{Context, ContextOptions};
 
 fn main() {
     let ctx = Context::new(&ContextOptions::default()).unwrap();
@@ -19,14 +20,8 @@ fn main() {
     let mask = Mask::white(tile, 21);
     let kernel = Kernel::new(s.kernel, &tile);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let mut gpu = GpuRun::new(
-        &ctx,
-        tile,
-        s,
-        Some(&mask),
-        GpuOptions { deterministic: true, profile: false, transport: None },
-    )
-    .unwrap();
+    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     let mut worst = (0.0f64, String::new());
     let mut hist = [0usize; 8];
     for it in 0..300 {

@@ -13,8 +13,8 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::optimize::{RunState, Settings};
 use crate::problem::Tile;
+use crate::settings::{RunState, Settings};
 
 const MAGIC: &[u8; 8] = b"FSOTCKP1";
 

@@ -24,8 +24,11 @@ pub enum Error {
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
-    #[error("GPU memory: {0} (a smaller tile, or --backend cpu, may fit)")]
+    #[error("GPU memory: {0} (a smaller tile may fit)")]
     Allocation(#[from] gpu_allocator::AllocationError),
+    /// A checkpoint is in the way of a run that does not resume it.
+    #[error("checkpoint {} exists: continue it, or remove it to start over", .0.display())]
+    CheckpointExists(PathBuf),
     #[error("interrupted")]
     Interrupted,
 }
@@ -37,7 +40,7 @@ fn vulkan_hint(result: ash::vk::Result) -> &'static str {
         R::ERROR_DEVICE_LOST => {
             " (the GPU was lost: a driver reset, a hang or a removed device; nothing was written)"
         }
-        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile, or --backend cpu, may fit)",
+        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile may fit)",
         R::ERROR_OUT_OF_HOST_MEMORY => " (out of host memory)",
         _ => "",
     }
@@ -57,5 +60,13 @@ impl Error {
     }
     pub fn io(context: impl Into<String>, source: std::io::Error) -> Self {
         Error::Io { context: context.into(), source }
+    }
+}
+
+impl Error {
+    /// Out of GPU memory (an allocation, or a Vulkan call that said so).
+    pub fn is_out_of_device_memory(&self) -> bool {
+        matches!(self, Error::Allocation(_))
+            || matches!(self, Error::Vulkan { result, .. } if *result == ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)
     }
 }

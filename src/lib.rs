@@ -1,22 +1,26 @@
 //! fsot: perceptually optimized spatio-temporal sample masks by filtered sliced
-//! optimal transport.
+//! optimal transport. See the README's architecture section for how the modules
+//! fit together.
+pub mod backend;
 pub mod baselines;
 pub mod bench;
 pub mod checkpoint;
-pub mod cpu;
-pub mod engine;
+pub mod cpu_backend;
 pub mod error;
 pub mod eval;
 pub mod gpu;
 pub mod io;
 pub mod kernel;
 pub mod mask;
-pub mod optimize;
-pub mod optimizer;
+pub mod method;
 pub mod problem;
 pub mod rng;
+pub mod run;
 pub mod score;
+pub mod settings;
 pub mod slice;
+pub mod step_rule;
 pub mod stress;
 pub mod targets;
 pub mod transport;
+pub mod vk;

@@ -8,18 +8,20 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cpu::{Accumulator, FIXED_SCALE};
+use crate::backend::BackendChoice;
+use crate::cpu_backend::{Accumulator, FIXED_SCALE};
 use crate::error::{Error, Result};
-use crate::gpu::context::Context;
-use crate::gpu::optimizer::{GpuOptions, GpuRun};
+use crate::gpu::VulkanOptions;
 use crate::kernel::{Kernel, KernelSpec};
 use crate::mask::Mask;
-use crate::optimize::{Run, Settings};
 use crate::problem::Tile;
 use crate::rng::{derive, seed_key, Stream};
+use crate::run::{CancelFlag, Run, RunOptions};
 use crate::score::score;
+use crate::settings::Settings;
 use crate::slice::SliceSampler;
 use crate::transport::{transport_slice, Scratch};
+use crate::vk::Context;
 
 /// How big the suite runs.
 #[derive(Clone, Copy, Debug)]
@@ -65,6 +67,32 @@ fn settings(kernel: KernelSpec, iterations: u32, seed: u64) -> Settings {
     let mut s = Settings::new(kernel, seed);
     s.iterations = iterations;
     s
+}
+
+/// A library run on the CPU path, or on `ctx` with `vulkan`.
+fn start(
+    tile: Tile,
+    s: Settings,
+    init: Option<&Mask>,
+    ctx: Option<&Context>,
+    vulkan: VulkanOptions,
+) -> Result<Run> {
+    let options = match ctx {
+        Some(c) => RunOptions {
+            backend: BackendChoice::Vulkan,
+            context: Some(c.clone()),
+            vulkan,
+            ..RunOptions::default()
+        },
+        None => RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() },
+    };
+    Run::start(tile, s, init, options)
+}
+
+/// Runs to iteration `to`; the samples then.
+fn samples_at(run: &mut Run, to: u32) -> Result<Vec<f32>> {
+    run.advance(to, &CancelFlag::new(), &mut |_| {})?;
+    run.backend().samples()
 }
 
 /// Samples finite and in [0, 1): the count of those that are not.
@@ -218,19 +246,15 @@ fn extreme(
             seconds,
         });
     };
-    let t = Instant::now();
-    let mut run = Run::new(tile, s, Some(&start_mask))?;
-    while !run.finished() {
-        run.step();
-    }
-    judge("cpu", run.samples().to_vec(), t.elapsed().as_secs_f64());
-    if let (Some(ctx), true) = (ctx, tile.dims <= 2) {
-        let t = Instant::now();
-        let mut g = GpuRun::new(ctx, tile, s, Some(&start_mask), GpuOptions::default())?;
-        while !g.finished() {
-            g.step_batch(u32::MAX)?;
+    let gpu = ctx.filter(|_| tile.dims <= 2);
+    for (backend, ctx) in [("cpu", None), ("vulkan", gpu)] {
+        if backend == "vulkan" && ctx.is_none() {
+            continue;
         }
-        judge("vulkan", g.samples()?, t.elapsed().as_secs_f64());
+        let t = Instant::now();
+        let mut run = start(tile, s, Some(&start_mask), ctx, VulkanOptions::default())?;
+        let samples = samples_at(&mut run, s.iterations)?;
+        judge(backend, samples, t.elapsed().as_secs_f64());
     }
     Ok(out)
 }
@@ -242,95 +266,95 @@ pub fn run_stress(
     log: &mut dyn FnMut(&Check),
 ) -> Result<Vec<Check>> {
     let mut checks = Vec::new();
-    let mut push = |c: Check, checks: &mut Vec<Check>| {
+    let mut push = |c: Check| {
         log(&c);
         checks.push(c);
     };
     let taa = spec("taa", 2.1, 0.1)?;
-
-    // Long runs.
-    let tile = Tile::new(8, 8, 4, 1, 2)?;
-    let s = settings(taa, size.long_cpu, 1);
-    let mut run = Run::new(tile, s, None)?;
-    let c = long_run(
-        "long run, cpu",
-        size.long_cpu,
-        |to| {
-            while run.iteration() < to {
-                run.step();
-            }
-            Ok(run.samples().to_vec())
-        },
-        tile,
-        taa,
-    )?;
-    push(c, &mut checks);
-    if let Some(ctx) = ctx {
-        let s = settings(taa, size.long_gpu, 1);
-        let mut g = GpuRun::new(ctx, tile, s, None, GpuOptions::default())?;
-        let c = long_run(
-            "long run, vulkan",
-            size.long_gpu,
-            |to| {
-                while g.iteration() < to {
-                    g.step_batch(to - g.iteration())?;
-                }
-                g.samples()
-            },
-            tile,
-            taa,
-        )?;
-        push(c, &mut checks);
+    for c in long_runs(size, ctx, taa)? {
+        push(c);
     }
-
-    // Float32 GPU against the f64 CPU transport on the same slices.
     if let Some(ctx) = ctx {
-        for (kernel, tile) in [
-            ("spatial", Tile::new(16, 16, 4, 1, 2)?),
-            ("taa", Tile::new(16, 16, 8, 1, 2)?),
-            ("perceptual-taa", Tile::new(16, 16, 8, 2, 2)?),
-            ("taa", Tile::new(32, 32, 8, 1, 1)?),
-        ] {
-            let start = Instant::now();
-            let mask = Mask::white(tile, 21);
-            let mut s = settings(spec(kernel, 2.1, 0.1)?, 10, 21);
-            s.slices = Some(400);
-            let mut g = GpuRun::new(ctx, tile, s, Some(&mask), GpuOptions::default())?;
-            let mut diffs = Vec::new();
-            for iteration in [0u32, 7] {
-                let gpu = g.displacements(iteration)?;
-                let cpu = reference_displacements(&mask, &s, 400, iteration);
-                diffs.extend(gpu.iter().zip(&cpu).map(|(a, b)| (a - b).abs()));
-            }
-            diffs.sort_by(|a, b| a.total_cmp(b));
-            let beyond = diffs.iter().filter(|&&d| d > 1e-5).count();
-            let p999 = diffs[(diffs.len() * 999 / 1000).min(diffs.len() - 1)];
-            let worst = diffs[diffs.len() - 1];
-            push(
-                Check {
-                    group: "float32 GPU vs float64 CPU",
-                    name: format!("{kernel}, {}, 400 slices, 2 iterations", tile.describe()),
-                    figure: format!(
-                        "{beyond} of {} coordinates beyond 1e-5{}; largest {worst:.1e}; 99.9th percentile {p999:.1e}",
-                        diffs.len(),
-                        if beyond > 0 { " (near-ties of two projections ranked the other way in float32)" } else { "" }
-                    ),
-                    bound: "99.9% within 1e-5; rank swaps (<= 0.1%) within 1e-2".into(),
-                    passed: p999 <= 1e-5 && worst <= 1e-2,
-                    seconds: start.elapsed().as_secs_f64(),
-                },
-                &mut checks,
-            );
+        for c in float32_against_float64(ctx)? {
+            push(c);
         }
     }
-
-    // Accumulation.
-    push(accumulate_cpu(size.accumulate), &mut checks);
+    push(accumulate_cpu(size.accumulate));
     if let Some(ctx) = ctx {
-        push(accumulate_gpu(ctx, size.accumulate)?, &mut checks);
+        push(accumulate_gpu(ctx, size.accumulate)?);
     }
+    for c in extremes(size, ctx, taa)? {
+        push(c);
+    }
+    if let Some(c) = ctx.map(|c| larger_than_a_binding(c, taa)).transpose()?.flatten() {
+        push(c);
+    }
+    for c in determinism(ctx, taa)? {
+        push(c);
+    }
+    Ok(checks)
+}
 
-    // Extremes.
+/// Long runs on each backend.
+fn long_runs(size: StressSize, ctx: Option<&Context>, taa: KernelSpec) -> Result<Vec<Check>> {
+    let tile = Tile::new(8, 8, 4, 1, 2)?;
+    let mut out = Vec::new();
+    let mut run = start(tile, settings(taa, size.long_cpu, 1), None, None, VulkanOptions::default())?;
+    out.push(long_run("long run, cpu", size.long_cpu, |to| samples_at(&mut run, to), tile, taa)?);
+    if let Some(ctx) = ctx {
+        let mut g = start(tile, settings(taa, size.long_gpu, 1), None, Some(ctx), VulkanOptions::default())?;
+        out.push(long_run("long run, vulkan", size.long_gpu, |to| samples_at(&mut g, to), tile, taa)?);
+    }
+    Ok(out)
+}
+
+/// Float32 GPU displacements against the f64 CPU transport on the same slices.
+fn float32_against_float64(ctx: &Context) -> Result<Vec<Check>> {
+    let mut out = Vec::new();
+    for (kernel, tile) in [
+        ("spatial", Tile::new(16, 16, 4, 1, 2)?),
+        ("taa", Tile::new(16, 16, 8, 1, 2)?),
+        ("perceptual-taa", Tile::new(16, 16, 8, 2, 2)?),
+        ("taa", Tile::new(32, 32, 8, 1, 1)?),
+    ] {
+        let start_time = Instant::now();
+        let mask = Mask::white(tile, 21);
+        let mut s = settings(spec(kernel, 2.1, 0.1)?, 10, 21);
+        s.slices = Some(400);
+        let mut g = start(tile, s, Some(&mask), Some(ctx), VulkanOptions::default())?;
+        let mut diffs = Vec::new();
+        for iteration in [0u32, 7] {
+            let gpu = g.backend_mut().displacements(iteration)?;
+            let cpu = reference_displacements(&mask, &s, 400, iteration);
+            diffs.extend(gpu.iter().zip(&cpu).map(|(a, b)| (a - b).abs()));
+        }
+        diffs.sort_by(|a, b| a.total_cmp(b));
+        let beyond = diffs.iter().filter(|&&d| d > 1e-5).count();
+        let p999 = diffs[(diffs.len() * 999 / 1000).min(diffs.len() - 1)];
+        let worst = diffs[diffs.len() - 1];
+        out.push(Check {
+            group: "float32 GPU vs float64 CPU",
+            name: format!("{kernel}, {}, 400 slices, 2 iterations", tile.describe()),
+            figure: format!(
+                "{beyond} of {} coordinates beyond 1e-5{}; largest {worst:.1e}; 99.9th percentile {p999:.1e}",
+                diffs.len(),
+                if beyond > 0 {
+                    " (near-ties of two projections ranked the other way in float32)"
+                } else {
+                    ""
+                }
+            ),
+            bound: "99.9% within 1e-5; rank swaps (<= 0.1%) within 1e-2".into(),
+            passed: p999 <= 1e-5 && worst <= 1e-2,
+            seconds: start_time.elapsed().as_secs_f64(),
+        });
+    }
+    Ok(out)
+}
+
+/// Extreme settings and shapes; ties: every sample at the same value (every sort
+/// key ties), and the float extremes of [0, 1).
+fn extremes(size: StressSize, ctx: Option<&Context>, taa: KernelSpec) -> Result<Vec<Check>> {
     let n = size.extreme;
     let cases: Vec<(&str, Tile, KernelSpec)> = vec![
         ("sigma 0.25", Tile::new(16, 16, 4, 1, 2)?, spec("taa", 0.25, 0.1)?),
@@ -346,112 +370,100 @@ pub fn run_stress(
         ("1 x 1 x 1", Tile::new(1, 1, 1, 1, 1)?, taa),
         ("spp 16", Tile::new(8, 8, 4, 16, 2)?, taa),
     ];
+    let mut out = Vec::new();
     for (name, tile, kernel) in cases {
-        for c in extreme(name, tile, kernel, n, ctx, None)? {
-            push(c, &mut checks);
-        }
+        out.extend(extreme(name, tile, kernel, n, ctx, None)?);
     }
-    // Ties: every sample at the same value (every sort key ties), and the float
-    // extremes of [0, 1).
     let tile = Tile::new(8, 8, 4, 1, 2)?;
     let below_one = f32::from_bits(1.0f32.to_bits() - 1);
     for (name, value) in
         [("every sample 0.5", 0.5f32), ("every sample 0", 0.0), ("every sample 1 - ulp", below_one)]
     {
         let mask = Mask { tile, samples: vec![value; tile.values()], meta: vec![] };
-        for c in extreme(name, tile, taa, n, ctx, Some(&mask))? {
-            push(c, &mut checks);
-        }
+        out.extend(extreme(name, tile, taa, n, ctx, Some(&mask))?);
     }
+    Ok(out)
+}
 
-    // A tile whose accumulators exceed one binding (maxStorageBufferRange: 128 MiB
-    // on lavapipe): a clear error before any work, not a crash or a wrong result.
-    if let Some(ctx) = ctx {
-        let range = ctx.info().max_storage_buffer_range;
-        let start = Instant::now();
-        if range <= 512 << 20 {
-            // 8 bytes per value (fixed-point accumulators), one value more than fits.
-            let values = range / 8 + 1;
-            let width = 4096u64;
-            let tile = Tile::new(width as usize, values.div_ceil(width) as usize, 1, 1, 1)?;
-            let s = settings(taa, 1, 1);
-            let options = GpuOptions { deterministic: true, ..GpuOptions::default() };
-            let result = GpuRun::new(ctx, tile, s, None, options);
-            let message = result.err().map(|e| e.to_string()).unwrap_or_default();
-            let check = Check {
-                group: "extremes",
-                name: format!("{} (more than one binding of {} MiB), vulkan", tile.describe(), range >> 20),
-                figure: if message.is_empty() { "accepted".into() } else { format!("refused: {message}") },
-                bound: "refused, naming maxStorageBufferRange".into(),
-                passed: message.contains("maxStorageBufferRange"),
-                seconds: start.elapsed().as_secs_f64(),
-            };
-            push(check, &mut checks);
-        } else {
-            eprintln!(
-                "(a tile larger than one binding not tried: {} binds {} MiB)",
-                ctx.info().name,
-                range >> 20
-            );
-        }
+/// A tile whose accumulators exceed one binding (maxStorageBufferRange: 128 MiB
+/// on lavapipe): a clear error before any work, not a crash or a wrong result.
+fn larger_than_a_binding(ctx: &Context, taa: KernelSpec) -> Result<Option<Check>> {
+    let range = ctx.info().max_storage_buffer_range;
+    let start_time = Instant::now();
+    if range > 512 << 20 {
+        eprintln!(
+            "(a tile larger than one binding not tried: {} binds {} MiB)",
+            ctx.info().name,
+            range >> 20
+        );
+        return Ok(None);
     }
+    // 8 bytes per value (fixed-point accumulators), one value more than fits.
+    let values = range / 8 + 1;
+    let width = 4096u64;
+    let tile = Tile::new(width as usize, values.div_ceil(width) as usize, 1, 1, 1)?;
+    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let result = start(tile, settings(taa, 1, 1), None, Some(ctx), options);
+    let message = result.err().map(|e| e.to_string()).unwrap_or_default();
+    Ok(Some(Check {
+        group: "extremes",
+        name: format!("{} (more than one binding of {} MiB), vulkan", tile.describe(), range >> 20),
+        figure: if message.is_empty() { "accepted".into() } else { format!("refused: {message}") },
+        bound: "refused, naming maxStorageBufferRange".into(),
+        passed: message.contains("maxStorageBufferRange"),
+        seconds: start_time.elapsed().as_secs_f64(),
+    }))
+}
 
-    // Determinism.
+/// The same run, bit for bit: the CPU path across thread counts, the GPU's
+/// deterministic mode across runs.
+fn determinism(ctx: Option<&Context>, taa: KernelSpec) -> Result<Vec<Check>> {
     let tile = Tile::new(16, 16, 8, 2, 2)?;
     let s = settings(taa, 60, 5);
-    let start = Instant::now();
+    let start_time = Instant::now();
     let mut results = Vec::new();
     for threads in [1usize, 2, 3, 8] {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .map_err(|e| Error::invalid(format!("cannot start {threads} threads: {e}")))?;
-        let samples = pool.install(|| -> Result<Vec<u32>> {
-            let mut run = Run::new(tile, s, None)?;
-            while !run.finished() {
-                run.step();
-            }
-            Ok(run.samples().iter().map(|v| v.to_bits()).collect())
+        let samples = pool.install(|| -> Result<Vec<f32>> {
+            samples_at(&mut start(tile, s, None, None, VulkanOptions::default())?, s.iterations)
         })?;
-        results.push(samples);
+        results.push(samples.iter().map(|v| v.to_bits()).collect::<Vec<u32>>());
     }
-    let same = results.windows(2).all(|w| w[0] == w[1]);
-    push(
-        Check {
-            group: "determinism",
-            name: format!("CPU path, {}, 60 iterations, 1 / 2 / 3 / 8 threads", tile.describe()),
-            figure: if same { "bit-identical".into() } else { "DIFFERENT".into() },
-            bound: "bit-identical".into(),
-            passed: same,
-            seconds: start.elapsed().as_secs_f64(),
-        },
-        &mut checks,
-    );
+    let mut out = vec![same_check(
+        format!("CPU path, {}, 60 iterations, 1 / 2 / 3 / 8 threads", tile.describe()),
+        &results,
+        start_time,
+    )];
     if let Some(ctx) = ctx {
-        let start = Instant::now();
-        let options = GpuOptions { deterministic: true, ..GpuOptions::default() };
+        let start_time = Instant::now();
+        let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
         let mut runs = Vec::new();
         for _ in 0..3 {
-            let mut g = GpuRun::new(ctx, tile, s, None, options)?;
-            while !g.finished() {
-                g.step_batch(u32::MAX)?;
-            }
-            runs.push(g.samples()?.iter().map(|v| v.to_bits()).collect::<Vec<u32>>());
+            let samples = samples_at(&mut start(tile, s, None, Some(ctx), options)?, s.iterations)?;
+            runs.push(samples.iter().map(|v| v.to_bits()).collect::<Vec<u32>>());
         }
-        let same = runs.windows(2).all(|w| w[0] == w[1]);
-        push(
-            Check {
-                group: "determinism",
-                name: format!("GPU --deterministic, {}, 60 iterations, 3 runs", tile.describe()),
-                figure: if same { "bit-identical".into() } else { "DIFFERENT".into() },
-                bound: "bit-identical".into(),
-                passed: same,
-                seconds: start.elapsed().as_secs_f64(),
-            },
-            &mut checks,
-        );
+        out.push(same_check(
+            format!("GPU --deterministic, {}, 60 iterations, 3 runs", tile.describe()),
+            &runs,
+            start_time,
+        ));
     }
-    Ok(checks)
+    Ok(out)
+}
+
+fn same_check(name: String, results: &[Vec<u32>], start_time: Instant) -> Check {
+    let same = results.windows(2).all(|w| w[0] == w[1]);
+    Check {
+        group: "determinism",
+        name,
+        figure: if same { "bit-identical".into() } else { "DIFFERENT".into() },
+        bound: "bit-identical".into(),
+        passed: same,
+        seconds: start_time.elapsed().as_secs_f64(),
+    }
 }
 
 /// The checks as a Markdown table.

@@ -3,10 +3,11 @@
 
 mod common;
 
+use fsot::backend::BackendChoice;
 use fsot::bench::convergence::{convergence, SceneJudge};
-use fsot::engine::BackendChoice;
 use fsot::kernel::KernelSpec;
 use fsot::problem::Tile;
+use fsot::run::RunOptions;
 
 #[test]
 fn both_backends_converge_on_the_same_problem_and_their_checkpoints_are_in_order() {
@@ -16,14 +17,13 @@ fn both_backends_converge_on_the_same_problem_and_their_checkpoints_are_in_order
     let judge = SceneJudge::new(tile, Some(dir.path())).unwrap();
     let mut backends = vec![BackendChoice::Cpu];
     if common::gpu_context().is_some() {
-        // The engine turns the validation layer on from the environment; any
-        // message makes `convergence` fail.
-        std::env::set_var("FSOT_VALIDATION", "1");
+        // With the validation layer on, any message makes `convergence` fail.
         backends.push(BackendChoice::Vulkan);
     }
     let mut last_objective = Vec::new();
     for choice in backends {
-        let points = convergence(choice, tile, spec, 3, &[5, 20, 40], &judge).unwrap();
+        let base = RunOptions { validation: true, ..RunOptions::default() };
+        let points = convergence(choice, &base, tile, spec, 3, &[5, 20, 40], &judge).unwrap();
         let iterations: Vec<u32> = points.iter().map(|p| p.iteration).collect();
         assert_eq!(iterations, vec![0, 5, 20, 40], "{choice:?}");
         assert!(points.windows(2).all(|w| w[1].seconds > w[0].seconds), "{choice:?}: time must grow");

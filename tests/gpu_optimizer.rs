@@ -2,25 +2,30 @@
 
 mod common;
 
-use fsot::gpu::optimizer::{GpuOptions, GpuRun, TransportKind};
+use fsot::backend::Backend;
+use fsot::gpu::shape::LANE_MAX;
+use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::mask::Mask;
-use fsot::optimize::{optimize, Settings};
 use fsot::problem::Tile;
 use fsot::rng::seed_key;
+use fsot::run::optimize;
 use fsot::score::score;
+use fsot::settings::Settings;
 use fsot::slice::SliceSampler;
 use fsot::transport::{transport_slice, Scratch};
 
 /// The per-lane transport is for CPU implementations (lavapipe); a GPU must refuse
 /// it with a clear error. True when `transport` is refused here (checked).
-fn refused_here(ctx: &fsot::gpu::context::Context, transport: TransportKind) -> bool {
+fn refused_here(ctx: &fsot::vk::Context, transport: TransportKind) -> bool {
     if transport != TransportKind::PerLane || ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU {
         return false;
     }
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
-    let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
-    let err = GpuRun::new(ctx, tile, settings("taa", 5, 1), None, options).err().expect("per-lane on a GPU");
+    let options =
+        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    let err =
+        VulkanRun::new(ctx, tile, settings("taa", 5, 1), None, options).err().expect("per-lane on a GPU");
     assert!(err.to_string().contains("CPU implementations"), "{err}");
     true
 }
@@ -55,8 +60,8 @@ fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: Tr
     let tile = mask.tile;
     let mut s = settings(kernel, 10, 21);
     s.slices = Some(300);
-    let options = GpuOptions { deterministic, profile: false, transport: Some(transport) };
-    let mut gpu = GpuRun::new(&ctx, tile, s, Some(mask), options).unwrap();
+    let options = VulkanOptions { deterministic, transport: Some(transport), ..VulkanOptions::default() };
+    let mut gpu = VulkanRun::new(&ctx, tile, s, Some(mask), options).unwrap();
     for iteration in [0u32, 5] {
         let g = gpu.displacements(iteration).unwrap();
         let c = cpu_displacements(mask, &s, 300, iteration);
@@ -87,7 +92,7 @@ fn per_lane_classes_up_to_its_limit_give_the_cpu_displacements() {
     let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
     let kernel = Kernel::new(KernelSpec::from_name("gaussian", 2.1, None, 0.1, 60.0).unwrap(), &tile);
     let largest = kernel.taps.len() * 3;
-    assert!(largest > 1024 && largest <= fsot::gpu::optimizer::LANE_MAX as usize, "{largest}");
+    assert!(largest > 1024 && largest <= LANE_MAX as usize, "{largest}");
     compare_on_mask(&Mask::white(tile, 8), "gaussian", true, TransportKind::PerLane);
 }
 
@@ -128,13 +133,14 @@ fn large_classes_with(transport: TransportKind) {
     assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
     let mask = Mask::white(tile, 5);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
-    let mut gpu = GpuRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
+    let options =
+        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     assert!(gpu.large_capacity() > 1024);
     let (mut checked, mut ties) = (0, 0);
     for iteration in 0..400 {
         let slice = sampler.draw(iteration, 0);
-        let limit = if transport == TransportKind::PerLane { fsot::gpu::optimizer::LANE_MAX } else { 2048 };
+        let limit = if transport == TransportKind::PerLane { LANE_MAX } else { 2048 };
         if slice.len * 4 <= limit {
             continue;
         }
@@ -195,8 +201,9 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let run = |transport| {
-        let options = GpuOptions { deterministic: true, profile: false, transport: Some(transport) };
-        let mut g = GpuRun::new(&ctx, tile, settings("taa", 40, 3), None, options).unwrap();
+        let options =
+            VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+        let mut g = VulkanRun::new(&ctx, tile, settings("taa", 40, 3), None, options).unwrap();
         while !g.finished() {
             g.step_batch(u32::MAX).unwrap();
         }
@@ -219,14 +226,14 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let s = settings("taa", 70, 4);
-    let options = GpuOptions { deterministic: true, profile: false, transport: None };
-    let mut straight = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    let options = VulkanOptions { deterministic: true, transport: None, ..VulkanOptions::default() };
+    let mut straight = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
     while !straight.finished() {
         straight.step_batch(u32::MAX).unwrap();
     }
     // Stopped at 45 (not a multiple of the 32-iteration batch), saved, restored
     // into a fresh run through the checkpoint file format.
-    let mut first = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    let mut first = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
     while first.iteration() < 45 {
         first.step_batch(45 - first.iteration()).unwrap();
     }
@@ -235,7 +242,7 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     drop(first);
     let saved = fsot::checkpoint::decode(&bytes, &fp, &tile).unwrap();
     assert_eq!(saved.iteration, 45);
-    let mut resumed = GpuRun::new(&ctx, tile, s, None, options).unwrap();
+    let mut resumed = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
     resumed.restore(&saved).unwrap();
     while !resumed.finished() {
         resumed.step_batch(u32::MAX).unwrap();
@@ -252,7 +259,7 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
     let s = settings("taa", 150, 7);
     let cpu = optimize(tile, s, None).unwrap();
-    let mut gpu = GpuRun::new(&ctx, tile, s, None, GpuOptions::default()).unwrap();
+    let mut gpu = VulkanRun::new(&ctx, tile, s, None, VulkanOptions::default()).unwrap();
     let mut last = Vec::new();
     while !gpu.finished() {
         last = gpu.step_batch(u32::MAX).unwrap();
@@ -269,12 +276,12 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
 #[test]
 fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     let Some(ctx) = common::gpu_context() else { return };
-    let err = GpuRun::new(
+    let err = VulkanRun::new(
         &ctx,
         Tile::new(8, 8, 4, 1, 3).unwrap(),
         settings("taa", 5, 1),
         None,
-        GpuOptions::default(),
+        VulkanOptions::default(),
     )
     .err()
     .unwrap();
@@ -289,14 +296,16 @@ fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     let Some(host) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     {
-        let guest = fsot::gpu::context::Context::wrap(host.external()).unwrap();
-        let mut run = GpuRun::new(&guest, tile, settings("taa", 20, 2), None, GpuOptions::default()).unwrap();
+        let guest = fsot::vk::Context::wrap(host.external()).unwrap();
+        let mut run =
+            VulkanRun::new(&guest, tile, settings("taa", 20, 2), None, VulkanOptions::default()).unwrap();
         while !run.finished() {
             run.step_batch(u32::MAX).unwrap();
         }
         assert!(run.samples().unwrap().iter().all(|v| (0.0..1.0).contains(v)));
     } // guest dropped: the host's device must still work
-    let mut again = GpuRun::new(&host, tile, settings("taa", 5, 2), None, GpuOptions::default()).unwrap();
+    let mut again =
+        VulkanRun::new(&host, tile, settings("taa", 5, 2), None, VulkanOptions::default()).unwrap();
     again.step_batch(u32::MAX).unwrap();
     drop(again);
     common::assert_no_validation_messages(&host);

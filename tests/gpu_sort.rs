@@ -3,8 +3,9 @@
 
 mod common;
 
-use fsot::gpu::sort::{float_key, RadixSort};
 use fsot::rng::{derive, Stream};
+use fsot::vk::sort::float_key;
+use fsot::vk::{RadixSort, SortCount};
 
 fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
@@ -34,7 +35,7 @@ fn sorts_like_the_cpu_at_awkward_sizes() {
     let Some(ctx) = common::gpu_context() else {
         return;
     };
-    let mut sort = RadixSort::new(&ctx, (1 << 22) + 1, None).unwrap();
+    let mut sort = RadixSort::new(&ctx, (1 << 22) + 1, SortCount::Host).unwrap();
     let mut rng = Stream::new(derive(5, 5));
     let mut sizes = vec![0usize, 1, 2, 3, 7, 255, 256, 257, 2047, 2048, 2049, 4095, 65537];
     for k in [12u32, 16, 20, 22] {
@@ -54,7 +55,7 @@ fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
     let Some(ctx) = common::gpu_context() else {
         return;
     };
-    let mut sort = RadixSort::new(&ctx, 100_000, None).unwrap();
+    let mut sort = RadixSort::new(&ctx, 100_000, SortCount::Host).unwrap();
     let mut rng = Stream::new(derive(6, 6));
     // Heavy duplicates: 5 distinct keys.
     let dup: Vec<u32> =
@@ -105,8 +106,8 @@ fn refuses_more_pairs_than_it_can_hold() {
     let Some(ctx) = common::gpu_context() else {
         return;
     };
-    let mut sort = RadixSort::new(&ctx, 1000, None).unwrap();
+    let mut sort = RadixSort::new(&ctx, 1000, SortCount::Host).unwrap();
     assert!(sort.set_count(1001).is_err());
-    assert!(RadixSort::new(&ctx, u32::MAX, None).is_err());
+    assert!(RadixSort::new(&ctx, u32::MAX, SortCount::Host).is_err());
     common::assert_no_validation_messages(&ctx);
 }

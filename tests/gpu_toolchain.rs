@@ -3,10 +3,11 @@
 
 mod common;
 
-use fsot::gpu::buffer::{Buffer, Location};
-use fsot::gpu::pipeline::{barrier, copy, submit_and_wait, ComputePipeline};
+use fsot::gpu::layout::{binding, HashPush};
 use fsot::gpu::shaders;
 use fsot::rng::hash2;
+use fsot::vk::commands::barrier;
+use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location};
 
 #[test]
 fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
@@ -22,25 +23,27 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
     let workgroup = 64u32;
     let bytes = count as u64 * 4;
     let out = Buffer::new(&ctx, bytes, Location::Device, "hash-out").unwrap();
-    let readback = Buffer::new(&ctx, bytes, Location::Readback, "hash-readback").unwrap();
-    let pipeline = ComputePipeline::new(&ctx, shaders::HASH_FILL, 1, 8, &[workgroup]).unwrap();
-    pipeline.bind(&[&out]).unwrap();
-    let push: Vec<u8> = [key, count].iter().flat_map(|v| v.to_ne_bytes()).collect();
-    submit_and_wait(&ctx, |cmd| {
-        pipeline.dispatch(cmd, [count.div_ceil(workgroup), 1, 1], &push);
-        barrier(&ctx, cmd);
-        copy(&ctx, cmd, &out, &readback);
+    let desc = ComputeDesc {
+        spirv: shaders::HASH_FILL,
+        bindings: binding::BINDINGS,
+        push_bytes: std::mem::size_of::<HashPush>() as u32,
+        spec: &[workgroup],
+        sets: 1,
+    };
+    let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
+    pipeline.bind(0, &[(binding::HASH_VALUES, &out)]).unwrap();
+    let push = HashPush { key, count };
+    ctx.submit(|cmd| {
+        pipeline.dispatch(cmd, 0, [count.div_ceil(workgroup), 1, 1], bytemuck::bytes_of(&push));
         barrier(&ctx, cmd);
     })
     .unwrap();
-    let got: Vec<u32> =
-        readback.read().unwrap().chunks_exact(4).map(|c| u32::from_ne_bytes(c.try_into().unwrap())).collect();
+    let got: Vec<u32> = out.download(count as usize).unwrap();
     for (i, &v) in got.iter().enumerate() {
         assert_eq!(v, hash2(key, i as u32), "value {i}");
     }
     drop(pipeline);
     drop(out);
-    drop(readback);
     common::assert_no_validation_messages(&ctx);
 }
 

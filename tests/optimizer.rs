@@ -3,9 +3,10 @@
 use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::kernel::KernelSpec;
 use fsot::mask::Mask;
-use fsot::optimize::{optimize, Settings};
 use fsot::problem::Tile;
+use fsot::run::optimize;
 use fsot::score::score;
+use fsot::settings::Settings;
 
 fn spec(name: &str) -> KernelSpec {
     KernelSpec::from_name(name, 2.1, None, 0.1, 60.0).unwrap()

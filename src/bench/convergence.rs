@@ -9,21 +9,25 @@
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::engine::{BackendChoice, Engine, Started};
+use serde::Serialize;
+
+use crate::backend::{BackendChoice, BackendKind};
 use crate::error::Result;
 use crate::eval::eye::Eye;
+use crate::eval::metric::relative_errors;
 use crate::eval::perceived::{perceived_error, TestSetup};
 use crate::eval::render::{references, render, taa, MaskSampler, Shot};
 use crate::eval::scenes::Scene;
-use crate::gpu::optimizer::GpuOptions;
+use crate::gpu::VulkanOptions;
 use crate::kernel::KernelSpec;
 use crate::mask::Mask;
-use crate::optimize::Settings;
 use crate::problem::Tile;
+use crate::run::{CancelFlag, Run, RunOptions};
 use crate::score::{score, SCORE_SLICES};
+use crate::settings::Settings;
 
 /// One checkpoint.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Point {
     pub backend: String,
     pub machine: String,
@@ -80,22 +84,6 @@ impl Point {
             self.perceived_ratio
         )
     }
-
-    pub fn json(&self) -> String {
-        format!(
-            "{{\"suite\": \"convergence\", \"backend\": \"{}\", \"machine\": \"{}\", \"iteration\": {}, \
-             \"seconds\": {:e}, \"gpu_seconds\": {}, \"objective_ratio\": {:e}, \"prelmse_ratio\": {:e}, \
-             \"perceived_ratio\": {:e}}}",
-            self.backend,
-            self.machine_quoted(),
-            self.iteration,
-            self.seconds,
-            self.gpu_seconds.map(|s| format!("{s:e}")).unwrap_or_else(|| "null".into()),
-            self.objective_ratio,
-            self.prelmse_ratio,
-            self.perceived_ratio
-        )
-    }
 }
 
 /// The scene judge: a soft shadow, 64 x 64, TAA, the eye at sigma 2.1.
@@ -139,20 +127,7 @@ impl SceneJudge {
         let n = self.shot.image;
         let frames =
             taa(&render(self.scene, self.shot, &MaskSampler::new(mask, self.scene.dims(), seed)), 0.1);
-        let error: Vec<Vec<f64>> = frames
-            .iter()
-            .zip(&self.reference)
-            .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect())
-            .collect();
-        let (mut sum, mut count) = (0.0, 0usize);
-        for f in self.warmup..self.shot.frames {
-            let seen = self.eye.filter(&error, f, n);
-            for (e, r) in seen.iter().zip(&self.seen_reference[f - self.warmup]) {
-                sum += e * e / (r * r + crate::eval::suite::EPSILON);
-                count += 1;
-            }
-        }
-        sum / count as f64
+        relative_errors(&frames, &self.reference, &self.seen_reference, &self.eye, self.warmup, n).0
     }
 
     pub fn ratio(&self, mask: &Mask) -> f64 {
@@ -166,9 +141,12 @@ impl SceneJudge {
     }
 }
 
-/// Runs the problem on one backend to the last checkpoint, judging each.
+/// Runs the problem on one backend to the last checkpoint, judging each. `base`:
+/// the device and validation settings (its backend and Vulkan options are set
+/// here).
 pub fn convergence(
     choice: BackendChoice,
+    base: &RunOptions,
     tile: Tile,
     spec: KernelSpec,
     seed: u64,
@@ -179,48 +157,39 @@ pub fn convergence(
     let mut settings = Settings::new(spec, seed);
     settings.iterations = last;
     // Profiled: timestamps around every pass give the GPU's own time.
-    let gpu = GpuOptions { deterministic: false, profile: true, transport: None };
-    let Started { mut engine, note } = Engine::start(choice, tile, settings, None, None, gpu)?;
-    let backend = if engine.is_gpu() { "vulkan" } else { "cpu" }.to_string();
-    let machine = if engine.is_gpu() {
-        note.trim_start_matches("backend: vulkan on ").to_string()
-    } else {
-        super::machine::cpu_description()
+    let vulkan = VulkanOptions { profile: true, ..VulkanOptions::default() };
+    let options = RunOptions { backend: choice, vulkan, ..base.clone() };
+    let mut run = Run::start(tile, settings, None, options)?;
+    let kind = run.backend().kind();
+    let machine = match kind {
+        BackendKind::Vulkan => run.note().trim_start_matches("vulkan on ").to_string(),
+        BackendKind::Cpu => super::machine::cpu_description(),
     };
-    let mut points = Vec::new();
-    let mut elapsed = Duration::ZERO;
-    let judge_at = |engine: &Engine, elapsed: Duration| -> Result<Point> {
-        let mask = engine.mask()?;
-        let gpu_seconds = match engine {
-            Engine::Gpu(r) => {
-                Some((r.profile.transport_ns + r.profile.large_ns + r.profile.update_ns) * 1e-9)
-            }
-            Engine::Cpu(_) => None,
-        };
+    let judge_at = |run: &Run, elapsed: Duration| -> Result<Point> {
+        let mask = run.backend().mask()?;
         Ok(Point {
-            backend: backend.clone(),
+            backend: kind.name().to_string(),
             machine: machine.clone(),
-            iteration: engine.iteration(),
+            iteration: run.iteration(),
             seconds: elapsed.as_secs_f64(),
-            gpu_seconds,
+            gpu_seconds: run.backend().report().profile.map(|p| p.seconds()),
             objective_ratio: score(&mask, spec, SCORE_SLICES).ratio(),
             prelmse_ratio: judge.ratio(&mask),
             perceived_ratio: judge.perceived_ratio(&mask),
         })
     };
-    points.push(judge_at(&engine, elapsed)?);
+    let mut elapsed = Duration::ZERO;
+    let mut points = vec![judge_at(&run, elapsed)?];
     let mut sorted: Vec<u32> = checkpoints.iter().copied().filter(|&c| c > 0).collect();
     sorted.sort_unstable();
     sorted.dedup();
     for c in sorted {
         let start = Instant::now();
-        while engine.iteration() < c {
-            engine.step_up_to(c - engine.iteration())?;
-        }
+        run.advance(c, &CancelFlag::new(), &mut |_| {})?;
         elapsed += start.elapsed();
-        points.push(judge_at(&engine, elapsed)?);
+        points.push(judge_at(&run, elapsed)?);
     }
-    let messages = engine.validation_messages();
+    let messages = run.backend().report().validation_messages;
     if !messages.is_empty() {
         return Err(crate::error::Error::invalid(format!(
             "the Vulkan validation layer reported {} message(s), the first: {}",

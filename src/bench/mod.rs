@@ -6,6 +6,7 @@ pub mod plot;
 pub mod scaling;
 pub mod scatter;
 pub mod sort;
+pub mod timing;
 
 pub use scatter::{bench_scatter, ScatterBench};
 pub use sort::{bench_sort, SortBench};

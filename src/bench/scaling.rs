@@ -4,10 +4,12 @@
 
 use std::time::Instant;
 
+use crate::backend::BackendChoice;
 use crate::error::{Error, Result};
 use crate::kernel::KernelSpec;
-use crate::optimize::{Run, Settings};
 use crate::problem::Tile;
+use crate::run::{CancelFlag, Run, RunOptions};
+use crate::settings::Settings;
 
 /// One configuration's figures.
 #[derive(Clone, Debug, PartialEq)]
@@ -23,12 +25,11 @@ pub struct Scale {
 pub fn measure(tile: Tile, iterations: u32) -> Result<(u32, f64)> {
     let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0)?, 1);
     settings.iterations = iterations.max(1);
-    let mut run = Run::new(tile, settings, None)?;
+    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let mut run = Run::start(tile, settings, None, options)?;
     let start = Instant::now();
-    while !run.finished() {
-        run.step();
-    }
-    Ok((run.slices_per_iteration(), start.elapsed().as_secs_f64() / settings.iterations as f64))
+    run.run(&CancelFlag::new(), &mut |_| {})?;
+    Ok((run.backend().slices_per_iteration(), start.elapsed().as_secs_f64() / settings.iterations as f64))
 }
 
 /// Peak resident memory of this process (VmHWM), where /proc has it.

@@ -1,7 +1,7 @@
 //! The gradient scatter on its own: `n` contributions added into `n / 16`
 //! accumulators at random indices (the shape of the optimizer's scatter, where each
 //! sample receives a contribution from many slices), on the GPU with the transport
-//! passes' helper (`glsl/scatter_add_body.glsl`) in fixed point and, where the
+//! passes' helper (`glsl/fsot/scatter_add.comp`) in fixed point and, where the
 //! device has them, float atomics; on the CPU with the CPU path's accumulator.
 //! Every result is checked against a sum in f64.
 
@@ -9,15 +9,14 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::cpu::{Accumulator, FIXED_SCALE};
+use super::timing::median;
+use crate::cpu_backend::{Accumulator, FIXED_SCALE};
 use crate::error::{Error, Result};
-use crate::gpu::buffer::{Buffer, Location};
-use crate::gpu::context::Context;
-use crate::gpu::pipeline::{barrier, submit_and_wait, ComputePipeline};
+use crate::gpu::layout::{binding, ScatterPush};
 use crate::gpu::shaders;
-use crate::gpu::sort::{as_bytes, copy_range, from_bytes};
-use crate::gpu::timer::Timer;
 use crate::rng::{derive, Stream};
+use crate::vk::commands::{barrier, zero};
+use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, Location, Timer};
 
 /// Contributions per accumulator.
 pub const FAN_IN: u32 = 16;
@@ -67,11 +66,6 @@ pub fn reference_sums(idx: &[u32], val: &[f32], targets: u32) -> Vec<f64> {
     sums
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
 fn worst(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
@@ -86,14 +80,8 @@ struct DeviceInput {
 
 fn upload(ctx: &Context, idx: &[u32], val: &[f32], targets: u32) -> Result<DeviceInput> {
     let n = idx.len() as u32;
-    let bytes = n as u64 * 4;
-    let idx_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-targets")?;
-    let val_buf = Buffer::new(ctx, bytes, Location::Device, "scatter-values")?;
-    let mut up = Buffer::new(ctx, bytes, Location::Upload, "scatter-upload")?;
-    up.write(as_bytes(idx))?;
-    submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &idx_buf, bytes))?;
-    up.write(as_bytes(val))?;
-    submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &val_buf, bytes))?;
+    let idx_buf = Buffer::with_data(ctx, idx, Location::Device, "scatter-targets")?;
+    let val_buf = Buffer::with_data(ctx, val, Location::Device, "scatter-values")?;
     Ok(DeviceInput { idx: idx_buf, val: val_buf, n, targets })
 }
 
@@ -133,34 +121,37 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
     let width = if float { 4 } else { 8 };
     let acc_bytes = targets as u64 * width;
     let acc = Buffer::new(ctx, acc_bytes, Location::Device, "scatter-acc")?;
-    let pipeline = ComputePipeline::new(ctx, spirv, 3, 4, &[WORKGROUP])?;
-    pipeline.bind(&[idx, val, &acc])?;
+    let desc = ComputeDesc {
+        spirv,
+        bindings: binding::BINDINGS,
+        push_bytes: std::mem::size_of::<ScatterPush>() as u32,
+        spec: &[WORKGROUP],
+        sets: 1,
+    };
+    let pipeline = ComputePipeline::new(ctx, &desc)?;
+    pipeline
+        .bind(0, &[(binding::SCATTER_TARGETS, idx), (binding::SCATTER_VALUES, val), (binding::ACC, &acc)])?;
     let runs = repeats + 2;
     let timer = Timer::new(ctx, 2 * runs)?;
     let groups = n.div_ceil(WORKGROUP);
-    submit_and_wait(ctx, |cmd| {
+    let push = ScatterPush { count: n };
+    ctx.submit(|cmd| {
         timer.reset(cmd);
         for r in 0..runs {
-            unsafe { ctx.device().cmd_fill_buffer(cmd, acc.raw, 0, acc_bytes, 0) };
+            zero(ctx, cmd, &acc, 0, acc_bytes);
             barrier(ctx, cmd);
             timer.stamp(cmd, 2 * r);
-            pipeline.dispatch(cmd, [groups, 1, 1], &n.to_ne_bytes());
+            pipeline.dispatch(cmd, 0, [groups, 1, 1], bytemuck::bytes_of(&push));
             barrier(ctx, cmd);
             timer.stamp(cmd, 2 * r + 1);
         }
     })?;
     let ns = timer.read_ns(2 * runs)?;
     let seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
-    let down = Buffer::new(ctx, acc_bytes, Location::Readback, "scatter-readback")?;
-    submit_and_wait(ctx, |cmd| {
-        copy_range(ctx, cmd, &acc, &down, acc_bytes);
-        barrier(ctx, cmd);
-    })?;
-    let bytes = down.read()?;
     let sums = if float {
-        from_bytes::<f32>(bytes).into_iter().map(f64::from).collect()
+        acc.download::<f32>(targets as usize)?.into_iter().map(f64::from).collect()
     } else {
-        from_bytes::<i64>(bytes).into_iter().map(|q| q as f64 / FIXED_SCALE).collect()
+        acc.download::<i64>(targets as usize)?.into_iter().map(|q| q as f64 / FIXED_SCALE).collect()
     };
     Ok((seconds, sums))
 }

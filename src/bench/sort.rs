@@ -4,13 +4,11 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::timing::median;
 use crate::error::{Error, Result};
-use crate::gpu::buffer::{Buffer, Location};
-use crate::gpu::context::Context;
-use crate::gpu::pipeline::{barrier, submit_and_wait};
-use crate::gpu::sort::{as_bytes, copy_range, from_bytes, RadixSort};
-use crate::gpu::timer::Timer;
 use crate::rng::{derive, Stream};
+use crate::vk::commands::{barrier, copy};
+use crate::vk::{Buffer, Context, Location, RadixSort, SortCount, Timer};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SortBench {
@@ -37,11 +35,6 @@ impl SortBench {
     }
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
 /// Sorts `n` random 32-bit keys with 32-bit payloads `repeats` times on the GPU
 /// (after a warm-up, the same input restored before each run) and on the CPU;
 /// checks the GPU result against the CPU's.
@@ -52,26 +45,18 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     let mut rng = Stream::new(derive(0xbe7c, n));
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
     let vals: Vec<u32> = (0..n).collect();
-    let sort = RadixSort::new(ctx, n, None)?;
-    let mut sort = sort;
+    let mut sort = RadixSort::new(ctx, n, SortCount::Host)?;
     sort.set_count(n)?;
     let bytes = n as u64 * 4;
-    let pristine_k = Buffer::new(ctx, bytes, Location::Device, "bench-keys")?;
-    let pristine_v = Buffer::new(ctx, bytes, Location::Device, "bench-vals")?;
-    {
-        let mut up = Buffer::new(ctx, bytes, Location::Upload, "bench-upload")?;
-        up.write(as_bytes(&keys))?;
-        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &pristine_k, bytes))?;
-        up.write(as_bytes(&vals))?;
-        submit_and_wait(ctx, |cmd| copy_range(ctx, cmd, &up, &pristine_v, bytes))?;
-    }
+    let pristine_k = Buffer::with_data(ctx, &keys, Location::Device, "bench-keys")?;
+    let pristine_v = Buffer::with_data(ctx, &vals, Location::Device, "bench-vals")?;
     let runs = repeats + 2;
     let timer = Timer::new(ctx, 2 * runs)?;
-    submit_and_wait(ctx, |cmd| {
+    ctx.submit(|cmd| {
         timer.reset(cmd);
         for r in 0..runs {
-            copy_range(ctx, cmd, &pristine_k, &sort.keys[0], bytes);
-            copy_range(ctx, cmd, &pristine_v, &sort.vals[0], bytes);
+            copy(ctx, cmd, &pristine_k, &sort.keys[0], bytes, 0);
+            copy(ctx, cmd, &pristine_v, &sort.vals[0], bytes, 0);
             barrier(ctx, cmd);
             timer.stamp(cmd, 2 * r);
             sort.record(cmd, 32, Some(n));
@@ -82,10 +67,10 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     let gpu_seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
     // One more run with a timestamp after every dispatch, for the breakdown.
     let stages = Timer::new(ctx, 17)?;
-    submit_and_wait(ctx, |cmd| {
+    ctx.submit(|cmd| {
         stages.reset(cmd);
-        copy_range(ctx, cmd, &pristine_k, &sort.keys[0], bytes);
-        copy_range(ctx, cmd, &pristine_v, &sort.vals[0], bytes);
+        copy(ctx, cmd, &pristine_k, &sort.keys[0], bytes, 0);
+        copy(ctx, cmd, &pristine_v, &sort.vals[0], bytes, 0);
         barrier(ctx, cmd);
         sort.record_timed(cmd, 32, Some(n), Some(&stages));
     })?;
@@ -98,12 +83,7 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
         stages_ms[2] += (t[b + 4] - t[b + 3]) * 1e-6;
     }
     // Check the last run against the CPU.
-    let down = Buffer::new(ctx, bytes, Location::Readback, "bench-readback")?;
-    submit_and_wait(ctx, |cmd| {
-        copy_range(ctx, cmd, &sort.vals[0], &down, bytes);
-        barrier(ctx, cmd);
-    })?;
-    let gpu_vals: Vec<u32> = from_bytes(down.read()?);
+    let gpu_vals: Vec<u32> = sort.vals[0].download(n as usize)?;
     let input: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
     let mut pairs = Vec::new();
     let mut cpu_times = Vec::new();

@@ -2,6 +2,7 @@
 //! as a display (TAA) and an eye would, and measure what is left.
 pub mod eye;
 pub mod integrands;
+pub mod metric;
 pub mod perceived;
 pub mod pictures;
 pub mod render;

@@ -12,18 +12,19 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::baselines::fast::{fast_mask, FastSpec, Filter};
-use crate::baselines::stbn::stbn_mask_with;
+use crate::baselines::fast::{FastSpec, Filter};
 use crate::error::{Error, Result};
 use crate::eval::eye::Eye;
+use crate::eval::metric::relative_errors;
 use crate::eval::pictures::scene_pictures;
 use crate::eval::render::{references, render, taa, MaskSampler, Shot};
 use crate::eval::scenes::Scene;
 use crate::io::atomic::AtomicFile;
 use crate::kernel::KernelSpec;
 use crate::mask::Mask;
-use crate::optimize::{optimize, Settings};
+use crate::method::{make, Method};
 use crate::problem::Tile;
+use crate::settings::Settings;
 
 pub const EPSILON: f64 = 0.01;
 pub const TAA_ALPHA: f64 = 0.1;
@@ -105,31 +106,32 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> R
         }
     }
     let seed = 1;
-    let fsot = |kernel: &str| -> Result<Mask> {
+    let fsot = |kernel: &str| -> Result<Method> {
         let mut s = Settings::new(KernelSpec::from_name(kernel, sigma, None, TAA_ALPHA, 60.0)?, seed);
         s.iterations = size.iterations;
-        optimize(t, s, None)
+        Ok(Method::Fsot(s))
     };
-    let mask = match method {
-        "white" => Mask::white(t, seed),
+    let method = match method {
+        "white" => Method::White,
         "fsot-spatial" => fsot("spatial")?,
         "ours-gaussian" => fsot("gaussian")?,
         "ours-taa" => fsot("taa")?,
         "ours-perceptual" => fsot("perceptual")?,
         "ours-perceptual-taa" => fsot("perceptual-taa")?,
         // STBN keeps its own sigma (1.9, its paper's); vector masks by annealing.
-        "stbn" => stbn_mask_with(t, 1.9, 1.9, size.passes, seed, |_, _| {})?,
+        "stbn" => Method::Stbn { sigma: 1.9, sigma_t: 1.9, passes: size.passes },
         // FAST's Gaussian exp(-r^2 / (2 s^2)) matches the eye's exp(-r^2 /
         // sigma^2) at s = sigma / sqrt 2 (1.3435 for 1.9, as published).
-        "fast" => {
-            let spec = FastSpec {
+        "fast" => Method::Fast {
+            spec: FastSpec {
                 spatial: Filter::Gaussian { sigma: sigma / std::f64::consts::SQRT_2 },
                 ..FastSpec::default()
-            };
-            fast_mask(t, &spec, size.passes, seed, |_, _| {})?.0
-        }
+            },
+            passes: size.passes,
+        },
         other => return Err(Error::invalid(format!("unknown method `{other}`"))),
     };
+    let mask = make(&method, t, seed, &mut |_, _| {})?.mask;
     crate::io::atomic::make_folder(cache)?;
     crate::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)
@@ -140,33 +142,6 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> R
 struct SceneReference {
     frames: [Vec<Vec<f64>>; 2],
     seen: [Vec<Vec<f64>>; 2],
-}
-
-/// (pRelMSE, RelMSE) of one render against the reference.
-fn errors(
-    render: &[Vec<f64>],
-    reference: &[Vec<f64>],
-    seen_reference: &[Vec<f64>],
-    eye: &Eye,
-    start: usize,
-    n: usize,
-) -> (f64, f64) {
-    let m = eye.margin;
-    let inner = n - 2 * m;
-    let error: Vec<Vec<f64>> =
-        render.iter().zip(reference).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
-    let (mut p_sum, mut r_sum, mut count) = (0.0, 0.0, 0usize);
-    for f in start..render.len() {
-        let seen = eye.filter(&error, f, n);
-        for (i, (&e, &r)) in seen.iter().zip(&seen_reference[f - start]).enumerate() {
-            p_sum += e * e / (r * r + EPSILON);
-            let (x, y) = (i % inner + m, i / inner + m);
-            let (e, r) = (error[f][y * n + x], reference[f][y * n + x]);
-            r_sum += e * e / (r * r + EPSILON);
-            count += 1;
-        }
-    }
-    (p_sum / count as f64, r_sum / count as f64)
 }
 
 /// Runs the evaluation; `log` gets a line per step.
@@ -211,7 +186,7 @@ pub fn run_eval(
                     let with_taa = taa(&image, TAA_ALPHA);
                     for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
                         let (p, rel) =
-                            errors(frames, &reference.frames[k], &reference.seen[k], &eye, start, n);
+                            relative_errors(frames, &reference.frames[k], &reference.seen[k], &eye, start, n);
                         sums[k].0 += p / size.renders as f64;
                         sums[k].1 += rel / size.renders as f64;
                     }

@@ -1,18 +1,61 @@
-//! Rust mirrors of the push-constant blocks in `glsl/common.glsl` and
-//! `glsl/radix_common.glsl`. Field order and types must match the GLSL structs;
-//! `tests/gpu_layout` style checks live in the unit tests below.
+//! The Rust mirror of `glsl/fsot/bindings.glsl`: binding indices, push-constant
+//! structs and buffer records, each declared once here. `tests/spirv_layout.rs`
+//! checks every offset, size and binding against the compiled SPIR-V.
 
-/// Plain data that can be handed to Vulkan as bytes.
-pub trait Pod: Copy {
-    fn bytes(&self) -> &[u8] {
-        // Safe for the #[repr(C)] structs below: u32/f32 fields only, no padding.
-        unsafe { std::slice::from_raw_parts(self as *const Self as *const u8, std::mem::size_of::<Self>()) }
-    }
+use bytemuck::{Pod, Zeroable};
+
+/// Binding indices (`FSOT_BINDING_*`); every fsot pass uses this one layout.
+pub mod binding {
+    pub const SAMPLES: u32 = 0;
+    pub const TAPS: u32 = 1;
+    pub const ACC: u32 = 2;
+    pub const COSTS: u32 = 3;
+    pub const LARGE_META: u32 = 4;
+    pub const LARGE_KEYS: u32 = 5;
+    pub const LARGE_VALS: u32 = 6;
+    pub const LARGE_POINTS: u32 = 7;
+    pub const LARGE_PROJ: u32 = 8;
+    pub const LARGE_SEG: u32 = 9;
+    pub const LARGE_PKEY: u32 = 10;
+    pub const FIRST: u32 = 11;
+    pub const SECOND: u32 = 12;
+    pub const GATHER_TABLE: u32 = 13;
+    pub const LARGE_ARGS: u32 = 14;
+    pub const SCATTER_TARGETS: u32 = 15;
+    pub const SCATTER_VALUES: u32 = 16;
+    pub const HASH_VALUES: u32 = 17;
+    /// Bindings in the layout (`FSOT_BINDINGS`).
+    pub const BINDINGS: u32 = 18;
+
+    /// Every binding with the name of its block in GLSL.
+    pub const BLOCKS: [(&str, u32); 18] = [
+        ("Samples", SAMPLES),
+        ("Taps", TAPS),
+        ("Acc", ACC),
+        ("Costs", COSTS),
+        ("LargeMeta", LARGE_META),
+        ("LargeKeys", LARGE_KEYS),
+        ("LargeVals", LARGE_VALS),
+        ("LargePoints", LARGE_POINTS),
+        ("LargeProj", LARGE_PROJ),
+        ("LargeSeg", LARGE_SEG),
+        ("LargePKey", LARGE_PKEY),
+        ("First", FIRST),
+        ("Second", SECOND),
+        ("GatherTable", GATHER_TABLE),
+        ("LargeArgs", LARGE_ARGS),
+        ("ScatterTargets", SCATTER_TARGETS),
+        ("ScatterValues", SCATTER_VALUES),
+        ("HashValues", HASH_VALUES),
+    ];
 }
 
-/// `TransportPush` in common.glsl.
+/// Fixed-point scale of the objective's squared distances (`FSOT_COST_SCALE`).
+pub const COST_SCALE: f64 = 4_294_967_296.0;
+
+/// `TransportPush`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TransportPush {
     pub slice_key: u32,
     pub iteration: u32,
@@ -27,11 +70,10 @@ pub struct TransportPush {
     pub large_capacity: u32,
     pub pad: u32,
 }
-impl Pod for TransportPush {}
 
-/// `UpdatePush` in common.glsl.
+/// `UpdatePush`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct UpdatePush {
     pub values: u32,
     pub rule: u32,
@@ -46,40 +88,50 @@ pub struct UpdatePush {
     pub bias2: f32,
     pub pad: u32,
 }
-impl Pod for UpdatePush {}
 
-/// `RadixPush` in radix_common.glsl.
+/// `ScatterPush`.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RadixPush {
-    pub shift: u32,
-    pub blocks: u32,
-    pub chunks: u32,
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct ScatterPush {
+    pub count: u32,
+}
+
+/// `HashPush`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct HashPush {
+    pub key: u32,
+    pub count: u32,
+}
+
+/// The head of `LargeMeta`, before its `LargeSegment`s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct LargeMetaHead {
+    pub large_count: u32,
+    pub large_segments: u32,
+    pub large_overflow: u32,
+    pub large_pad: u32,
+}
+
+/// `LargeSegment`: one large class in the large-class buffers.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct LargeSegment {
+    pub slice: u32,
+    pub first: u32,
+    pub size: u32,
     pub pad: u32,
 }
-impl Pod for RadixPush {}
 
-/// `LargePush` in transport_large.comp.
+/// One cost slot of `Costs`: squared distances (COST_SCALE fixed point), count.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct LargePush {
-    pub transport: TransportPush,
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct CostSlot {
+    pub squared: i64,
+    pub count: i64,
 }
-impl Pod for LargePush {}
 
-/// Byte offset of a kernel tap table entry: (dx, dy, dt, level threshold).
-pub type TapEntry = [u32; 4];
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn push_blocks_have_the_glsl_sizes() {
-        // 12 scalars each; push constants must stay within the 128 bytes every
-        // device guarantees.
-        assert_eq!(std::mem::size_of::<TransportPush>(), 48);
-        assert_eq!(std::mem::size_of::<UpdatePush>(), 48);
-        assert_eq!(std::mem::size_of::<RadixPush>(), 16);
-    }
-}
+/// `LargeArgs`: the large-class stage's indirect dispatches.
+pub const ARG_GATHER: u64 = 0;
+pub const ARG_SEGMENTS: u64 = 16;

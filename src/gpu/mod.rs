@@ -1,26 +1,41 @@
-//! A small, explicit Vulkan layer on `ash` and `gpu-allocator`: a context (instance,
-//! device, queue, allocator, validation messages), buffers that own their memory,
-//! compute pipelines built from the SPIR-V that `build.rs` compiles out of `glsl/`,
-//! and one-shot command submission. Nothing here knows about sampling.
+//! The fsot optimizer's Vulkan backend, built on the generic layer in `vk/`:
+//! the binding layout and its Rust mirror (`layout`), the transport's launch shape
+//! (`shape`), the buffer plan (`buffers`), the pipelines (`pipelines`) and the run
+//! (`run`, `VulkanRun`, one implementation of `backend::Backend`).
 
-pub mod buffer;
-pub mod context;
-pub(crate) mod fault;
+pub mod buffers;
 pub mod layout;
-pub mod optimizer;
-pub mod pipeline;
-pub mod sort;
-pub mod timer;
+pub mod pipelines;
+pub mod run;
+pub mod shape;
+
+pub use run::VulkanRun;
+pub use shape::{TransportKind, TransportShape};
+
 pub mod shaders {
-    //! SPIR-V of every `glsl/*.comp`, compiled by `build.rs`.
-    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+    //! SPIR-V of `glsl/fsot/*.comp` and their variants, compiled by `build.rs`.
+    include!(concat!(env!("OUT_DIR"), "/fsot_shaders.rs"));
 }
 
-use ash::vk;
+/// Largest dimension the GPU path handles (its exact targets are the closed form
+/// for d <= 2).
+pub const GPU_MAX_DIMS: usize = 2;
+/// Iterations recorded per submission.
+pub const BATCH: u32 = 32;
 
-use crate::error::Error;
-
-/// Maps a failed Vulkan call to the crate's error, naming the call.
-pub(crate) fn check<T>(call: &'static str, result: Result<T, vk::Result>) -> Result<T, Error> {
-    result.map_err(|result| Error::Vulkan { call, result })
+/// How a Vulkan run works.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct VulkanOptions {
+    /// Fixed-point int64 atomics: bit-identical run to run. Otherwise float
+    /// atomic add where the device has it (faster on some devices, not
+    /// reproducible bit for bit).
+    pub deterministic: bool,
+    /// Time each pass with timestamp queries.
+    pub profile: bool,
+    /// Which transport pass to use: None picks by device (per lane on CPU
+    /// implementations, workgroups on GPUs); tests force each.
+    pub transport: Option<TransportKind>,
+    /// Force the workgroup transport with (invocations, slices per workgroup):
+    /// for tuning (the command line reads it from `FSOT_TRANSPORT=WG,SPG`).
+    pub transport_shape: Option<(u32, u32)>,
 }

@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use fsot::gpu::context::{Context, ContextOptions};
+use fsot::vk::{Context, ContextOptions};
 
 /// A Vulkan context with the validation layer on. GPU tests are mandatory (CI
 /// installs lavapipe and the layer); set FSOT_SKIP_GPU_TESTS=1 to skip them on a

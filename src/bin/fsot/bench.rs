@@ -1,7 +1,11 @@
 //! `fsot bench`: the benchmark suites and the single-kernel measurements.
 
+use serde::Serialize;
+use serde_json::json;
+
 use super::*;
-use fsot::gpu::context::{Context, ContextOptions};
+use fsot::bench::convergence::Point;
+use fsot::vk::Context;
 
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
@@ -14,7 +18,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
-            let ctx = Context::new(&ContextOptions::from_env(device))?;
+            let ctx = super::env::context(device)?;
             let b = fsot::bench::bench_sort(&ctx, n, repeats)?;
             println!(
                 "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",
@@ -33,7 +37,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
         Some(BenchSuite::Scatter(KernelBench { n, repeats, device })) => {
-            let ctx = Context::new(&ContextOptions::from_env(device))?;
+            let ctx = super::env::context(device)?;
             let b = fsot::bench::bench_scatter(&ctx, n, repeats)?;
             println!("{}", scatter_line(&b));
             Ok(())
@@ -64,15 +68,47 @@ pub(crate) fn scatter_line(b: &fsot::bench::ScatterBench) -> String {
     )
 }
 
-/// The convergence and time-to-quality suites, CPU path against Vulkan.
+/// The convergence and time-to-quality suites, CPU path against Vulkan, then the
+/// scaling, sort and scatter suites; Markdown, CSV, a plot and JSON records.
 pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
-    use fsot::bench::convergence::{convergence, time_to, SceneJudge};
-    use fsot::bench::plot::line_plot;
     fsot::io::atomic::make_folder(&args.out)?;
     let md = AtomicFile::create(&args.out.join("convergence.md"))?;
     let csv = AtomicFile::create(&args.out.join("convergence.csv"))?;
     let plot = AtomicFile::create(&args.out.join("convergence.png"))?;
     let json = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
+    let mut records: Vec<serde_json::Value> = Vec::new();
+    let (points, mut table) = convergence_suite(args)?;
+    let mut rows = format!("{}\n", Point::CSV_HEADER);
+    for p in &points {
+        rows += &format!("{}\n", p.csv_row());
+        let mut record = serde_json::to_value(p).map_err(json_error)?;
+        record["suite"] = json!("convergence");
+        records.push(record);
+    }
+    table += &scaling_suite(args.quick, &mut records)?;
+    match super::env::context(None) {
+        Ok(ctx) => table += &kernel_suites(&ctx, args.quick, &mut records)?,
+        Err(e) => table += &format!("\nSort and scatter suites not run: no Vulkan device ({e}).\n"),
+    }
+    plot.commit(&fsot::bench::plot::line_plot(&plot_series(&points), 640, 400)?)?;
+    md.commit(table.as_bytes())?;
+    csv.commit(rows.as_bytes())?;
+    if let Some(j) = json {
+        let mut text = serde_json::to_string_pretty(&records).map_err(json_error)?;
+        text.push('\n');
+        j.commit(text.as_bytes())?;
+    }
+    println!("{table}");
+    Ok(())
+}
+
+fn json_error(e: serde_json::Error) -> Error {
+    Error::invalid(format!("cannot write the JSON records: {e}"))
+}
+
+/// Convergence of each backend on the same problem, and time to quality.
+fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
+    use fsot::bench::convergence::{convergence, SceneJudge};
     let (tile, kernel, checkpoints): (Tile, &str, Vec<u32>) = if args.quick {
         (Tile::new(32, 32, 16, 1, 2)?, "taa", vec![2, 4, 8, 16, 32, 64, 128, 192])
     } else {
@@ -85,10 +121,15 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
         args.out.display()
     );
     let judge = SceneJudge::new(tile, Some(&args.out.join("cache")))?;
+    let base = RunOptions {
+        device: super::env::device(None),
+        validation: super::env::validation(),
+        ..RunOptions::default()
+    };
     let mut points = Vec::new();
     let mut notes = Vec::new();
     for choice in [BackendChoice::Cpu, BackendChoice::Vulkan] {
-        match convergence(choice, tile, spec, seed, &checkpoints, &judge) {
+        match convergence(choice, &base, tile, spec, seed, &checkpoints, &judge) {
             Ok(p) => {
                 eprintln!("{} on {}: {} checkpoints", p[0].backend, p[0].machine, p.len());
                 points.extend(p);
@@ -97,8 +138,6 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
             Err(e) => return Err(e),
         }
     }
-    let mut backends: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
-    backends.dedup();
     let mut table = format!(
         "# fsot bench{}\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
          planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
@@ -110,40 +149,60 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
         tile.describe(),
         spec.describe()
     );
-    let mut rows = format!("{}\n", fsot::bench::convergence::Point::CSV_HEADER);
     for p in &points {
         table += &format!("{}\n", p.markdown_row());
-        rows += &format!("{}\n", p.csv_row());
     }
-    table += "\n## Time to quality (seconds; - where not reached)\n\n\
-              The public implementation of the paper needs about 1000 iterations (9 minutes on 2 cores) to \
-              reach about 0.65 x white noise on the perceived test (the core issue's figure).\n\n\
-              | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
-              | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
-    // Vulkan twice: host wall time, then the GPU's own time (timestamps).
-    let mut rows_by: Vec<(String, Vec<fsot::bench::convergence::Point>)> = Vec::new();
+    table += &time_to_quality(&points);
+    for n in &notes {
+        table += &format!("\n{n}\n");
+    }
+    table +=
+        "\nPlot (convergence.png): x seconds (log), y ratio to white noise; blue CPU objective, orange CPU \
+              pRelMSE, green Vulkan objective, red Vulkan pRelMSE.\n";
+    Ok((points, table))
+}
+
+/// The backends that have points, in order.
+fn backends(points: &[Point]) -> Vec<String> {
+    let mut b: Vec<String> = points.iter().map(|p| p.backend.clone()).collect();
+    b.dedup();
+    b
+}
+
+/// Seconds to quality levels per backend (Vulkan twice: host wall time, then the
+/// GPU's own time from timestamps).
+fn time_to_quality(points: &[Point]) -> String {
+    use fsot::bench::convergence::time_to;
+    let mut table = String::from(
+        "\n## Time to quality (seconds; - where not reached)\n\n\
+         The public implementation of the paper needs about 1000 iterations (9 minutes on 2 cores) to \
+         reach about 0.65 x white noise on the perceived test (the core issue's figure).\n\n\
+         | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+    );
+    let backends = backends(points);
+    let mut rows_by: Vec<(String, Vec<Point>)> = Vec::new();
     for b in &backends {
         let mine: Vec<_> = points.iter().filter(|p| &p.backend == b).cloned().collect();
         if mine.iter().all(|p| p.gpu_seconds.is_some()) {
-            let gpu_time = mine.iter().map(|p| fsot::bench::convergence::Point {
-                seconds: p.gpu_seconds.unwrap_or(p.seconds),
-                ..p.clone()
-            });
-            rows_by.push((b.clone(), mine.clone()));
-            rows_by.push((format!("{b}, GPU time"), gpu_time.collect()));
+            let gpu_time = mine
+                .iter()
+                .map(|p| Point { seconds: p.gpu_seconds.unwrap_or(p.seconds), ..p.clone() })
+                .collect();
+            rows_by.push((b.clone(), mine));
+            rows_by.push((format!("{b}, GPU time"), gpu_time));
         } else {
             rows_by.push((b.clone(), mine));
         }
     }
+    let cell = |v: Option<f64>| v.map(|s| format!("{s:.4}")).unwrap_or_else(|| "-".into());
     for (b, mine) in &rows_by {
-        let mine = mine.clone();
-        let cell = |v: Option<f64>| v.map(|s| format!("{s:.4}")).unwrap_or_else(|| "-".into());
         let obj: Vec<String> =
-            [0.8, 0.6, 0.5].iter().map(|&l| cell(time_to(&mine, l, |p| p.objective_ratio))).collect();
+            [0.8, 0.6, 0.5].iter().map(|&l| cell(time_to(mine, l, |p| p.objective_ratio))).collect();
         let pr: Vec<String> =
-            [0.6, 0.4, 0.3].iter().map(|&l| cell(time_to(&mine, l, |p| p.prelmse_ratio))).collect();
+            [0.6, 0.4, 0.3].iter().map(|&l| cell(time_to(mine, l, |p| p.prelmse_ratio))).collect();
         let pe: Vec<String> =
-            [0.65, 0.55].iter().map(|&l| cell(time_to(&mine, l, |p| p.perceived_ratio))).collect();
+            [0.65, 0.55].iter().map(|&l| cell(time_to(mine, l, |p| p.perceived_ratio))).collect();
         table += &format!("| {b} | {} | {} | {} |\n", obj.join(" | "), pr.join(" | "), pe.join(" | "));
     }
     let total = |b: &str| points.iter().filter(|p| p.backend == b).map(|p| p.seconds).fold(0.0, f64::max);
@@ -153,21 +212,33 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
             total("vulkan") / total("cpu").max(1e-9)
         );
     }
-    for n in &notes {
-        table += &format!("\n{n}\n");
-    }
-    table +=
-        "\nPlot (convergence.png): x seconds (log), y ratio to white noise; blue CPU objective, orange CPU \
-              pRelMSE, green Vulkan objective, red Vulkan pRelMSE.\n";
+    table
+}
+
+/// The plot's lines: per backend, objective and pRelMSE against seconds.
+fn plot_series(points: &[Point]) -> Vec<Vec<(f64, f64)>> {
     let mut series = Vec::new();
-    for b in &backends {
-        let mine: Vec<_> = points.iter().filter(|p| &p.backend == b && p.seconds > 0.0).collect();
+    for b in backends(points) {
+        let mine: Vec<_> = points.iter().filter(|p| p.backend == b && p.seconds > 0.0).collect();
         series.push(mine.iter().map(|p| (p.seconds, p.objective_ratio)).collect());
         series.push(mine.iter().map(|p| (p.seconds, p.prelmse_ratio)).collect());
     }
-    let mut records: Vec<String> = points.iter().map(|p| format!("  {}", p.json())).collect();
-    // Scaling: each configuration in a child process.
-    let configs: Vec<(usize, usize, usize, usize, usize)> = if args.quick {
+    series
+}
+
+/// A scaling record.
+#[derive(Serialize)]
+struct ScalingRecord {
+    suite: &'static str,
+    tile: String,
+    slices: u32,
+    seconds_per_iteration: f64,
+    peak_bytes: u64,
+}
+
+/// Scaling: each configuration in a child process (its peak memory its own).
+fn scaling_suite(quick: bool, records: &mut Vec<serde_json::Value>) -> Result<String> {
+    let configs: Vec<(usize, usize, usize, usize, usize)> = if quick {
         vec![(32, 32, 8, 2, 1), (64, 64, 16, 2, 1), (32, 32, 8, 1, 1), (32, 32, 8, 8, 1), (32, 32, 8, 2, 4)]
     } else {
         let mut c = vec![(32, 32, 8, 2, 1), (64, 64, 16, 2, 1), (128, 128, 32, 2, 1), (256, 256, 64, 2, 1)];
@@ -177,7 +248,7 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
     };
     let exe =
         std::env::current_exe().map_err(|e| Error::invalid(format!("cannot find this program: {e}")))?;
-    table += &format!(
+    let mut table = format!(
         "\n## Scaling (CPU path, {}; perceptual-taa, time per iteration and the child process's peak memory)\n\n\
          | tile | slices per iteration | ms per iteration | peak memory (MB) |\n| --- | ---: | ---: | ---: |\n",
         fsot::bench::machine::cpu_description()
@@ -205,99 +276,79 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
             scale.seconds_per_iteration * 1e3,
             scale.peak_bytes as f64 / 1048576.0
         );
-        records.push(format!(
-            "  {{\"suite\": \"scaling\", \"tile\": \"{}\", \"slices\": {}, \"seconds_per_iteration\": {:e}, \"peak_bytes\": {}}}",
-            tile.describe(),
-            scale.slices,
-            scale.seconds_per_iteration,
-            scale.peak_bytes
-        ));
+        let record = ScalingRecord {
+            suite: "scaling",
+            tile: tile.describe(),
+            slices: scale.slices,
+            seconds_per_iteration: scale.seconds_per_iteration,
+            peak_bytes: scale.peak_bytes,
+        };
+        records.push(serde_json::to_value(record).map_err(json_error)?);
     }
-    // Kernels: the GPU radix sort against the CPU sort, against input size.
-    let sizes: Vec<u32> = if args.quick {
+    Ok(table)
+}
+
+/// The GPU radix sort against the CPU sort, and the gradient scatter, against size.
+fn kernel_suites(ctx: &Context, quick: bool, records: &mut Vec<serde_json::Value>) -> Result<String> {
+    let sizes: Vec<u32> = if quick {
         vec![1 << 16, 1 << 18, 1 << 20]
     } else {
         (16..=24).step_by(2).map(|k| 1u32 << k).collect()
     };
-    match Context::new(&ContextOptions::from_env(None)) {
-        Ok(ctx) => {
-            let is_cpu_device = ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU;
-            let ceiling = if is_cpu_device {
-                let b = fsot::bench::machine::host_copy_bandwidth();
-                format!("host memory, measured by a parallel copy: {:.1} GB/s", b * 1e-9)
-            } else {
-                "the device's memory bandwidth (../shared/notes/performance.md)".to_string()
-            };
-            table += &format!(
-                "\n## Sort throughput against size ({}; ceiling: {ceiling})\n\n\
-                 Effective bandwidth: 4 passes, each reading and writing 8 bytes per pair.\n\n\
-                 | pairs | vulkan ms | vulkan G pairs/s | effective GB/s | cpu ms ({}) | cpu G pairs/s |\n\
-                 | ---: | ---: | ---: | ---: | ---: | ---: |\n",
-                ctx.info().name,
-                fsot::bench::machine::cpu_description()
-            );
-            for &n in &sizes {
-                let b = fsot::bench::bench_sort(&ctx, n, if args.quick { 3 } else { 5 })?;
-                let gbs = 4.0 * 16.0 * n as f64 / b.gpu_seconds * 1e-9;
-                eprintln!("sort {n}: {:.3} G pairs/s", b.gpu_pairs_per_second() * 1e-9);
-                table += &format!(
-                    "| {n} | {:.3} | {:.3} | {gbs:.1} | {:.3} | {:.3} |\n",
-                    b.gpu_seconds * 1e3,
-                    b.gpu_pairs_per_second() * 1e-9,
-                    b.cpu_seconds * 1e3,
-                    b.cpu_pairs_per_second() * 1e-9
-                );
-                records.push(format!(
-                    "  {{\"suite\": \"sort\", \"device\": \"{}\", \"pairs\": {n}, \"gpu_seconds\": {:e}, \"cpu_seconds\": {:e}}}",
-                    b.device.replace('"', "'"),
-                    b.gpu_seconds,
-                    b.cpu_seconds
-                ));
-            }
-            table += &format!(
-                "\n## Scatter throughput against size ({}; ceiling as above)\n\n\
-                 N contributions at random into N/16 accumulators, as the optimizer's gradient scatter. \
-                 Effective bandwidth: the least bytes a scatter moves (index and value read, \
-                 each 8-byte accumulator read and written once) over the time.\n\n\
-                 | contributions | fixed point ms | G adds/s | effective GB/s | float atomics ms | G adds/s | cpu ms ({}) | cpu G adds/s |\n\
-                 | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
-                ctx.info().name,
-                fsot::bench::machine::cpu_description()
-            );
-            for &n in &sizes {
-                let b = fsot::bench::bench_scatter(&ctx, n, if args.quick { 3 } else { 5 })?;
-                eprintln!("{}", scatter_line(&b));
-                let rate = |s: f64| n as f64 / s * 1e-9;
-                let (float_ms, float_rate) = match b.float_seconds {
-                    Some(s) => (format!("{:.3}", s * 1e3), format!("{:.3}", rate(s))),
-                    None => ("-".to_string(), "-".to_string()),
-                };
-                table += &format!(
-                    "| {n} | {:.3} | {:.3} | {:.1} | {float_ms} | {float_rate} | {:.3} | {:.3} |\n",
-                    b.fixed_seconds * 1e3,
-                    rate(b.fixed_seconds),
-                    b.bytes() / b.fixed_seconds * 1e-9,
-                    b.cpu_seconds * 1e3,
-                    rate(b.cpu_seconds)
-                );
-                records.push(format!(
-                    "  {{\"suite\": \"scatter\", \"device\": \"{}\", \"contributions\": {n}, \"fixed_seconds\": {:e}, \"float_seconds\": {}, \"cpu_seconds\": {:e}}}",
-                    b.device.replace('"', "'"),
-                    b.fixed_seconds,
-                    b.float_seconds.map(|s| format!("{s:e}")).unwrap_or_else(|| "null".into()),
-                    b.cpu_seconds
-                ));
-            }
-        }
-        Err(e) => table += &format!("\nSort and scatter suites not run: no Vulkan device ({e}).\n"),
+    let repeats = if quick { 3 } else { 5 };
+    let ceiling = if ctx.info().is_cpu() {
+        let b = fsot::bench::machine::host_copy_bandwidth();
+        format!("host memory, measured by a parallel copy: {:.1} GB/s", b * 1e-9)
+    } else {
+        "the device's memory bandwidth (../shared/notes/performance.md)".to_string()
+    };
+    let cpu = fsot::bench::machine::cpu_description();
+    let mut table = format!(
+        "\n## Sort throughput against size ({}; ceiling: {ceiling})\n\n\
+         Effective bandwidth: 4 passes, each reading and writing 8 bytes per pair.\n\n\
+         | pairs | vulkan ms | vulkan G pairs/s | effective GB/s | cpu ms ({cpu}) | cpu G pairs/s |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        ctx.info().name
+    );
+    for &n in &sizes {
+        let b = fsot::bench::bench_sort(ctx, n, repeats)?;
+        let gbs = 4.0 * 16.0 * n as f64 / b.gpu_seconds * 1e-9;
+        eprintln!("sort {n}: {:.3} G pairs/s", b.gpu_pairs_per_second() * 1e-9);
+        table += &format!(
+            "| {n} | {:.3} | {:.3} | {gbs:.1} | {:.3} | {:.3} |\n",
+            b.gpu_seconds * 1e3,
+            b.gpu_pairs_per_second() * 1e-9,
+            b.cpu_seconds * 1e3,
+            b.cpu_pairs_per_second() * 1e-9
+        );
+        records.push(json!({"suite": "sort", "device": b.device, "pairs": n, "gpu_seconds": b.gpu_seconds, "cpu_seconds": b.cpu_seconds}));
     }
-    let json_text = format!("[\n{}\n]\n", records.join(",\n"));
-    plot.commit(&line_plot(&series, 640, 400)?)?;
-    md.commit(table.as_bytes())?;
-    csv.commit(rows.as_bytes())?;
-    if let Some(j) = json {
-        j.commit(json_text.as_bytes())?;
+    table += &format!(
+        "\n## Scatter throughput against size ({}; ceiling as above)\n\n\
+         N contributions at random into N/16 accumulators, as the optimizer's gradient scatter. \
+         Effective bandwidth: the least bytes a scatter moves (index and value read, \
+         each 8-byte accumulator read and written once) over the time.\n\n\
+         | contributions | fixed point ms | G adds/s | effective GB/s | float atomics ms | G adds/s | cpu ms ({cpu}) | cpu G adds/s |\n\
+         | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
+        ctx.info().name
+    );
+    for &n in &sizes {
+        let b = fsot::bench::bench_scatter(ctx, n, repeats)?;
+        eprintln!("{}", scatter_line(&b));
+        let rate = |s: f64| n as f64 / s * 1e-9;
+        let (float_ms, float_rate) = match b.float_seconds {
+            Some(s) => (format!("{:.3}", s * 1e3), format!("{:.3}", rate(s))),
+            None => ("-".to_string(), "-".to_string()),
+        };
+        table += &format!(
+            "| {n} | {:.3} | {:.3} | {:.1} | {float_ms} | {float_rate} | {:.3} | {:.3} |\n",
+            b.fixed_seconds * 1e3,
+            rate(b.fixed_seconds),
+            b.bytes() / b.fixed_seconds * 1e-9,
+            b.cpu_seconds * 1e3,
+            rate(b.cpu_seconds)
+        );
+        records.push(json!({"suite": "scatter", "device": b.device, "contributions": n, "fixed_seconds": b.fixed_seconds, "float_seconds": b.float_seconds, "cpu_seconds": b.cpu_seconds}));
     }
-    println!("{table}");
-    Ok(())
+    Ok(table)
 }

@@ -1,6 +1,7 @@
 //! The `fsot` command line: its flags here, each command in its own file.
 
 mod bench;
+mod env;
 mod eval;
 mod optimize;
 mod score;
@@ -13,16 +14,17 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use fsot::backend::{BackendChoice, Report};
 use fsot::baselines::fast::{Combine, Filter};
-use fsot::engine::{BackendChoice, Engine, Started};
 use fsot::error::{Error, Result};
-use fsot::gpu::optimizer::GpuOptions;
+use fsot::gpu::VulkanOptions;
 use fsot::io::atomic::AtomicFile;
 use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
 use fsot::mask::Mask;
-use fsot::optimize::Settings;
 use fsot::problem::Tile;
+use fsot::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 use fsot::score::{score, SCORE_SLICES};
+use fsot::settings::Settings;
 
 #[derive(Parser)]
 #[command(
@@ -245,7 +247,7 @@ struct OptimizeArgs {
     #[command(flatten)]
     kernel: KernelArgs,
     /// Iterations of the optimizer.
-    #[arg(long, default_value_t = fsot::optimize::DEFAULT_ITERATIONS, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = fsot::settings::DEFAULT_ITERATIONS, allow_negative_numbers = true)]
     iterations: u32,
     /// Slices per iteration [default: enough for each sample to be in 16 classes
     /// per iteration].
@@ -350,9 +352,18 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(Error::Interrupted) => ExitCode::from(130),
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {e}{}", hint(&e));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// What the command line adds to a library error: the flag that helps.
+fn hint(e: &Error) -> &'static str {
+    match e {
+        _ if e.is_out_of_device_memory() => " (or --backend cpu)",
+        Error::CheckpointExists(_) => " (--resume continues it)",
+        _ => "",
     }
 }
 

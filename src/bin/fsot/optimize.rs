@@ -30,187 +30,142 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         }
         return make_baseline(&args, tile, spec, out);
     }
-    let choice = match args.backend {
-        Backend::Auto => BackendChoice::Auto,
-        Backend::Cpu => BackendChoice::Cpu,
-        Backend::Vulkan => BackendChoice::Vulkan,
-    };
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = args.iterations;
     settings.slices = args.slices;
-    let fingerprint = fsot::checkpoint::fingerprint(&tile, &settings);
-    let saved = saved_state(&args, &fingerprint, &tile)?;
-    let gpu = GpuOptions { deterministic: args.deterministic, profile: args.profile, transport: None };
-    let Started { mut engine, note } =
-        Engine::start(choice, tile, settings, init.as_ref(), args.device.clone(), gpu)?;
-    eprintln!("{note}");
-    if let (Some(state), Some(p)) = (&saved, &args.checkpoint) {
-        engine.restore(state)?;
-        eprintln!("resumed from {} at iteration {}", p.display(), state.iteration);
+    let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
+    eprintln!("backend: {}", run.note());
+    if let (Some(from), Some(p)) = (run.resumed_from(), &args.checkpoint) {
+        eprintln!("resumed from {} at iteration {from}", p.display());
     }
     eprintln!(
         "optimizing {} for kernel {}: {} iterations x {} slices",
         tile.describe(),
         spec.describe(),
         args.iterations,
-        engine.slices_per_iteration()
+        run.backend().slices_per_iteration()
     );
-    let start_samples = match &init {
-        Some(m) => m.samples.clone(),
-        None => Mask::white(tile, args.seed).samples,
-    };
+    let start_samples = fsot::settings::initial_samples(&tile, &settings, init.as_ref())?;
     let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
-    let bar = ProgressBar::new(args.iterations as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_position(engine.iteration() as u64);
-    // Ctrl-C from here on stops between iterations, after saving a checkpoint.
-    let interrupted = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    {
-        let flag = interrupted.clone();
-        ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::SeqCst))
-            .map_err(|e| Error::invalid(format!("cannot catch Ctrl-C: {e}")))?;
-    }
-    let save = |engine: &Engine, path: &std::path::Path| -> Result<()> {
-        fsot::checkpoint::write(path, &fingerprint, &engine.state()?)
-    };
-    let every = args.checkpoint_every.max(1);
-    let mut next_checkpoint = engine.iteration() + every;
+    let bar = iteration_bar(args.iterations, run.iteration());
+    // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
+    let cancel = CancelFlag::on_interrupt()?;
     let start = Instant::now();
-    while !engine.finished() {
-        if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
-            bar.finish_and_clear();
-            match &args.checkpoint {
-                Some(p) => {
-                    save(&engine, p)?;
-                    eprintln!(
-                        "interrupted at iteration {} of {}: state saved to {}; continue with the same command and --resume",
-                        engine.iteration(),
-                        args.iterations,
-                        p.display()
-                    );
-                }
-                None => eprintln!(
-                    "interrupted at iteration {} of {}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
-                    engine.iteration(),
-                    args.iterations,
-                    args.out.display()
-                ),
+    let outcome = run.run(&cancel, &mut |event| match event {
+        Event::Progress { iteration, objective, .. } => {
+            bar.set_position(iteration as u64);
+            if let Some(c) = objective {
+                bar.set_message(format!("{c:.3e}"));
             }
-            return Err(Error::Interrupted);
         }
-        let stepped = match &args.checkpoint {
-            Some(_) => engine.step_up_to(next_checkpoint.saturating_sub(engine.iteration())),
-            None => engine.step(),
-        };
-        let costs = match stepped {
-            Ok(c) => c,
-            // With --backend auto a GPU that fails mid-run hands over to the CPU
-            // path, from the last checkpoint when there is one.
-            Err(e) if choice == BackendChoice::Auto && engine.is_gpu() && e.is_device_failure() => {
-                bar.suspend(|| eprintln!("warning: the GPU failed at iteration {}: {e}", engine.iteration()));
-                let cpu = Engine::start(BackendChoice::Cpu, tile, settings, init.as_ref(), None, gpu)?;
-                engine = cpu.engine;
-                let from = match args.checkpoint.as_ref().filter(|p| p.exists()) {
-                    Some(p) => {
-                        engine.restore(&fsot::checkpoint::read(p, &fingerprint, &tile)?)?;
-                        format!("its checkpoint {} (iteration {})", p.display(), engine.iteration())
-                    }
+        Event::Checkpoint { .. } => {}
+        Event::FellBack { error, at, backend, from, checkpoint } => {
+            bar.suspend(|| {
+                eprintln!("warning: the GPU failed at iteration {at}: {error}");
+                let source = match checkpoint {
+                    Some(p) => format!("its checkpoint {} (iteration {from})", p.display()),
                     None => "the start".to_string(),
                 };
-                bar.suspend(|| eprintln!("{}; continuing from {from}", cpu.note));
-                bar.set_position(engine.iteration() as u64);
-                next_checkpoint = engine.iteration() + every;
-                continue;
-            }
-            Err(e) => return Err(e),
-        };
-        bar.inc(costs.len() as u64);
-        if let Some(c) = costs.last() {
-            bar.set_message(format!("{c:.3e}"));
+                eprintln!("backend: {backend}; continuing from {source}");
+            });
+            bar.set_position(from as u64);
         }
-        if let Some(p) = &args.checkpoint {
-            if engine.iteration() >= next_checkpoint && !engine.finished() {
-                save(&engine, p)?;
-                next_checkpoint = engine.iteration() + every;
-            }
-        }
-    }
+    })?;
     bar.finish_and_clear();
+    if let Outcome::Cancelled { iteration, saved } = outcome {
+        match saved {
+            Some(p) => eprintln!(
+                "interrupted at iteration {iteration} of {}: state saved to {}; continue with the same command and --resume",
+                args.iterations,
+                p.display()
+            ),
+            None => eprintln!(
+                "interrupted at iteration {iteration} of {}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
+                args.iterations,
+                args.out.display()
+            ),
+        }
+        return Err(Error::Interrupted);
+    }
     let seconds = start.elapsed().as_secs_f64();
-    let mask = engine.mask()?;
+    let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
+    let mask = run.finish()?;
     let after = score(&mask, spec, SCORE_SLICES);
     fsot::io::exr::write(&mask, out)?;
     if let Some(dir) = &args.png {
         let files = fsot::io::png::write(&mask, dir)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
-    if let Some(p) = &args.checkpoint {
-        if p.exists() {
-            std::fs::remove_file(p).map_err(|e| {
-                Error::io(format!("the run is complete, but removing {} failed", p.display()), e)
-            })?;
-        }
-    }
-    let backend = if engine.is_gpu() { "vulkan" } else { "cpu" };
     println!(
-        "wrote {}: {}, kernel {}, {} iterations in {seconds:.1} s ({backend}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
+        "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
         spec.describe(),
-        engine.iteration(),
+        kind.name(),
         before.objective,
         after.objective,
         after.ratio()
     );
-    if let Engine::Gpu(run) = &engine {
-        gpu_report(run, args.profile)?;
-    }
-    Ok(())
+    backend_report(&report)
 }
 
-/// The checkpoint rules: `--resume` needs `--checkpoint`, which must then hold a
-/// checkpoint of this very run; without `--resume` an existing checkpoint is left
-/// alone (an error), and the path must be writable before the work starts.
-fn saved_state(
-    args: &OptimizeArgs,
-    fingerprint: &str,
-    tile: &Tile,
-) -> Result<Option<fsot::optimize::RunState>> {
-    let Some(path) = &args.checkpoint else {
-        return match args.resume {
-            true => Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)")),
-            false => Ok(None),
-        };
+/// The library run's options from the flags and the environment.
+fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
+    let checkpoint = match (&args.checkpoint, args.resume) {
+        (None, true) => {
+            return Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)"))
+        }
+        (None, false) => None,
+        (Some(_), _) if args.checkpoint_every == 0 => {
+            return Err(Error::invalid("--checkpoint-every must be at least 1"))
+        }
+        (Some(path), resume) => {
+            Some(Checkpointing { path: path.clone(), every: args.checkpoint_every, resume })
+        }
     };
-    if args.checkpoint_every == 0 {
-        return Err(Error::invalid("--checkpoint-every must be at least 1"));
-    }
-    let saved = match args.resume {
-        true => Some(fsot::checkpoint::read(path, fingerprint, tile)?),
-        false => None,
+    let backend = match args.backend {
+        Backend::Auto => BackendChoice::Auto,
+        Backend::Cpu => BackendChoice::Cpu,
+        Backend::Vulkan => BackendChoice::Vulkan,
     };
-    if !args.resume && path.exists() {
-        return Err(Error::invalid(format!(
-            "checkpoint {} exists: continue it with --resume, or remove it to start over",
-            path.display()
-        )));
-    }
-    AtomicFile::create(path)?; // a checkpoint that cannot be written fails now
-    Ok(saved)
+    let vulkan = VulkanOptions {
+        deterministic: args.deterministic,
+        profile: args.profile,
+        transport: None,
+        transport_shape: env::transport_shape(),
+    };
+    Ok(RunOptions {
+        backend,
+        device: env::device(args.device.clone()),
+        context: None,
+        validation: env::validation(),
+        vulkan,
+        checkpoint,
+    })
 }
 
-/// After a Vulkan run: skipped large classes, the profile, validation messages.
-fn gpu_report(run: &fsot::gpu::optimizer::GpuRun, profile: bool) -> Result<()> {
-    if run.overflowed() > 0 {
-        eprintln!("warning: {} large classes did not fit their buffer and were skipped", run.overflowed());
+/// The progress bar of a run (hidden when stderr is not a terminal).
+fn iteration_bar(iterations: u32, at: u32) -> ProgressBar {
+    let bar = ProgressBar::new(iterations as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_position(at as u64);
+    bar
+}
+
+/// After a run: skipped large classes, the profile, validation messages.
+fn backend_report(report: &Report) -> Result<()> {
+    if report.skipped_large_classes > 0 {
+        eprintln!(
+            "warning: {} large classes did not fit their buffer and were skipped",
+            report.skipped_large_classes
+        );
     }
-    if profile {
-        let p = &run.profile;
+    if let Some(p) = &report.profile {
         let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
         println!(
             "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
@@ -220,7 +175,7 @@ fn gpu_report(run: &fsot::gpu::optimizer::GpuRun, profile: bool) -> Result<()> {
             per(p.update_ns)
         );
     }
-    let messages = run.validation_messages();
+    let messages = &report.validation_messages;
     if !messages.is_empty() {
         eprintln!("{} validation messages:", messages.len());
         for m in messages.iter().take(10) {
@@ -257,58 +212,37 @@ pub(crate) fn make_baseline(
     if swaps && !(1..=100_000).contains(&args.passes) {
         return Err(Error::invalid(format!("--passes must be in 1..=100000, got {}", args.passes)));
     }
-    let start = Instant::now();
-    let mask = match args.method {
-        Method::White => {
-            let mut m = Mask::white(tile, args.seed);
-            m.set_meta("version", env!("CARGO_PKG_VERSION"));
-            m
-        }
+    let method = match args.method {
+        Method::White => fsot::method::Method::White,
         Method::Stbn => {
             let sigma = args.kernel.sigma.unwrap_or(fsot::baselines::stbn::DEFAULT_SIGMA);
-            let sigma_t = args.kernel.sigma_t.unwrap_or(sigma);
-            let bar = swap_bar(args.passes, tile.dims > 1);
-            let mask = fsot::baselines::stbn::stbn_mask_with(
-                tile,
+            fsot::method::Method::Stbn {
                 sigma,
-                sigma_t,
-                args.passes,
-                args.seed,
-                |_, e| {
-                    bar.inc(1);
-                    bar.set_message(format!("{e:.6e}"));
-                },
-            )?;
-            bar.finish_and_clear();
-            mask
+                sigma_t: args.kernel.sigma_t.unwrap_or(sigma),
+                passes: args.passes,
+            }
         }
-        Method::Fast => {
-            let spec = fsot::baselines::fast::FastSpec {
+        Method::Fast => fsot::method::Method::Fast {
+            spec: fsot::baselines::fast::FastSpec {
                 spatial: Filter::parse(&args.fast_spatial, false)?,
                 temporal: Filter::parse(&args.fast_temporal, true)?,
                 combine: Combine::parse(&args.fast_combine)?,
-            };
-            let bar = swap_bar(args.passes, true);
-            let (mask, report) =
-                fsot::baselines::fast::fast_mask(tile, &spec, args.passes, args.seed, |_, e| {
-                    bar.inc(1);
-                    bar.set_message(format!("{e:.6e}"));
-                })?;
-            bar.finish_and_clear();
-            eprintln!(
-                "{} ({} neighbours per pixel): loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated)",
-                spec.describe(),
-                report.offsets,
-                report.start_energy,
-                report.trace.last().copied().unwrap_or(report.start_energy),
-                report.accepted,
-                report.proposed,
-                report.recomputed
-            );
-            mask
-        }
-        Method::Fsot => unreachable!("handled by optimize"),
+            },
+            passes: args.passes,
+        },
+        Method::Fsot => return Err(Error::invalid("fsot runs through the library run")),
     };
+    let start = Instant::now();
+    let bar = swap_bar(args.passes, method.swaps(&tile));
+    let made = fsot::method::make(&method, tile, args.seed, &mut |_, e| {
+        bar.inc(1);
+        bar.set_message(format!("{e:.6e}"));
+    })?;
+    bar.finish_and_clear();
+    if let Some(note) = &made.note {
+        eprintln!("{note}");
+    }
+    let mask = made.mask;
     let seconds = start.elapsed().as_secs_f64();
     let s = score(&mask, spec, SCORE_SLICES);
     fsot::io::exr::write(&mask, out)?;

@@ -8,8 +8,7 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     let ctx = if args.cpu_only {
         None
     } else {
-        use fsot::gpu::context::{Context, ContextOptions};
-        match Context::new(&ContextOptions::from_env(args.device.clone())) {
+        match super::env::context(args.device.clone()) {
             Ok(c) => Some(c),
             Err(e) => {
                 eprintln!("no Vulkan device, CPU checks only: {e}");

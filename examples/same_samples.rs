@@ -1,0 +1,38 @@
+//! Compares two mask files: bit-identical samples or not, and their metadata
+//! side by side (how the redesign's "no mask changed" was checked).
+//!
+//! cargo run --release --example same_samples -- A.exr B.exr
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [a, b] = &args[..] else {
+        eprintln!("usage: same_samples A.exr B.exr");
+        return ExitCode::from(2);
+    };
+    let (a, b) = match (fsot::io::exr::read(a.as_ref()), fsot::io::exr::read(b.as_ref())) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let differing = a.samples.iter().zip(&b.samples).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+    let same = a.tile == b.tile && differing == 0;
+    println!(
+        "{}: {} of {} samples differ",
+        if same { "bit-identical" } else { "DIFFERENT" },
+        differing + a.samples.len().abs_diff(b.samples.len()),
+        a.samples.len()
+    );
+    for (k, v) in &a.meta {
+        if b.meta(k) != Some(v.as_str()) {
+            println!("  meta {k}: {v:?} / {:?}", b.meta(k));
+        }
+    }
+    if same {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
+}

@@ -1,0 +1,132 @@
+// Every buffer, push-constant struct and binding index of the fsot passes, declared
+// once. Mirrored once in Rust (src/gpu/layout.rs); tests/spirv_layout.rs checks
+// the compiled SPIR-V against the mirror. Every pass uses the same descriptor set
+// layout (FSOT_BINDINGS storage buffers) and touches only the buffers it names.
+// Include first, right after #version and any extension of the pass's own.
+// FSOT_FLOAT_ATOMICS (set by build.rs for the `_FLOAT` variants): accumulators are
+// floats added with VK_EXT_shader_atomic_float; otherwise int64 fixed point.
+#ifndef FSOT_BINDINGS_GLSL
+#define FSOT_BINDINGS_GLSL
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#ifdef FSOT_FLOAT_ATOMICS
+#extension GL_EXT_shader_atomic_float : require
+#endif
+#include "common.glsl"
+
+#define FSOT_BINDING_SAMPLES 0
+#define FSOT_BINDING_TAPS 1
+#define FSOT_BINDING_ACC 2
+#define FSOT_BINDING_COSTS 3
+#define FSOT_BINDING_LARGE_META 4
+#define FSOT_BINDING_LARGE_KEYS 5
+#define FSOT_BINDING_LARGE_VALS 6
+#define FSOT_BINDING_LARGE_POINTS 7
+#define FSOT_BINDING_LARGE_PROJ 8
+#define FSOT_BINDING_LARGE_SEG 9
+#define FSOT_BINDING_LARGE_PKEY 10
+#define FSOT_BINDING_FIRST 11
+#define FSOT_BINDING_SECOND 12
+#define FSOT_BINDING_GATHER_TABLE 13
+#define FSOT_BINDING_LARGE_ARGS 14
+#define FSOT_BINDING_SCATTER_TARGETS 15
+#define FSOT_BINDING_SCATTER_VALUES 16
+#define FSOT_BINDING_HASH_VALUES 17
+#define FSOT_BINDINGS 18
+
+// Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
+#define FSOT_FIXED_SCALE 1099511627776.0
+// Fixed-point scale of the objective's squared distances: 2^32.
+#define FSOT_COST_SCALE 4294967296.0
+
+// One iteration of the transport passes.
+struct TransportPush {
+    uint slice_key;      // rng::derive(seed key, 0x51ce)
+    uint iteration;
+    uint width;
+    uint height;
+    uint frames;
+    uint spp;
+    uint dims;
+    uint taps;           // entries in the kernel table
+    uint slices;         // slices this iteration
+    uint cost_slot;      // where this iteration's objective goes
+    uint large_capacity; // elements the large-class buffers hold
+    uint pad;
+};
+
+// The update pass.
+struct UpdatePush {
+    uint values;
+    uint rule;        // 0 momentum, 1 Adam
+    uint step_t;      // 1-based step number
+    float scale;      // schedule factor
+    float inv_hits;   // 1 / expected hits per value
+    float p0;         // momentum: step;  Adam: lr
+    float p1;         // momentum: beta;  Adam: beta1
+    float p2;         // Adam: beta2
+    float p3;         // Adam: eps
+    float bias1;      // Adam: 1 - beta1^t
+    float bias2;      // Adam: 1 - beta2^t
+    uint pad;
+};
+
+// The scatter benchmark.
+struct ScatterPush {
+    uint count;
+};
+
+// The toolchain probe (hash_fill.comp).
+struct HashPush {
+    uint key;
+    uint count;
+};
+
+// A large class in the large-class buffers: its slice, first element, size.
+struct LargeSegment {
+    uint slice;
+    uint first;
+    uint size;
+    uint pad;
+};
+
+layout(std430, set = 0, binding = FSOT_BINDING_SAMPLES) buffer Samples { float samples[]; };
+// Kernel taps in decreasing weight: dx, dy, dt, level threshold.
+layout(std430, set = 0, binding = FSOT_BINDING_TAPS) readonly buffer Taps { uvec4 taps[]; };
+#ifdef FSOT_FLOAT_ATOMICS
+layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { float acc[]; };
+#else
+layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { int64_t acc[]; };
+#endif
+// Per cost slot: squared distances (FSOT_COST_SCALE fixed point), count.
+layout(std430, set = 0, binding = FSOT_BINDING_COSTS) buffer Costs { int64_t costs[]; };
+// Large classes: elements used (the radix sort's count: the first word), classes,
+// classes dropped for want of room, then one segment per class.
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_META) buffer LargeMeta {
+    uint large_count;
+    uint large_segments;
+    uint large_overflow;
+    uint large_pad;
+    LargeSegment segments[];
+};
+// Large classes, element e: sort key and payload (the radix sort's input and
+// output), point, projection, segment (its first element), and the projection's
+// sortable key.
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_KEYS) buffer LargeKeys { uint large_keys[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_VALS) buffer LargeVals { uint large_vals[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_POINTS) buffer LargePoints { uint large_points[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_PROJ) buffer LargeProj { float large_proj[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_SEG) buffer LargeSeg { uint large_seg[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_PKEY) buffer LargePKey { uint large_pkey[]; };
+// Optimizer state: momentum or Adam's first moment; Adam's second.
+layout(std430, set = 0, binding = FSOT_BINDING_FIRST) buffer First { float first[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_SECOND) buffer Second { float second[]; };
+// The gather's per-element table (projection keys, or segments).
+layout(std430, set = 0, binding = FSOT_BINDING_GATHER_TABLE) readonly buffer GatherTable { uint gather_table[]; };
+// Indirect dispatches of the large-class stage: gather, then one group per class.
+layout(std430, set = 0, binding = FSOT_BINDING_LARGE_ARGS) writeonly buffer LargeArgs { uvec4 large_args[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_TARGETS) readonly buffer ScatterTargets { uint scatter_targets[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_VALUES) readonly buffer ScatterValues { float scatter_values[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_HASH_VALUES) writeonly buffer HashValues { uint hash_values[]; };
+
+#endif

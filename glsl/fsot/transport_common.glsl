@@ -1,0 +1,76 @@
+// Helpers of the transport passes (transport.comp for GPUs, transport_lane.comp
+// for CPU implementations): same buffers, same rules. Include after bindings.glsl
+// and the pass's push-constant block `pc` (TransportPush).
+#include "accumulate.glsl"
+
+// Class size (samples) of a slice: taps whose threshold exceeds its level
+// (thresholds decrease), times spp.
+uint fsot_class_size(FsotSlice s) {
+    uint lo = 0u, hi = pc.taps;
+    while (lo < hi) {
+        uint mid = (lo + hi) / 2u;
+        if (taps[mid].w > s.level) { lo = mid + 1u; } else { hi = mid; }
+    }
+    return lo * pc.spp;
+}
+
+// Point index of class member i.
+uint fsot_class_point(FsotSlice s, uint i) {
+    // No integer division or remainder by a run-time value on the common path:
+    // on SIMD drivers (llvmpipe) each one is a scalar divide per lane. Taps and
+    // centres both lie in [0, size), so one conditional subtraction wraps.
+    uint tap_index = pc.spp == 1u ? i : i / pc.spp;
+    uint member = i - tap_index * pc.spp;
+    uvec4 tap = taps[tap_index];
+    uint x = s.cx + tap.x;
+    uint y = s.cy + tap.y;
+    uint f = s.ct + tap.z;
+    x = x >= pc.width ? x - pc.width : x;
+    y = y >= pc.height ? y - pc.height : y;
+    f = f >= pc.frames ? f - pc.frames : f;
+    return ((f * pc.height + y) * pc.width + x) * pc.spp + member;
+}
+
+// Projection of a point on the slice's direction after its toroidal shift.
+// Written out for d <= 2, the only dimensions the GPU path takes (the host
+// checks): a loop over a run-time count with indexed private arrays costs
+// gathers on SIMD drivers.
+float fsot_project(FsotSlice s, uint point) {
+    uint base = point * pc.dims;
+    float y = samples[base] - s.shift[0];
+    float p = 0.0 + s.theta[0] * (y - floor(y));
+    if (pc.dims > 1u) {
+        y = samples[base + 1u] - s.shift[1];
+        p += s.theta[1] * (y - floor(y));
+    }
+    return p;
+}
+
+// Reserves room for a large class in the radix sort's input; -1 if full.
+int fsot_reserve_large(uint slice, uint n) {
+    uint off = atomicAdd(large_count, n);
+    if (off + n > pc.large_capacity) {
+        atomicAdd(large_overflow, 1u);
+        return -1;
+    }
+    uint seg = atomicAdd(large_segments, 1u);
+    segments[seg] = LargeSegment(slice, off, n, 0u);
+    return int(off);
+}
+
+// Writes large-class member i (element off + i) for the radix sort.
+void fsot_write_large(FsotSlice s, uint off, uint i) {
+    uint point = fsot_class_point(s, i);
+    uint e = off + i;
+    float proj = fsot_project(s, point);
+    large_keys[e] = point;
+    large_vals[e] = e;
+    large_points[e] = point;
+    large_proj[e] = proj;
+    large_seg[e] = off;
+    large_pkey[e] = fsot_float_key(proj);
+}
+
+bool fsot_before(float ka, uint va, float kb, uint vb) {
+    return ka < kb || (ka == kb && va < vb);
+}

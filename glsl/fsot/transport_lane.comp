@@ -1,0 +1,148 @@
+#version 450
+// The transport pass for CPU implementations of Vulkan (lavapipe): one
+// invocation per slice, its class in private memory, sorted by a bucket sort
+// (O(n) expected; ties by point index: the CPU's order), no barriers and no
+// traffic between invocations, which such drivers run as SIMD lanes. Classes
+// larger than FSOT_LANE_MAX go to the large-class path (global radix sort), as in
+// transport.comp; GPUs use that pass instead.
+// variant FLOAT: FSOT_FLOAT_ATOMICS
+#include "bindings.glsl"
+layout(push_constant) uniform Push { TransportPush pc; };
+#include "transport_common.glsl"
+
+layout(local_size_x_id = 0) in;
+// Largest class sorted in one invocation (set by the host: LANE_MAX); 32 KiB of
+// private memory per invocation at 2048.
+layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
+#define FSOT_INSERTION_BUDGET 4u
+
+// Private arrays: the projections in class order, one counter per bucket, and
+// the class in sorted order.
+float key[FSOT_LANE_MAX];
+uint bucket_start[FSOT_LANE_MAX];
+float sorted_key[FSOT_LANE_MAX];
+uint sorted_point[FSOT_LANE_MAX];
+
+// Bucket of a projection: n equal buckets over the projections' range
+// [offset, offset + a1 + a2]. Monotone in the key, so equal keys share a bucket
+// and only keys within one bucket can be out of order after the placing pass.
+uint lane_bucket(float key_value, float offset, float scale, uint n) {
+    return min(uint(max(key_value - offset, 0.0) * scale), n - 1u);
+}
+
+// Heap sort of sorted_key/sorted_point in place: the fallback when keys pile
+// into few buckets.
+void sift_down(uint root, uint end) {
+    while (2u * root + 1u < end) {
+        uint child = 2u * root + 1u;
+        if (child + 1u < end
+            && fsot_before(sorted_key[child], sorted_point[child], sorted_key[child + 1u], sorted_point[child + 1u])) {
+            child += 1u;
+        }
+        if (!fsot_before(sorted_key[root], sorted_point[root], sorted_key[child], sorted_point[child])) {
+            return;
+        }
+        float tk = sorted_key[root]; sorted_key[root] = sorted_key[child]; sorted_key[child] = tk;
+        uint tv = sorted_point[root]; sorted_point[root] = sorted_point[child]; sorted_point[child] = tv;
+        root = child;
+    }
+}
+
+void heap_sort(uint n) {
+    for (uint i = n / 2u; i > 0u; --i) {
+        sift_down(i - 1u, n);
+    }
+    for (uint end = n - 1u; end > 0u; --end) {
+        float tk = sorted_key[0]; sorted_key[0] = sorted_key[end]; sorted_key[end] = tk;
+        uint tv = sorted_point[0]; sorted_point[0] = sorted_point[end]; sorted_point[end] = tv;
+        sift_down(0u, end);
+    }
+}
+
+void main() {
+    uint slice = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
+    if (slice >= pc.slices) {
+        return;
+    }
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
+    uint n = fsot_class_size(s);
+    if (n < 2u) {
+        return;
+    }
+    if (n > FSOT_LANE_MAX) {
+        int off = fsot_reserve_large(slice, n);
+        if (off >= 0) {
+            for (uint i = 0u; i < n; ++i) {
+                fsot_write_large(s, uint(off), i);
+            }
+        }
+        return;
+    }
+    // Bucket sort: O(n) expected, few per-lane memory accesses (each one a
+    // gather on a SIMD driver), then an insertion sort that only has to order
+    // keys within a bucket; ties by point index, the CPU's order.
+    FsotTrapezoid z = fsot_trapezoid(s.theta[0], s.theta[1]);
+    float scale = float(n) / max(z.a1 + z.a2, 1e-30);
+    for (uint b = 0u; b < n; ++b) {
+        bucket_start[b] = 0u;
+    }
+    for (uint i = 0u; i < n; ++i) {
+        float p = fsot_project(s, fsot_class_point(s, i));
+        key[i] = p;
+        bucket_start[lane_bucket(p, z.offset, scale, n)] += 1u;
+    }
+    uint total = 0u;
+    uint pairs = 0u; // pairs sharing a bucket: at most this many insertion moves
+    for (uint b = 0u; b < n; ++b) {
+        uint c = bucket_start[b];
+        bucket_start[b] = total;
+        total += c;
+        pairs += c * (c - min(c, 1u)) / 2u;
+    }
+    for (uint i = 0u; i < n; ++i) {
+        float p = key[i];
+        uint b = lane_bucket(p, z.offset, scale, n);
+        uint at = bucket_start[b];
+        bucket_start[b] = at + 1u;
+        sorted_key[at] = p;
+        sorted_point[at] = fsot_class_point(s, i);
+    }
+    // Insertion sort: each key moves past the larger keys of its own bucket,
+    // so at most `pairs` moves in all. Where keys pile into few buckets
+    // (degenerate samples), a heap sort instead: O(n log n) whatever the keys,
+    // so no class pushes an invocation past the driver's loop budget.
+    if (pairs <= FSOT_INSERTION_BUDGET * n) {
+        // The largest key so far stays in registers: most keys are already in
+        // place (a different bucket from their predecessor), so they cost one
+        // comparison and no private-memory traffic.
+        float last_key = sorted_key[0];
+        uint last_point = sorted_point[0];
+        for (uint i = 1u; i < n; ++i) {
+            float k = sorted_key[i];
+            uint v = sorted_point[i];
+            if (!fsot_before(k, v, last_key, last_point)) {
+                last_key = k;
+                last_point = v;
+                continue;
+            }
+            uint j = i;
+            do {
+                sorted_key[j] = sorted_key[j - 1u];
+                sorted_point[j] = sorted_point[j - 1u];
+                --j;
+            } while (j > 0u && fsot_before(k, v, sorted_key[j - 1u], sorted_point[j - 1u]));
+            sorted_key[j] = k;
+            sorted_point[j] = v;
+        }
+    } else {
+        heap_sort(n);
+    }
+    // Only d <= 2 reaches the GPU path (the host checks): two components.
+    float cost = 0.0;
+    for (uint i = 0u; i < n; ++i) {
+        float delta = fsot_rank_target(z, i, n) - sorted_key[i];
+        cost += delta * delta;
+        fsot_add_displacement(sorted_point[i], pc.dims, delta, s.theta);
+    }
+    fsot_add_cost(pc.cost_slot, cost, n);
+}

@@ -1,0 +1,44 @@
+// Every buffer, push-constant struct and binding index of the radix sort's passes,
+// declared once. Mirrored once in Rust (src/vk/sort.rs); tests/spirv_layout.rs
+// checks the compiled SPIR-V against the mirror. Every pass uses the same
+// descriptor set layout (SORT_BINDINGS storage buffers); the ping-pong passes
+// bind two sets, in and out swapped.
+//
+// An LSD sort of 32-bit keys with 32-bit payloads, 8 bits per pass,
+// reduce-then-scan (no cross-workgroup waiting, so it is correct on drivers
+// without forward progress between workgroups, lavapipe included). A block is
+// WG x ITEMS consecutive elements; block b's count of digit d lives at
+// hist[d * blocks + b], so one exclusive scan of hist gives every (digit, block)
+// its first output position. The element count is the first word of a buffer, so
+// a producer on the GPU can set it.
+#ifndef SORT_BINDINGS_GLSL
+#define SORT_BINDINGS_GLSL
+
+#define SORT_BINDING_COUNT 0
+#define SORT_BINDING_KEYS_IN 1
+#define SORT_BINDING_VALS_IN 2
+#define SORT_BINDING_KEYS_OUT 3
+#define SORT_BINDING_VALS_OUT 4
+#define SORT_BINDING_HIST 5
+#define SORT_BINDING_PARTIALS 6
+#define SORT_BINDING_ARGS 7
+#define SORT_BINDINGS 8
+
+struct RadixPush {
+    uint shift;   // bit offset of this pass's digit
+    uint blocks;  // blocks in the dispatch (hist has 256 x blocks entries); 0: from count
+    uint chunks;  // scan chunks (workgroups of scan_reduce / scan_apply); 0: from count
+    uint pad;
+};
+
+layout(std430, set = 0, binding = SORT_BINDING_COUNT) readonly buffer SortCount { uint count; };
+layout(std430, set = 0, binding = SORT_BINDING_KEYS_IN) readonly buffer KeysIn { uint keys_in[]; };
+layout(std430, set = 0, binding = SORT_BINDING_VALS_IN) readonly buffer ValsIn { uint vals_in[]; };
+layout(std430, set = 0, binding = SORT_BINDING_KEYS_OUT) writeonly buffer KeysOut { uint keys_out[]; };
+layout(std430, set = 0, binding = SORT_BINDING_VALS_OUT) writeonly buffer ValsOut { uint vals_out[]; };
+layout(std430, set = 0, binding = SORT_BINDING_HIST) buffer Hist { uint hist[]; };
+layout(std430, set = 0, binding = SORT_BINDING_PARTIALS) buffer Partials { uint partials[]; };
+// Indirect dispatches when the count is only on the GPU: blocks, then scan chunks.
+layout(std430, set = 0, binding = SORT_BINDING_ARGS) writeonly buffer SortArgs { uvec4 sort_args[]; };
+
+#endif

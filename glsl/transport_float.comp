@@ -1,7 +1,0 @@
-#version 450
-// Transport pass with float atomic accumulators (VK_EXT_shader_atomic_float).
-#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
-#extension GL_EXT_shader_atomic_int64 : require
-#extension GL_EXT_shader_atomic_float : require
-#define FSOT_FLOAT_ATOMICS
-#include "transport_body.glsl"

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Runs the same optimizations with two fsot binaries and compares the masks'
+# samples bit for bit (examples/same_samples.rs; the EXR files themselves differ
+# run to run in bytes that are not samples). CPU runs, and --deterministic Vulkan
+# runs on whatever device VK_DRIVER_FILES / --device selects (lavapipe in CI).
+#   scripts/same-masks.sh OLD_FSOT NEW_FSOT
+set -euo pipefail
+old=$(realpath "$1"); new=$(realpath "$2")
+cd "$(dirname "$0")/.."
+cargo build --release --quiet --example same_samples
+compare=$(realpath target/release/examples/same_samples)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+runs=(
+  "--backend cpu --size 16x16x8 --dims 2 --kernel taa --iterations 50 --seed 3"
+  "--backend cpu --size 16x16x8 --dims 1 --kernel perceptual-taa --iterations 40 --seed 5"
+  "--backend cpu --size 16x16x8 --dims 3 --kernel gaussian --iterations 30 --seed 9"
+  "--backend cpu --size 32x32x4 --dims 2 --kernel gaussian --sigma 12 --iterations 10 --seed 2"
+  "--backend vulkan --deterministic --size 16x16x8 --dims 2 --kernel taa --iterations 50 --seed 3"
+  "--backend vulkan --deterministic --size 16x16x8 --dims 1 --kernel perceptual-taa --iterations 40 --seed 5"
+  "--backend vulkan --deterministic --size 32x32x8 --dims 2 --kernel gaussian --sigma 3 --iterations 20 --seed 9"
+  "--backend vulkan --deterministic --size 32x32x4 --dims 2 --kernel gaussian --sigma 12 --iterations 10 --seed 2"
+)
+failed=0
+for i in "${!runs[@]}"; do
+  # shellcheck disable=SC2086
+  "$old" optimize ${runs[$i]} --out "$work/old-$i.exr" >/dev/null 2>&1
+  # shellcheck disable=SC2086
+  "$new" optimize ${runs[$i]} --out "$work/new-$i.exr" >/dev/null 2>&1
+  if verdict=$("$compare" "$work/old-$i.exr" "$work/new-$i.exr"); then :; else failed=$((failed + 1)); fi
+  echo "${runs[$i]}: $verdict"
+done
+echo "$(( ${#runs[@]} - failed )) passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,87 @@
+//! One interface over the optimizer's backends: the CPU path (`cpu_backend`) and
+//! Vulkan (`gpu`). `run::Run` drives a backend through it; nothing else needs to
+//! know which one it has.
+
+use crate::error::Result;
+use crate::mask::Mask;
+use crate::settings::RunState;
+
+/// Where a run may go.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// A Vulkan GPU when there is one (not a CPU implementation such as
+    /// lavapipe, which is slower than the CPU path, unless a device is named),
+    /// else the CPU path; a GPU that fails mid-run hands over to the CPU.
+    #[default]
+    Auto,
+    Cpu,
+    Vulkan,
+}
+
+/// Which backend a run is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BackendKind {
+    Cpu,
+    Vulkan,
+}
+
+impl BackendKind {
+    pub fn name(&self) -> &'static str {
+        match self {
+            BackendKind::Cpu => "cpu",
+            BackendKind::Vulkan => "vulkan",
+        }
+    }
+}
+
+/// GPU time per pass, from timestamp queries (nanoseconds, summed).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Profile {
+    pub transport_ns: f64,
+    pub large_ns: f64,
+    pub update_ns: f64,
+    pub iterations: u32,
+}
+
+impl Profile {
+    /// The GPU's own time over every profiled iteration.
+    pub fn seconds(&self) -> f64 {
+        (self.transport_ns + self.large_ns + self.update_ns) * 1e-9
+    }
+}
+
+/// What a backend has to say after (or during) a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    /// Time per pass, when profiling (Vulkan).
+    pub profile: Option<Profile>,
+    /// Large classes skipped because their buffer was full (Vulkan; should be 0).
+    pub skipped_large_classes: u64,
+    /// What the Vulkan validation layer reported (empty with the layer off).
+    pub validation_messages: Vec<String>,
+}
+
+/// A run of the optimizer on one backend: step, save, restore, read.
+pub trait Backend: Send {
+    fn kind(&self) -> BackendKind;
+    /// The backend and its device, in words.
+    fn describe(&self) -> String;
+    /// Iterations done.
+    fn iteration(&self) -> u32;
+    fn slices_per_iteration(&self) -> u32;
+    /// Runs at least one and at most `max` iterations (one on the CPU, a batch
+    /// on the GPU); returns their objective estimates. None past the end.
+    fn step_up_to(&mut self, max: u32) -> Result<Vec<f64>>;
+    /// Where the run stands, for a checkpoint.
+    fn state(&self) -> Result<RunState>;
+    /// Continues from a saved state (made by either backend).
+    fn restore(&mut self, saved: &RunState) -> Result<()>;
+    /// The samples as they are now.
+    fn samples(&self) -> Result<Vec<f32>>;
+    /// The samples with their provenance.
+    fn mask(&self) -> Result<Mask>;
+    /// Diagnostics: the summed displacement of every coordinate from the slices
+    /// of iteration `iteration`, without moving anything.
+    fn displacements(&mut self, iteration: u32) -> Result<Vec<f64>>;
+    fn report(&self) -> Report;
+}

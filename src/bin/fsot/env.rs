@@ -1,0 +1,31 @@
+//! The environment variables the command line reads and hands to the library as
+//! options (the library reads none but the documented `FSOT_FAULT` test switch).
+
+use fsot::vk::{Context, ContextOptions};
+
+use super::Result;
+
+/// The Vulkan device: the flag, else `FSOT_DEVICE`.
+pub(crate) fn device(flag: Option<String>) -> Option<String> {
+    flag.or_else(|| std::env::var("FSOT_DEVICE").ok()).filter(|d| !d.is_empty())
+}
+
+/// `FSOT_VALIDATION=1`: the Vulkan validation layer on.
+pub(crate) fn validation() -> bool {
+    std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false)
+}
+
+/// `FSOT_TRANSPORT=WG,SPG`: the workgroup transport forced to that shape (tuning).
+pub(crate) fn transport_shape() -> Option<(u32, u32)> {
+    let v = std::env::var("FSOT_TRANSPORT").ok()?;
+    let f: Vec<u32> = v.split(',').filter_map(|x| x.trim().parse().ok()).collect();
+    match f[..] {
+        [wg, spg] if wg > 0 && spg > 0 => Some((wg, spg)),
+        _ => None,
+    }
+}
+
+/// A Vulkan context on the device the flag or the environment names.
+pub(crate) fn context(flag: Option<String>) -> Result<Context> {
+    Context::new(&ContextOptions { validation: validation(), device: device(flag) })
+}

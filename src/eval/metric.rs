@@ -1,0 +1,34 @@
+//! The one pRelMSE (and RelMSE) of the evaluation and the benchmarks'
+//! scene judge; definitions in `suite.rs`'s header.
+
+use crate::eval::eye::Eye;
+use crate::eval::suite::EPSILON;
+
+/// (pRelMSE, RelMSE) of one render against the reference, over the frames from
+/// `start` (`seen_reference[f - start]`: what the eye sees of reference frame f)
+/// and the image interior the eye's margin leaves.
+pub fn relative_errors(
+    render: &[Vec<f64>],
+    reference: &[Vec<f64>],
+    seen_reference: &[Vec<f64>],
+    eye: &Eye,
+    start: usize,
+    n: usize,
+) -> (f64, f64) {
+    let m = eye.margin;
+    let inner = n - 2 * m;
+    let error: Vec<Vec<f64>> =
+        render.iter().zip(reference).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
+    let (mut p_sum, mut r_sum, mut count) = (0.0, 0.0, 0usize);
+    for f in start..render.len() {
+        let seen = eye.filter(&error, f, n);
+        for (i, (&e, &r)) in seen.iter().zip(&seen_reference[f - start]).enumerate() {
+            p_sum += e * e / (r * r + EPSILON);
+            let (x, y) = (i % inner + m, i / inner + m);
+            let (e, r) = (error[f][y * n + x], reference[f][y * n + x]);
+            r_sum += e * e / (r * r + EPSILON);
+            count += 1;
+        }
+    }
+    (p_sum / count as f64, r_sum / count as f64)
+}

@@ -1,0 +1,86 @@
+//! The pipelines of a Vulkan run, each bound to the run's buffers through the one
+//! fsot layout.
+
+use super::buffers::RunBuffers;
+use super::layout::{binding, TransportPush, UpdatePush};
+use super::shaders;
+use super::shape::{TransportShape, LANE_MAX, LOCAL_MAX};
+use crate::error::Result;
+use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
+
+/// Descriptor sets of the gather: keyed by segment, or by projection.
+pub const GATHER_BY_SEGMENT: usize = 0;
+pub const GATHER_BY_PROJECTION: usize = 1;
+
+pub struct RunPipelines {
+    pub transport: ComputePipeline,
+    pub update: ComputePipeline,
+    /// The large-class stage, when the kernel makes large classes.
+    pub large: Option<LargePipelines>,
+}
+
+pub struct LargePipelines {
+    pub args: ComputePipeline,
+    pub gather: ComputePipeline,
+    pub transport: ComputePipeline,
+}
+
+fn pipeline(
+    ctx: &Context,
+    spirv: &[u8],
+    push_bytes: usize,
+    spec: &[u32],
+    sets: u32,
+) -> Result<ComputePipeline> {
+    let desc = ComputeDesc { spirv, bindings: binding::BINDINGS, push_bytes: push_bytes as u32, spec, sets };
+    ComputePipeline::new(ctx, &desc)
+}
+
+impl RunPipelines {
+    /// The passes for this shape and accumulator, bound to `buffers` (and the
+    /// large-class sort's buffers).
+    pub fn new(
+        ctx: &Context,
+        shape: &TransportShape,
+        float_acc: bool,
+        buffers: &RunBuffers,
+        sort: Option<&RadixSort>,
+    ) -> Result<Self> {
+        let all = buffers.bindings(sort)?;
+        let bound = |p: ComputePipeline, set: usize, table: Option<&Buffer>| -> Result<ComputePipeline> {
+            p.bind(set, &all)?;
+            if let Some(t) = table {
+                p.bind(set, &[(binding::GATHER_TABLE, t)])?;
+            }
+            Ok(p)
+        };
+        let tpush = std::mem::size_of::<TransportPush>();
+        let transport_spv = match (shape.per_lane, float_acc) {
+            (true, true) => shaders::TRANSPORT_LANE_FLOAT,
+            (true, false) => shaders::TRANSPORT_LANE,
+            (false, true) => shaders::TRANSPORT_FLOAT,
+            (false, false) => shaders::TRANSPORT,
+        };
+        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, local_max];
+        let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
+        let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
+        let update =
+            bound(pipeline(ctx, update_spv, std::mem::size_of::<UpdatePush>(), &[256], 1)?, 0, None)?;
+        let large = match sort {
+            Some(_) => {
+                let gather = pipeline(ctx, shaders::LARGE_GATHER, 0, &[256], 2)?;
+                let gather = bound(gather, GATHER_BY_SEGMENT, Some(&buffers.large_seg))?;
+                let gather = bound(gather, GATHER_BY_PROJECTION, Some(&buffers.large_pkey))?;
+                let spv = if float_acc { shaders::TRANSPORT_LARGE_FLOAT } else { shaders::TRANSPORT_LARGE };
+                // 128 invocations whatever the device: a class may hold taps x
+                // spp samples, and each invocation loops over n / WG.
+                let transport = bound(pipeline(ctx, spv, tpush, &[128], 1)?, 0, None)?;
+                let args = bound(pipeline(ctx, shaders::LARGE_ARGS, 0, &[], 1)?, 0, None)?;
+                Some(LargePipelines { args, gather, transport })
+            }
+            None => None,
+        };
+        Ok(Self { transport, update, large })
+    }
+}

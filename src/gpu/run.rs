@@ -1,0 +1,405 @@
+//! The fsot optimizer on Vulkan: the same slices, transport rule, scatter and step
+//! as the CPU backend, as compute passes. Every buffer is allocated once per run
+//! (`buffers.rs`); many iterations are recorded into one submission, with no host
+//! round trip between them.
+//!
+//! Per iteration: transport (one workgroup per slice: draw, gather, project,
+//! bitonic sort in shared memory, exact targets, scatter) -> for classes larger
+//! than shared memory holds, three passes of the global radix sort (by point, by
+//! projection, then stably by class) and a finishing transport pass -> update.
+
+use ash::vk;
+
+use super::buffers::{LargePlan, RunBuffers};
+use super::layout::{
+    CostSlot, LargeMetaHead, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE,
+};
+use super::pipelines::{RunPipelines, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
+use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
+use super::{VulkanOptions, BATCH, GPU_MAX_DIMS};
+use crate::backend::{Backend, BackendKind, Profile, Report};
+use crate::cpu_backend::FIXED_SCALE;
+use crate::error::{Error, Result};
+use crate::kernel::Kernel;
+use crate::mask::Mask;
+use crate::problem::Tile;
+use crate::rng::seed_key;
+use crate::settings::{initial_samples, run_mask, slices_and_hits, RunState, Settings};
+use crate::slice::{level_thresholds, slice_key};
+use crate::step_rule::{schedule, StepRule};
+use crate::vk::buffer::upload_batch;
+use crate::vk::commands::{barrier, copy, zero};
+use crate::vk::{Buffer, Context, RadixSort, Timer};
+
+pub struct VulkanRun {
+    pub tile: Tile,
+    pub settings: Settings,
+    pub kernel: Kernel,
+    pub options: VulkanOptions,
+    slices: u32,
+    hits_per_value: f64,
+    iteration: u32,
+    float_acc: bool,
+    shape: TransportShape,
+    large: LargePlan,
+    profile: Profile,
+    overflowed: u64,
+    // Pipelines and the sort before the buffers they are bound to: dropped first.
+    pipelines: RunPipelines,
+    sort: Option<RadixSort>,
+    timer: Option<Timer>,
+    buffers: RunBuffers,
+    ctx: Context,
+}
+
+impl VulkanRun {
+    /// A run on `ctx`, from `init` or from white noise drawn from the seed.
+    pub fn new(
+        ctx: &Context,
+        tile: Tile,
+        settings: Settings,
+        init: Option<&Mask>,
+        options: VulkanOptions,
+    ) -> Result<Self> {
+        let info = ctx.info().clone();
+        if tile.dims > GPU_MAX_DIMS {
+            return Err(Error::invalid(format!(
+                "the Vulkan optimizer handles d <= {GPU_MAX_DIMS} (closed-form targets); d = {} runs on the CPU backend",
+                tile.dims
+            )));
+        }
+        if !info.int64_atomics {
+            return Err(Error::VulkanUnavailable(format!("{} lacks 64-bit buffer atomics", info.name)));
+        }
+        if !info.subgroup_ballot {
+            return Err(Error::VulkanUnavailable(format!("{} lacks subgroup ballot in compute", info.name)));
+        }
+        let kernel = Kernel::new(settings.kernel, &tile);
+        let (slices, hits_per_value) = slices_and_hits(&tile, &kernel, &settings)?;
+        let samples = initial_samples(&tile, &settings, init)?;
+        let float_acc = !options.deterministic && info.float_atomic_add;
+        let max_class = (kernel.taps.len() * tile.spp) as u32;
+        let shape = transport_shape(ctx, max_class, &options)?;
+        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let thresholds = level_thresholds(&kernel);
+        let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
+        let adam = matches!(settings.rule, StepRule::Adam { .. });
+        let buffers =
+            RunBuffers::new(ctx, &tile, &kernel, &thresholds, &samples, adam, float_acc, &large, local_max)?;
+        let sort = buffers.large_sort(ctx, &large)?;
+        let pipelines = RunPipelines::new(ctx, &shape, float_acc, &buffers, sort.as_ref())?;
+        let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
+        Ok(Self {
+            tile,
+            settings,
+            kernel,
+            options,
+            slices,
+            hits_per_value,
+            iteration: 0,
+            float_acc,
+            shape,
+            large,
+            profile: Profile::default(),
+            overflowed: 0,
+            pipelines,
+            sort,
+            timer,
+            buffers,
+            ctx: ctx.clone(),
+        })
+    }
+
+    pub fn finished(&self) -> bool {
+        self.iteration >= self.settings.iterations
+    }
+    pub fn uses_float_atomics(&self) -> bool {
+        self.float_acc
+    }
+    pub fn large_capacity(&self) -> u32 {
+        self.large.capacity
+    }
+    /// Large classes dropped because their buffer was full (should stay 0).
+    pub fn overflowed(&self) -> u64 {
+        self.overflowed
+    }
+    /// Where the run's time went (with `VulkanOptions::profile`).
+    pub fn profile(&self) -> &Profile {
+        &self.profile
+    }
+
+    /// Records the transport pass of one iteration (and the reset of the
+    /// large-class counters).
+    fn record_transport(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, std::mem::size_of::<LargeMetaHead>() as u64);
+        barrier(&self.ctx, cmd);
+        let groups = two_d(self.shape.groups(self.slices));
+        self.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
+        barrier(&self.ctx, cmd);
+    }
+
+    /// Records the large-class stage, when the kernel can make classes too large
+    /// for the transport pass: the dispatch sizes from the counts the transport
+    /// left on the GPU, then three stable sorts (by point, by projection, by
+    /// class; so each class ends in projection order with ties in point order,
+    /// the CPU's), the gathers between them, and the finishing pass.
+    fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+        let (Some(sort), Some(large)) = (&self.sort, &self.pipelines.large) else { return };
+        let args = &self.buffers.large_args;
+        large.args.dispatch(cmd, 0, [1, 1, 1], &[]);
+        barrier(&self.ctx, cmd);
+        sort.record(cmd, self.large.point_bits, None);
+        large.gather.dispatch_indirect(cmd, GATHER_BY_PROJECTION, args, ARG_GATHER, &[]);
+        barrier(&self.ctx, cmd);
+        sort.record(cmd, 32, None);
+        large.gather.dispatch_indirect(cmd, GATHER_BY_SEGMENT, args, ARG_GATHER, &[]);
+        barrier(&self.ctx, cmd);
+        sort.record(cmd, self.large.seg_bits, None);
+        large.transport.dispatch_indirect(cmd, 0, args, ARG_SEGMENTS, bytemuck::bytes_of(push));
+        barrier(&self.ctx, cmd);
+    }
+
+    fn transport_push(&self, iteration: u32, slot: u32) -> TransportPush {
+        TransportPush {
+            slice_key: slice_key(seed_key(self.settings.seed)),
+            iteration,
+            width: self.tile.width as u32,
+            height: self.tile.height as u32,
+            frames: self.tile.frames as u32,
+            spp: self.tile.spp as u32,
+            dims: self.tile.dims as u32,
+            taps: self.kernel.taps.len() as u32,
+            slices: self.slices,
+            cost_slot: slot,
+            large_capacity: self.large.capacity,
+            pad: 0,
+        }
+    }
+
+    fn update_push(&self, iteration: u32) -> UpdatePush {
+        let t = iteration + 1;
+        let mut p = UpdatePush {
+            values: self.tile.values() as u32,
+            step_t: t,
+            scale: schedule(iteration, self.settings.iterations),
+            inv_hits: (1.0 / self.hits_per_value) as f32,
+            ..Default::default()
+        };
+        match self.settings.rule {
+            StepRule::Momentum { step, beta } => {
+                (p.rule, p.p0, p.p1) = (0, step, beta);
+            }
+            StepRule::Adam { lr, beta1, beta2, eps } => {
+                (p.rule, p.p0, p.p1, p.p2, p.p3) = (1, lr, beta1, beta2, eps);
+                p.bias1 = 1.0 - beta1.powi(t as i32);
+                p.bias2 = 1.0 - beta2.powi(t as i32);
+            }
+        }
+        p
+    }
+
+    /// Runs up to `max` iterations (at most BATCH) in one submission; returns each
+    /// iteration's objective estimate.
+    pub fn step_batch(&mut self, max: u32) -> Result<Vec<f64>> {
+        let count = max.min(BATCH).min(self.settings.iterations - self.iteration);
+        if count == 0 {
+            return Ok(Vec::new());
+        }
+        let ctx = &self.ctx;
+        let b = &self.buffers;
+        let values = self.tile.values() as u32;
+        let cost_bytes = BATCH as u64 * std::mem::size_of::<CostSlot>() as u64;
+        let stamp = |cmd, i| {
+            if let Some(t) = &self.timer {
+                t.stamp(cmd, i);
+            }
+        };
+        ctx.submit(|cmd| {
+            zero(ctx, cmd, &b.costs, 0, vk::WHOLE_SIZE);
+            if let Some(t) = &self.timer {
+                t.reset(cmd);
+            }
+            barrier(ctx, cmd);
+            for k in 0..count {
+                let it = self.iteration + k;
+                let push = self.transport_push(it, k);
+                stamp(cmd, 4 * k);
+                self.record_transport(cmd, &push);
+                stamp(cmd, 4 * k + 1);
+                self.record_large(cmd, &push);
+                stamp(cmd, 4 * k + 2);
+                let update = bytemuck::bytes_of(&self.update_push(it)).to_vec();
+                self.pipelines.update.dispatch(cmd, 0, two_d(values.div_ceil(256)), &update);
+                barrier(ctx, cmd);
+                stamp(cmd, 4 * k + 3);
+            }
+            copy(ctx, cmd, &b.costs, &b.readback, cost_bytes, 0);
+            copy(
+                ctx,
+                cmd,
+                &b.large_meta,
+                &b.readback,
+                std::mem::size_of::<LargeMetaHead>() as u64,
+                cost_bytes,
+            );
+            barrier(ctx, cmd);
+        })?;
+        let raw: Vec<u8> = b.readback.read(cost_bytes as usize + std::mem::size_of::<LargeMetaHead>())?;
+        let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes as usize]);
+        let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes as usize..]);
+        self.overflowed += head.large_overflow as u64;
+        let costs = slots[..count as usize]
+            .iter()
+            .map(|s| if s.count > 0 { s.squared as f64 / COST_SCALE / s.count as f64 } else { 0.0 })
+            .collect();
+        if let Some(t) = &self.timer {
+            let ns = t.read_ns(4 * count)?;
+            for k in 0..count as usize {
+                self.profile.transport_ns += ns[4 * k + 1] - ns[4 * k];
+                self.profile.large_ns += ns[4 * k + 2] - ns[4 * k + 1];
+                self.profile.update_ns += ns[4 * k + 3] - ns[4 * k + 2];
+            }
+            self.profile.iterations += count;
+        }
+        self.iteration += count;
+        Ok(costs)
+    }
+
+    /// Reads the first `count` values of a device buffer through the run's
+    /// readback buffer (no allocation).
+    fn fetch<T: bytemuck::Pod>(&self, buffer: &Buffer, count: usize) -> Result<Vec<T>> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        self.ctx.submit(|cmd| {
+            copy(&self.ctx, cmd, buffer, &self.buffers.readback, bytes, 0);
+            barrier(&self.ctx, cmd);
+        })?;
+        self.buffers.readback.read(count)
+    }
+}
+
+/// The transport shape for this device and kernel, or why the asked one cannot be.
+fn transport_shape(ctx: &Context, max_class: u32, options: &VulkanOptions) -> Result<TransportShape> {
+    let info = ctx.info();
+    let mut shape = TransportShape::for_device(info, max_class, options.transport_shape);
+    match options.transport {
+        Some(TransportKind::PerLane) if max_class > LOOP_BUDGET / 2 => {
+            return Err(Error::invalid("the per-lane transport cannot take classes this large"))
+        }
+        // Built for CPU implementations only: an H100's driver (580) refuses its
+        // pipeline at 2048 samples per invocation (bench/results/h100-run.log).
+        Some(TransportKind::PerLane) if !info.is_cpu() => {
+            return Err(Error::invalid(format!(
+                "the per-lane transport is for CPU implementations of Vulkan, not {}",
+                info.name
+            )))
+        }
+        Some(TransportKind::PerLane) => shape.per_lane = true,
+        Some(TransportKind::Workgroup) => shape.per_lane = false,
+        None => {}
+    }
+    Ok(shape)
+}
+
+impl Backend for VulkanRun {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Vulkan
+    }
+
+    fn describe(&self) -> String {
+        let scatter = if self.float_acc { "float atomics" } else { "fixed point, deterministic" };
+        format!("vulkan on {} ({}; scatter: {scatter})", self.ctx.info().name, self.ctx.info().driver)
+    }
+
+    fn iteration(&self) -> u32 {
+        self.iteration
+    }
+
+    fn slices_per_iteration(&self) -> u32 {
+        self.slices
+    }
+
+    fn step_up_to(&mut self, max: u32) -> Result<Vec<f64>> {
+        self.step_batch(max.max(1))
+    }
+
+    /// Samples and optimizer state read back in one submission.
+    fn state(&self) -> Result<RunState> {
+        let values = self.tile.values();
+        let bytes = values as u64 * 4;
+        let adam = matches!(self.settings.rule, StepRule::Adam { .. });
+        let b = &self.buffers;
+        self.ctx.submit(|cmd| {
+            copy(&self.ctx, cmd, &b.samples, &b.readback, bytes, 0);
+            copy(&self.ctx, cmd, &b.first, &b.readback, bytes, bytes);
+            barrier(&self.ctx, cmd);
+        })?;
+        let both: Vec<f32> = b.readback.read(2 * values)?;
+        let (samples, first) = both.split_at(values);
+        Ok(RunState {
+            iteration: self.iteration,
+            samples: samples.to_vec(),
+            first: first.to_vec(),
+            second: if adam { self.fetch(&b.second, values)? } else { Vec::new() },
+        })
+    }
+
+    fn restore(&mut self, saved: &RunState) -> Result<()> {
+        saved.check(&self.tile, &self.settings)?;
+        let b = &self.buffers;
+        let uploads = [
+            (&b.samples, bytemuck::cast_slice(&saved.samples)),
+            (&b.first, bytemuck::cast_slice(&saved.first)),
+            (&b.second, bytemuck::cast_slice(&saved.second)),
+        ];
+        upload_batch(&self.ctx, &uploads, |_| {})?;
+        self.iteration = saved.iteration;
+        Ok(())
+    }
+
+    fn samples(&self) -> Result<Vec<f32>> {
+        self.fetch(&self.buffers.samples, self.tile.values())
+    }
+
+    fn mask(&self) -> Result<Mask> {
+        let mut mask = run_mask(&self.tile, &self.settings, self.iteration, self.slices, self.samples()?);
+        mask.set_meta("backend", format!("vulkan ({})", self.ctx.info().name));
+        if !self.float_acc {
+            mask.set_meta("scatter", "fixed-point (deterministic)");
+        }
+        Ok(mask)
+    }
+
+    /// Runs only the transport passes of iteration `iteration` (no update) and
+    /// returns the summed displacement of every coordinate; the accumulators are
+    /// left at zero.
+    fn displacements(&mut self, iteration: u32) -> Result<Vec<f64>> {
+        let ctx = &self.ctx;
+        let values = self.tile.values();
+        let width = if self.float_acc { 4 } else { 8 };
+        let push = self.transport_push(iteration, 0);
+        let acc = &self.buffers.acc;
+        ctx.submit(|cmd| {
+            zero(ctx, cmd, acc, 0, vk::WHOLE_SIZE);
+            barrier(ctx, cmd);
+            self.record_transport(cmd, &push);
+            self.record_large(cmd, &push);
+            copy(ctx, cmd, acc, &self.buffers.readback, (values * width) as u64, 0);
+            barrier(ctx, cmd);
+            zero(ctx, cmd, acc, 0, vk::WHOLE_SIZE);
+            barrier(ctx, cmd);
+        })?;
+        Ok(if self.float_acc {
+            self.buffers.readback.read::<f32>(values)?.into_iter().map(f64::from).collect()
+        } else {
+            self.buffers.readback.read::<i64>(values)?.into_iter().map(|v| v as f64 / FIXED_SCALE).collect()
+        })
+    }
+
+    fn report(&self) -> Report {
+        Report {
+            profile: self.options.profile.then(|| self.profile.clone()),
+            skipped_large_classes: self.overflowed,
+            validation_messages: self.ctx.validation_messages(),
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! One entry point from a method's name and parameters to a mask, shared by the
+//! command line and the evaluation: white noise, STBN, FAST, and fsot (on the CPU
+//! path; a run with checkpoints, cancellation or Vulkan goes through `run::Run`).
+
+use crate::baselines::fast::{fast_mask, FastSpec};
+use crate::baselines::stbn::stbn_mask_with;
+use crate::error::Result;
+use crate::mask::Mask;
+use crate::problem::Tile;
+use crate::settings::Settings;
+
+/// How to make a mask.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Method {
+    /// Independent uniform samples.
+    White,
+    /// Spatiotemporal blue noise: energy sigmas in pixels and frames; vector
+    /// masks by `passes` passes of annealing.
+    Stbn { sigma: f64, sigma_t: f64, passes: u32 },
+    /// Filter-adapted masks: greedy swaps for the filter, `passes` passes.
+    Fast { spec: FastSpec, passes: u32 },
+    /// fsot's optimizer, to the end on the CPU path.
+    Fsot(Settings),
+}
+
+impl Method {
+    /// Does it search by passes of swaps (and so report each pass)?
+    pub fn swaps(&self, tile: &Tile) -> bool {
+        matches!(self, Method::Fast { .. }) || matches!(self, Method::Stbn { .. } if tile.dims > 1)
+    }
+}
+
+/// A made mask, and what its search has to say (FAST's swap counts).
+pub struct Made {
+    pub mask: Mask,
+    pub note: Option<String>,
+}
+
+/// Makes the mask of `method` for `tile` from `seed` (fsot: the settings' seed);
+/// `on_pass(pass, energy)` after each pass of a swap search.
+pub fn make(method: &Method, tile: Tile, seed: u64, on_pass: &mut dyn FnMut(u32, f64)) -> Result<Made> {
+    let (mask, note) = match method {
+        Method::White => {
+            let mut m = Mask::white(tile, seed);
+            m.set_meta("version", env!("CARGO_PKG_VERSION"));
+            (m, None)
+        }
+        Method::Stbn { sigma, sigma_t, passes } => {
+            (stbn_mask_with(tile, *sigma, *sigma_t, *passes, seed, &mut *on_pass)?, None)
+        }
+        Method::Fast { spec, passes } => {
+            let (mask, report) = fast_mask(tile, spec, *passes, seed, &mut *on_pass)?;
+            let note = format!(
+                "{} ({} neighbours per pixel): loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated)",
+                spec.describe(),
+                report.offsets,
+                report.start_energy,
+                report.trace.last().copied().unwrap_or(report.start_energy),
+                report.accepted,
+                report.proposed,
+                report.recomputed
+            );
+            (mask, Some(note))
+        }
+        Method::Fsot(settings) => (crate::run::optimize(tile, *settings, None)?, None),
+    };
+    Ok(Made { mask, note })
+}

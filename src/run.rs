@@ -1,0 +1,331 @@
+//! A run of the optimizer, owned by the library whatever calls it (the command
+//! line, a benchmark, a renderer): it picks the backend (`auto | cpu | vulkan`)
+//! and says why, falls back to the CPU path when a GPU fails mid-run (from the
+//! last checkpoint), writes checkpoints every N iterations and when cancelled,
+//! resumes from one, stops when the caller's cancel flag is set, and reports
+//! progress through a callback.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use crate::backend::{Backend, BackendChoice};
+use crate::checkpoint;
+use crate::cpu_backend::CpuRun;
+use crate::error::{Error, Result};
+use crate::gpu::{VulkanOptions, VulkanRun};
+use crate::io::atomic::AtomicFile;
+use crate::mask::Mask;
+use crate::problem::Tile;
+use crate::settings::{RunState, Settings};
+use crate::vk::{Context, ContextOptions};
+
+/// Checkpoints of a run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Checkpointing {
+    /// The checkpoint file: written atomically every `every` iterations and when
+    /// the run is cancelled, removed when the run completes.
+    pub path: PathBuf,
+    pub every: u32,
+    /// Continue from the checkpoint at `path` (which must be this very run's).
+    /// Without it an existing file at `path` is refused, never overwritten.
+    pub resume: bool,
+}
+
+/// How a run is made.
+#[derive(Clone, Default)]
+pub struct RunOptions {
+    pub backend: BackendChoice,
+    /// The Vulkan device: its index or part of its name [default: the first
+    /// discrete GPU]. A device named here is taken by `Auto` whatever its type.
+    pub device: Option<String>,
+    /// Work on this context (a renderer's wrapped device, or one the caller made)
+    /// instead of making one; `Auto` then takes it whatever its type.
+    pub context: Option<Context>,
+    /// Vulkan's validation layer on (its messages in `Backend::report`).
+    pub validation: bool,
+    pub vulkan: VulkanOptions,
+    pub checkpoint: Option<Checkpointing>,
+}
+
+/// What a run tells its observer.
+#[derive(Debug)]
+pub enum Event<'a> {
+    /// Iterations done; the objective estimate of the last one.
+    Progress { iteration: u32, iterations: u32, objective: Option<f64> },
+    /// A checkpoint was written.
+    Checkpoint { iteration: u32, path: &'a Path },
+    /// The GPU failed at iteration `at`; the run goes on on `backend` from
+    /// iteration `from` (its checkpoint's, or 0).
+    FellBack { error: &'a Error, at: u32, backend: &'a str, from: u32, checkpoint: Option<&'a Path> },
+}
+
+/// How `Run::advance` ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// The asked iteration was reached.
+    Reached,
+    /// The cancel flag was set: stopped between iterations, the state saved to
+    /// `saved` when checkpointing.
+    Cancelled { iteration: u32, saved: Option<PathBuf> },
+}
+
+/// A flag the caller sets to stop a run between iterations (a renderer wires its
+/// own; `on_interrupt` wires Ctrl-C and SIGTERM).
+#[derive(Clone, Debug, Default)]
+pub struct CancelFlag(Arc<AtomicBool>);
+
+impl CancelFlag {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::SeqCst)
+    }
+    /// A flag that Ctrl-C (SIGINT) and SIGTERM set. Once per process.
+    pub fn on_interrupt() -> Result<Self> {
+        let flag = Self::new();
+        let set = flag.clone();
+        ctrlc::set_handler(move || set.cancel())
+            .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
+        Ok(flag)
+    }
+}
+
+/// An optimization in progress, on whichever backend it was given.
+pub struct Run {
+    tile: Tile,
+    settings: Settings,
+    init: Option<Mask>,
+    options: RunOptions,
+    backend: Box<dyn Backend>,
+    note: String,
+    fingerprint: String,
+    resumed_from: Option<u32>,
+    next_checkpoint: u32,
+}
+
+impl Run {
+    /// Starts a run: checks the checkpoint rules (before any long work), picks the
+    /// backend, and resumes from the checkpoint when asked.
+    pub fn start(tile: Tile, settings: Settings, init: Option<&Mask>, options: RunOptions) -> Result<Self> {
+        if settings.iterations == 0 {
+            return Err(Error::invalid("iterations must be at least 1"));
+        }
+        let fingerprint = checkpoint::fingerprint(&tile, &settings);
+        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
+        let (mut backend, note) = start_backend(tile, settings, init, &options)?;
+        let resumed_from = match saved {
+            Some(state) => {
+                backend.restore(&state)?;
+                Some(state.iteration)
+            }
+            None => None,
+        };
+        let every = options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
+        let next_checkpoint = backend.iteration().saturating_add(every);
+        Ok(Self {
+            tile,
+            settings,
+            init: init.cloned(),
+            options,
+            backend,
+            note,
+            fingerprint,
+            resumed_from,
+            next_checkpoint,
+        })
+    }
+
+    /// The backend in words, and why it was chosen when not the one asked for.
+    pub fn note(&self) -> &str {
+        &self.note
+    }
+    /// The iteration the run resumed from, when it did.
+    pub fn resumed_from(&self) -> Option<u32> {
+        self.resumed_from
+    }
+    pub fn backend(&self) -> &dyn Backend {
+        self.backend.as_ref()
+    }
+    pub fn backend_mut(&mut self) -> &mut dyn Backend {
+        self.backend.as_mut()
+    }
+    pub fn tile(&self) -> &Tile {
+        &self.tile
+    }
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+    pub fn iteration(&self) -> u32 {
+        self.backend.iteration()
+    }
+    pub fn finished(&self) -> bool {
+        self.iteration() >= self.settings.iterations
+    }
+
+    /// Runs to the end (see `advance`).
+    pub fn run(&mut self, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
+        self.advance(self.settings.iterations, cancel, on)
+    }
+
+    /// Runs until iteration `to` (at most the run's length), checkpointing on the
+    /// way; stops between iterations when `cancel` is set. A GPU that fails under
+    /// `BackendChoice::Auto` hands over to the CPU path, from the last checkpoint.
+    pub fn advance(&mut self, to: u32, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
+        let to = to.min(self.settings.iterations);
+        while self.iteration() < to {
+            if cancel.is_cancelled() {
+                let saved = self.save()?;
+                return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
+            }
+            match self.step_once(to, on) {
+                Ok(()) => {}
+                // The GPU failed (in an iteration or reading its state back for a
+                // checkpoint): continue on the CPU path.
+                Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on)?,
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(Outcome::Reached)
+    }
+
+    /// One step of the backend towards `to` (a batch on the GPU, stopping at the
+    /// next checkpoint), then the checkpoint when one is due.
+    fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
+        let stop = match &self.options.checkpoint {
+            Some(_) => to.min(self.next_checkpoint),
+            None => to,
+        };
+        let costs = self.backend.step_up_to(stop.saturating_sub(self.iteration()).max(1))?;
+        let iteration = self.iteration();
+        on(Event::Progress {
+            iteration,
+            iterations: self.settings.iterations,
+            objective: costs.last().copied(),
+        });
+        if iteration >= self.next_checkpoint && !self.finished() {
+            if let Some(path) = self.save()? {
+                on(Event::Checkpoint { iteration, path: &path });
+            }
+        }
+        Ok(())
+    }
+
+    /// The mask as it is now, with its provenance. When the run is complete its
+    /// checkpoint is removed.
+    pub fn finish(self) -> Result<Mask> {
+        let mask = self.backend.mask()?;
+        if let (Some(c), true) = (&self.options.checkpoint, self.finished()) {
+            if c.path.exists() {
+                std::fs::remove_file(&c.path).map_err(|e| {
+                    Error::io(format!("the run is complete, but removing {} failed", c.path.display()), e)
+                })?;
+            }
+        }
+        Ok(mask)
+    }
+
+    /// Writes a checkpoint when checkpointing; where it went.
+    fn save(&mut self) -> Result<Option<PathBuf>> {
+        let Some(c) = &self.options.checkpoint else { return Ok(None) };
+        checkpoint::write(&c.path, &self.fingerprint, &self.backend.state()?)?;
+        self.next_checkpoint = self.iteration().saturating_add(c.every);
+        Ok(Some(c.path.clone()))
+    }
+
+    fn can_fall_back(&self, e: &Error) -> bool {
+        self.options.backend == BackendChoice::Auto
+            && self.backend.kind() == crate::backend::BackendKind::Vulkan
+            && e.is_device_failure()
+    }
+
+    /// Continues on the CPU path, from the checkpoint when there is one.
+    fn fall_back(&mut self, e: &Error, on: &mut dyn FnMut(Event)) -> Result<()> {
+        let at = self.iteration();
+        let mut cpu = CpuRun::new(self.tile, self.settings, self.init.as_ref())?;
+        let checkpoint = self.options.checkpoint.as_ref().map(|c| c.path.clone()).filter(|p| p.exists());
+        if let Some(p) = &checkpoint {
+            cpu.restore(&checkpoint::read(p, &self.fingerprint, &self.tile)?)?;
+        }
+        self.backend = Box::new(cpu);
+        self.note = self.backend.describe();
+        let from = self.iteration();
+        let every = self.options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
+        self.next_checkpoint = from.saturating_add(every);
+        on(Event::FellBack { error: e, at, backend: &self.note, from, checkpoint: checkpoint.as_deref() });
+        Ok(())
+    }
+}
+
+/// The checkpoint rules: with `resume`, the file must hold a checkpoint of this
+/// very run; without, an existing file is left alone (an error); and the path
+/// must be writable before the work starts.
+fn saved_state(c: Option<&Checkpointing>, fingerprint: &str, tile: &Tile) -> Result<Option<RunState>> {
+    let Some(c) = c else { return Ok(None) };
+    if c.every == 0 {
+        return Err(Error::invalid("checkpoints must be at least 1 iteration apart"));
+    }
+    let saved = match c.resume {
+        true => Some(checkpoint::read(&c.path, fingerprint, tile)?),
+        false if c.path.exists() => return Err(Error::CheckpointExists(c.path.clone())),
+        false => None,
+    };
+    AtomicFile::create(&c.path)?; // a checkpoint that cannot be written fails now
+    Ok(saved)
+}
+
+/// The backend for `options.backend`, and the note that says which and why.
+fn start_backend(
+    tile: Tile,
+    settings: Settings,
+    init: Option<&Mask>,
+    options: &RunOptions,
+) -> Result<(Box<dyn Backend>, String)> {
+    let gpu = |require_gpu_type: bool| -> Result<Box<dyn Backend>> {
+        let ctx = match &options.context {
+            Some(c) => c.clone(),
+            None => Context::new(&ContextOptions {
+                validation: options.validation,
+                device: options.device.clone(),
+            })?,
+        };
+        if require_gpu_type && ctx.info().is_cpu() {
+            return Err(Error::VulkanUnavailable(format!(
+                "the only Vulkan device is {}, a CPU implementation",
+                ctx.info().name
+            )));
+        }
+        Ok(Box::new(VulkanRun::new(&ctx, tile, settings, init, options.vulkan)?))
+    };
+    let cpu = || -> Result<Box<dyn Backend>> { Ok(Box::new(CpuRun::new(tile, settings, init)?)) };
+    let backend = match options.backend {
+        BackendChoice::Cpu => cpu()?,
+        BackendChoice::Vulkan => gpu(false)?,
+        // Any reason the GPU path cannot take the run (no device, d > 2, a tile
+        // too large for a binding) falls back to the CPU path, which reports input
+        // that is wrong everywhere itself. A device the caller named or handed in
+        // is taken whatever its type; otherwise only a GPU.
+        BackendChoice::Auto => match gpu(options.device.is_none() && options.context.is_none()) {
+            Ok(b) => b,
+            Err(e) => {
+                let b = cpu()?;
+                let note = format!("{} (no Vulkan GPU used: {e})", b.describe());
+                return Ok((b, note));
+            }
+        },
+    };
+    let note = backend.describe();
+    Ok((backend, note))
+}
+
+/// Runs the optimizer to the end on the CPU path, with no observer.
+pub fn optimize(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<Mask> {
+    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let mut run = Run::start(tile, settings, init, options)?;
+    run.run(&CancelFlag::new(), &mut |_| {})?;
+    run.finish()
+}

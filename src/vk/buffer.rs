@@ -1,0 +1,228 @@
+//! Buffers that own their memory (gpu-allocator), freed on drop, with one upload
+//! and one download path: through a host-visible staging buffer for device-local
+//! memory, directly for host-visible memory.
+
+use ash::vk;
+use bytemuck::Pod;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::commands::{barrier, copy};
+use super::context::Context;
+use super::{check, fault};
+use crate::error::{Error, Result};
+
+/// Where a buffer's memory lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// Device-local: the data passes work on.
+    Device,
+    /// Host-visible, written by the CPU: staging for uploads, small counts.
+    Upload,
+    /// Host-visible, read by the CPU: staging for read-back.
+    Readback,
+}
+
+pub struct Buffer {
+    ctx: Context,
+    pub raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    pub size: u64,
+    pub location: Location,
+}
+
+impl Buffer {
+    /// A storage buffer (also a copy source and destination, and indirect
+    /// arguments) of `size` bytes. Device-local buffers larger than one binding
+    /// (maxStorageBufferRange) are refused.
+    pub fn new(ctx: &Context, size: u64, location: Location, name: &str) -> Result<Self> {
+        if size == 0 {
+            return Err(Error::invalid(format!("buffer {name}: size 0")));
+        }
+        if location == Location::Device && size > ctx.info().max_storage_buffer_range {
+            return Err(Error::invalid(format!(
+                "buffer {name} needs {size} bytes; the device binds at most {} (maxStorageBufferRange)",
+                ctx.info().max_storage_buffer_range
+            )));
+        }
+        if location == Location::Device && fault::refuse_device_allocation(size) {
+            return Err(Error::Allocation(gpu_allocator::AllocationError::OutOfMemory));
+        }
+        let device = ctx.device();
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::INDIRECT_BUFFER;
+        let info =
+            vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: a valid create info on a live device.
+        let raw = check("vkCreateBuffer", unsafe { device.create_buffer(&info, None) })?;
+        // SAFETY: `raw` was just made on this device.
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let memory_location = match location {
+            Location::Device => MemoryLocation::GpuOnly,
+            Location::Upload => MemoryLocation::CpuToGpu,
+            Location::Readback => MemoryLocation::GpuToCpu,
+        };
+        let desc = AllocationCreateDesc {
+            name,
+            requirements,
+            location: memory_location,
+            linear: true,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        };
+        let allocation = ctx.allocator().and_then(|mut a| a.allocate(&desc).map_err(Error::from));
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                // SAFETY: the buffer is unused and unbound.
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(e);
+            }
+        };
+        // SAFETY: the allocation satisfies the buffer's requirements.
+        if let Err(result) =
+            unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+        {
+            if let Ok(mut alloc) = ctx.allocator() {
+                let _ = alloc.free(allocation); // the bind's error is the one to report
+            }
+            // SAFETY: the buffer is unused.
+            unsafe { device.destroy_buffer(raw, None) };
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result });
+        }
+        Ok(Self { ctx: ctx.clone(), raw, allocation: Some(allocation), size, location })
+    }
+
+    /// A buffer holding `data`.
+    pub fn with_data<T: Pod>(ctx: &Context, data: &[T], location: Location, name: &str) -> Result<Self> {
+        let mut buffer = Self::new(ctx, std::mem::size_of_val(data).max(4) as u64, location, name)?;
+        buffer.upload(data)?;
+        Ok(buffer)
+    }
+
+    /// Writes `data` at the start of the buffer (through a staging buffer when the
+    /// buffer is device-local); waits until it is there.
+    pub fn upload<T: Pod>(&mut self, data: &[T]) -> Result<()> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        match self.location {
+            Location::Device => upload_batch(&self.ctx, &[(self, bytes)], |_| {}),
+            _ => {
+                if bytes.len() as u64 > self.size {
+                    return Err(Error::invalid(format!(
+                        "an upload of {} bytes into a buffer of {}",
+                        bytes.len(),
+                        self.size
+                    )));
+                }
+                self.mapped_mut()?[..bytes.len()].copy_from_slice(bytes);
+                Ok(())
+            }
+        }
+    }
+
+    /// The first `count` values of type T in the buffer (through a staging buffer
+    /// when the buffer is device-local).
+    pub fn download<T: Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        if bytes > self.size {
+            return Err(Error::invalid(format!(
+                "a download of {bytes} bytes from a buffer of {}",
+                self.size
+            )));
+        }
+        match self.location {
+            Location::Readback | Location::Upload => self.read(count),
+            Location::Device => {
+                let staging = Buffer::new(&self.ctx, bytes.max(4), Location::Readback, "download-staging")?;
+                self.ctx.submit(|cmd| {
+                    copy(&self.ctx, cmd, self, &staging, bytes, 0);
+                    barrier(&self.ctx, cmd);
+                })?;
+                staging.read(count)
+            }
+        }
+    }
+
+    /// The first `count` values of a host-visible buffer, as they are now (after
+    /// the submission that wrote them has completed).
+    pub fn read<T: Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = count * std::mem::size_of::<T>();
+        let mapped = self
+            .allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .ok_or_else(|| Error::invalid("the buffer is not host-visible"))?;
+        let slice = mapped.get(..bytes).ok_or_else(|| Error::invalid("a read past the end of a buffer"))?;
+        // Copied out: the mapping's alignment need not suit T.
+        Ok(bytemuck::pod_collect_to_vec(slice))
+    }
+
+    fn mapped_mut(&mut self) -> Result<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .map(|s| &mut s[..size])
+            .ok_or_else(|| Error::invalid("the buffer is not host-visible"))
+    }
+}
+
+/// Uploads into device-local buffers, all through one staging buffer in one
+/// submission, followed by whatever `after` records; waits until done.
+pub fn upload_batch(
+    ctx: &Context,
+    uploads: &[(&Buffer, &[u8])],
+    after: impl FnOnce(vk::CommandBuffer),
+) -> Result<()> {
+    let mut offsets = Vec::with_capacity(uploads.len());
+    let mut total = 0u64;
+    for (buffer, bytes) in uploads {
+        if buffer.location != Location::Device || bytes.len() as u64 > buffer.size {
+            return Err(Error::invalid(format!(
+                "an upload of {} bytes into a {:?} buffer of {}",
+                bytes.len(),
+                buffer.location,
+                buffer.size
+            )));
+        }
+        offsets.push(total);
+        total += (bytes.len() as u64).div_ceil(16) * 16;
+    }
+    let staging = match total {
+        0 => None,
+        _ => {
+            let mut s = Buffer::new(ctx, total, Location::Upload, "upload-staging")?;
+            let mapped = s.mapped_mut()?;
+            for ((_, bytes), &at) in uploads.iter().zip(&offsets) {
+                mapped[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
+            }
+            Some(s)
+        }
+    };
+    ctx.submit(|cmd| {
+        if let Some(s) = &staging {
+            for ((buffer, bytes), &at) in uploads.iter().zip(&offsets) {
+                if !bytes.is_empty() {
+                    let region = [vk::BufferCopy::default().src_offset(at).size(bytes.len() as u64)];
+                    // SAFETY: `cmd` is being recorded; both buffers are alive with TRANSFER usage.
+                    unsafe { ctx.device().cmd_copy_buffer(cmd, s.raw, buffer.raw, &region) };
+                }
+            }
+        }
+        barrier(ctx, cmd);
+        after(cmd);
+    })
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        if let Some(allocation) = self.allocation.take() {
+            if let Ok(mut alloc) = self.ctx.allocator() {
+                let _ = alloc.free(allocation); // nothing useful to do with a failure in drop
+            }
+        }
+        // SAFETY: no pending submission uses the buffer (every submission is waited for).
+        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+    }
+}

@@ -1,0 +1,140 @@
+//! Command submission: one persistent command pool, command buffer and fence per
+//! context (reset and reused, not made per call), the queue lock around
+//! `vkQueueSubmit`, and the barrier and copy helpers recorded into it.
+
+use ash::vk;
+
+use super::buffer::Buffer;
+use super::check;
+use super::context::Context;
+use crate::error::{Error, Result};
+
+/// The context's pool, its one primary command buffer and the fence it waits on.
+pub(crate) struct Commands {
+    pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+}
+
+impl Commands {
+    pub fn new(device: &ash::Device, queue_family: u32) -> Result<Self> {
+        let info = vk::CommandPoolCreateInfo::default().queue_family_index(queue_family);
+        // SAFETY: a valid device and create info.
+        let pool = check("vkCreateCommandPool", unsafe { device.create_command_pool(&info, None) })?;
+        let made = (|| -> Result<(vk::CommandBuffer, vk::Fence)> {
+            let alloc = vk::CommandBufferAllocateInfo::default()
+                .command_pool(pool)
+                .level(vk::CommandBufferLevel::PRIMARY)
+                .command_buffer_count(1);
+            // SAFETY: the pool was just made on this device.
+            let cmd =
+                check("vkAllocateCommandBuffers", unsafe { device.allocate_command_buffers(&alloc) })?[0];
+            // SAFETY: a plain create call.
+            let fence = check("vkCreateFence", unsafe {
+                device.create_fence(&vk::FenceCreateInfo::default(), None)
+            })?;
+            Ok((cmd, fence))
+        })();
+        match made {
+            Ok((cmd, fence)) => Ok(Self { pool, cmd, fence }),
+            Err(e) => {
+                // SAFETY: nothing from the pool was submitted.
+                unsafe { device.destroy_command_pool(pool, None) };
+                Err(e)
+            }
+        }
+    }
+
+    /// Destroys the pool and fence.
+    ///
+    /// # Safety
+    /// Nothing recorded in the pool may be pending on the device.
+    pub unsafe fn destroy(&self, device: &ash::Device) {
+        // SAFETY: the caller guarantees the device is done with them.
+        unsafe {
+            device.destroy_fence(self.fence, None);
+            device.destroy_command_pool(self.pool, None);
+        }
+    }
+}
+
+impl Context {
+    /// Records commands with `record` into the context's command buffer, submits
+    /// them and waits until the device has run them. Holds the context's command
+    /// lock throughout and its queue lock around the submission.
+    pub fn submit(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        let s = &self.shared;
+        let device = &s.device;
+        let commands = s.commands.lock().map_err(|_| Error::invalid("the command lock is poisoned"))?;
+        let cmd = commands.cmd;
+        // SAFETY: the previous submission of this pool was waited for (below), so
+        // nothing recorded in it is pending.
+        check("vkResetCommandPool", unsafe {
+            device.reset_command_pool(commands.pool, vk::CommandPoolResetFlags::empty())
+        })?;
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the buffer is in the initial state after the pool reset.
+        check("vkBeginCommandBuffer", unsafe { device.begin_command_buffer(cmd, &begin) })?;
+        record(cmd);
+        // SAFETY: recording began above.
+        check("vkEndCommandBuffer", unsafe { device.end_command_buffer(cmd) })?;
+        let cmds = [cmd];
+        let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+        let submitted = match super::fault::submission() {
+            Some(injected) => Err(injected),
+            None => {
+                let _queue = s.queue_lock.lock().map_err(|_| Error::invalid("the queue lock is poisoned"))?;
+                // SAFETY: the queue is externally synchronised by the queue lock held here;
+                // the fence is unsignalled (reset after each wait).
+                unsafe { device.queue_submit(s.queue, &submit, commands.fence) }
+            }
+        };
+        check("vkQueueSubmit", submitted)?;
+        // SAFETY: the fence belongs to this device.
+        check("vkWaitForFences", unsafe { device.wait_for_fences(&[commands.fence], true, u64::MAX) })?;
+        // SAFETY: the fence is signalled and not in use by a pending submission.
+        check("vkResetFences", unsafe { device.reset_fences(&[commands.fence]) })
+    }
+}
+
+/// A full memory barrier between recorded commands (compute and transfer writes
+/// made visible to compute, transfer, host and indirect-argument reads).
+pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+    let mb = vk::MemoryBarrier::default()
+        .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
+        .dst_access_mask(
+            vk::AccessFlags::SHADER_READ
+                | vk::AccessFlags::SHADER_WRITE
+                | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::HOST_READ
+                | vk::AccessFlags::INDIRECT_COMMAND_READ,
+        );
+    // SAFETY: `cmd` is being recorded (inside `Context::submit`).
+    unsafe {
+        ctx.device().cmd_pipeline_barrier(
+            cmd,
+            vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
+            vk::PipelineStageFlags::COMPUTE_SHADER
+                | vk::PipelineStageFlags::TRANSFER
+                | vk::PipelineStageFlags::HOST
+                | vk::PipelineStageFlags::DRAW_INDIRECT,
+            vk::DependencyFlags::empty(),
+            &[mb],
+            &[],
+            &[],
+        )
+    };
+}
+
+/// Copies the first `bytes` bytes of `src` to `dst` at `dst_offset`.
+pub fn copy(ctx: &Context, cmd: vk::CommandBuffer, src: &Buffer, dst: &Buffer, bytes: u64, dst_offset: u64) {
+    let region = [vk::BufferCopy::default().size(bytes).dst_offset(dst_offset)];
+    // SAFETY: `cmd` is being recorded; both buffers are alive and have TRANSFER usage.
+    unsafe { ctx.device().cmd_copy_buffer(cmd, src.raw, dst.raw, &region) };
+}
+
+/// Sets every byte of `buffer` from `offset` for `bytes` bytes (vk::WHOLE_SIZE: to the end) to zero.
+pub fn zero(ctx: &Context, cmd: vk::CommandBuffer, buffer: &Buffer, offset: u64, bytes: u64) {
+    // SAFETY: `cmd` is being recorded; the buffer has TRANSFER_DST usage.
+    unsafe { ctx.device().cmd_fill_buffer(cmd, buffer.raw, offset, bytes, 0) };
+}

@@ -1,0 +1,243 @@
+//! A Vulkan context: a device, one compute queue, the memory allocator and a
+//! persistent command pool, made here (`Context::new`) or wrapped around a device
+//! a host application made (`Context::wrap`). Cheap to clone; `Send + Sync`.
+//!
+//! Thread safety: Vulkan requires a queue to be used by one thread at a time.
+//! Every submission takes the context's queue lock around `vkQueueSubmit`; a host
+//! that shares its queue with fsot hands its own lock in (`ExternalDevice::queue_lock`)
+//! and takes it around its own submissions. Recording and submitting also hold the
+//! context's command lock, so submissions from several threads to one context run
+//! one after another (use a context per thread for parallel GPU work).
+
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+use super::commands::Commands;
+use super::device::{self, DeviceInfo};
+use super::instance::{Instance, MessageSink};
+use crate::error::{Error, Result};
+
+/// How to make a context.
+#[derive(Clone, Debug, Default)]
+pub struct ContextOptions {
+    /// Enable VK_LAYER_KHRONOS_validation and collect its messages (an error if the
+    /// layer is missing).
+    pub validation: bool,
+    /// The device whose index this is or whose name contains this text [default:
+    /// the first discrete GPU, else integrated, virtual, any].
+    pub device: Option<String>,
+}
+
+/// A device made by a host application (a renderer) for fsot to work on. fsot
+/// never destroys these handles; the host keeps them alive while the Context
+/// lives. `int64_atomics` and `float_atomic_add` say which of those features the
+/// host enabled on the device (the Vulkan optimizer needs the first; the second
+/// is optional).
+#[derive(Clone)]
+pub struct ExternalDevice {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue_family: u32,
+    pub queue_index: u32,
+    pub int64_atomics: bool,
+    pub float_atomic_add: bool,
+    /// The lock the host takes around its own submissions to this queue; fsot
+    /// takes it around each of its submissions. None: the host does not submit to
+    /// this queue while fsot works on it (fsot then locks its own).
+    pub queue_lock: Option<Arc<Mutex<()>>>,
+}
+
+/// Everything that owns Vulkan objects, destroyed in order in `Drop`.
+pub(crate) struct Shared {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub device: ash::Device,
+    pub physical_device: vk::PhysicalDevice,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub queue_lock: Arc<Mutex<()>>,
+    pub commands: ManuallyDrop<Mutex<Commands>>,
+    pub allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub info: DeviceInfo,
+    /// The instance fsot made (None for a wrapped device).
+    owned: Option<Instance>,
+    messages: MessageSink,
+}
+
+/// A Vulkan context; cheap to clone (shared ownership).
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+impl Context {
+    pub fn new(options: &ContextOptions) -> Result<Self> {
+        let messages: MessageSink = Box::new(Mutex::new(Vec::new()));
+        let instance = Instance::new(options.validation, &messages)?;
+        let (physical_device, queue_family) = device::pick(&instance.raw, options.device.as_deref())?;
+        let info = device::info(&instance.raw, physical_device);
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&priorities)];
+        let mut float_atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
+            .shader_buffer_float32_atomic_add(info.float_atomic_add);
+        let mut extensions: Vec<*const i8> = Vec::new();
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(info.int64_atomics);
+        let mut features12 =
+            vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(info.int64_atomics);
+        let mut create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_features(&features)
+            .push_next(&mut features12);
+        if info.float_atomic_add {
+            extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
+            create = create.push_next(&mut float_atomics);
+        }
+        let create = create.enabled_extension_names(&extensions);
+        // SAFETY: the create info and everything it points to live until the call returns.
+        let device = unsafe { instance.raw.create_device(physical_device, &create, None) }
+            .map_err(|result| Error::Vulkan { call: "vkCreateDevice", result })?;
+        let external = ExternalDevice {
+            entry: instance.entry.clone(),
+            instance: instance.raw.clone(),
+            physical_device,
+            device,
+            queue_family,
+            queue_index: 0,
+            int64_atomics: info.int64_atomics,
+            float_atomic_add: info.float_atomic_add,
+            queue_lock: None,
+        };
+        Self::build(external, info, Some(instance), messages)
+    }
+
+    /// Works on a device that a host application made (see `ExternalDevice`); fsot
+    /// allocates its own memory and command pool on it and submits to the given
+    /// queue under the queue lock.
+    pub fn wrap(external: ExternalDevice) -> Result<Self> {
+        let mut info = device::info(&external.instance, external.physical_device);
+        info.int64_atomics &= external.int64_atomics;
+        info.float_atomic_add &= external.float_atomic_add;
+        Self::build(external, info, None, Box::new(Mutex::new(Vec::new())))
+    }
+
+    /// The rest of a context around a device; on failure, what was made here is
+    /// destroyed (an owned device and instance included).
+    fn build(
+        external: ExternalDevice,
+        info: DeviceInfo,
+        owned: Option<Instance>,
+        messages: MessageSink,
+    ) -> Result<Self> {
+        let device = external.device.clone();
+        let made = (|| -> Result<(Commands, Allocator)> {
+            let commands = Commands::new(&device, external.queue_family)?;
+            let allocator = Allocator::new(&AllocatorCreateDesc {
+                instance: external.instance.clone(),
+                device: device.clone(),
+                physical_device: external.physical_device,
+                debug_settings: Default::default(),
+                buffer_device_address: false,
+                allocation_sizes: Default::default(),
+            });
+            match allocator {
+                Ok(a) => Ok((commands, a)),
+                Err(e) => {
+                    // SAFETY: nothing was submitted with these commands.
+                    unsafe { commands.destroy(&device) };
+                    Err(e.into())
+                }
+            }
+        })();
+        let (commands, allocator) = match made {
+            Ok(m) => m,
+            Err(e) => {
+                if owned.is_some() {
+                    // SAFETY: the device was made by `new` and nothing else uses it yet.
+                    unsafe { device.destroy_device(None) };
+                }
+                return Err(e);
+            }
+        };
+        // SAFETY: the family and index name a queue the device was created with.
+        let queue = unsafe { device.get_device_queue(external.queue_family, external.queue_index) };
+        Ok(Self {
+            shared: Arc::new(Shared {
+                entry: external.entry,
+                instance: external.instance,
+                device,
+                physical_device: external.physical_device,
+                queue,
+                queue_family: external.queue_family,
+                queue_lock: external.queue_lock.unwrap_or_default(),
+                commands: ManuallyDrop::new(Mutex::new(commands)),
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                info,
+                owned,
+                messages,
+            }),
+        })
+    }
+
+    /// The handles, for handing this context's device to other code (or to `wrap`,
+    /// which then shares this context's queue lock).
+    pub fn external(&self) -> ExternalDevice {
+        let s = &self.shared;
+        ExternalDevice {
+            entry: s.entry.clone(),
+            instance: s.instance.clone(),
+            physical_device: s.physical_device,
+            device: s.device.clone(),
+            queue_family: s.queue_family,
+            queue_index: 0,
+            int64_atomics: s.info.int64_atomics,
+            float_atomic_add: s.info.float_atomic_add,
+            queue_lock: Some(s.queue_lock.clone()),
+        }
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+    pub fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// Validation messages collected so far (empty when validation is off).
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.shared.messages.lock().map(|l| l.clone()).unwrap_or_default()
+    }
+
+    /// The memory allocator, locked.
+    pub(crate) fn allocator(&self) -> Result<MutexGuard<'_, Allocator>> {
+        self.shared
+            .allocator
+            .lock()
+            .map_err(|_| Error::invalid("the GPU memory allocator's lock is poisoned"))
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: the last reference is gone: no buffer, pipeline or submission
+        // uses the device; the device is idle before anything is destroyed.
+        unsafe {
+            let _ = self.device.device_wait_idle(); // best effort: a lost device is torn down anyway
+            if let Ok(commands) = self.commands.lock() {
+                commands.destroy(&self.device);
+            }
+            ManuallyDrop::drop(&mut self.commands);
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owned.is_some() {
+                self.device.destroy_device(None);
+            }
+        }
+        drop(self.owned.take()); // the messenger and instance, before the message sink
+    }
+}

@@ -1,0 +1,121 @@
+//! Device choice, and what fsot reads of a device.
+
+use ash::vk;
+
+use super::check;
+use crate::error::{Error, Result};
+
+/// What a compute user needs to know about the chosen device.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub name: String,
+    pub driver: String,
+    pub device_type: vk::PhysicalDeviceType,
+    pub subgroup_size: u32,
+    pub max_storage_buffer_range: u64,
+    pub max_workgroup_invocations: u32,
+    pub max_shared_memory: u32,
+    pub timestamp_period_ns: f32,
+    pub float_atomic_add: bool,
+    /// shaderInt64 and shaderBufferInt64Atomics.
+    pub int64_atomics: bool,
+    /// Subgroup ballot operations in compute shaders (the radix sort needs them).
+    pub subgroup_ballot: bool,
+}
+
+impl DeviceInfo {
+    /// A CPU implementation of Vulkan (lavapipe, SwiftShader).
+    pub fn is_cpu(&self) -> bool {
+        self.device_type == vk::PhysicalDeviceType::CPU
+    }
+}
+
+/// The device named by `wanted` (an index, or part of its name, any case), else
+/// the first discrete GPU, integrated GPU, virtual GPU, then any other; with a
+/// compute queue family each.
+pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: plain queries on a live instance.
+    let devices = check("vkEnumeratePhysicalDevices", unsafe { instance.enumerate_physical_devices() })?;
+    let mut candidates = Vec::new();
+    for (index, &pd) in devices.iter().enumerate() {
+        // SAFETY: `pd` comes from this instance.
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        // SAFETY: as above.
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let Some(family) = families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+        else {
+            continue;
+        };
+        let rank = match props.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+            vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+            _ => 3,
+        };
+        candidates.push((rank, index, name, pd, family as u32));
+    }
+    if candidates.is_empty() {
+        return Err(Error::VulkanUnavailable("no Vulkan device with a compute queue".into()));
+    }
+    if let Some(want) = wanted.filter(|w| !w.is_empty()) {
+        let hit = candidates.iter().find(|c| {
+            want.parse::<usize>().map(|i| i == c.1).unwrap_or(false)
+                || c.2.to_lowercase().contains(&want.to_lowercase())
+        });
+        return match hit {
+            Some(c) => Ok((c.3, c.4)),
+            None => Err(Error::VulkanUnavailable(format!(
+                "no device matches {want:?}; devices: {}",
+                candidates.iter().map(|c| format!("{}: {}", c.1, c.2)).collect::<Vec<_>>().join(", ")
+            ))),
+        };
+    }
+    candidates.sort_by_key(|c| (c.0, c.1));
+    Ok((candidates[0].3, candidates[0].4))
+}
+
+/// What the device offers.
+pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceInfo {
+    let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut driver);
+    // SAFETY: the chained structs live until the call returns.
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    let props = props2.properties;
+    let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut plain2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
+    // SAFETY: as above.
+    unsafe { instance.get_physical_device_features2(pd, &mut plain2) };
+    let int64_atomics =
+        plain2.features.shader_int64 == vk::TRUE && features12.shader_buffer_int64_atomics == vk::TRUE;
+    let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
+    // SAFETY: a plain query.
+    let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
+    let has_atomic_ext = extensions.iter().any(|e| {
+        e.extension_name_as_c_str().map(|n| n == ash::ext::shader_atomic_float::NAME).unwrap_or(false)
+    });
+    if has_atomic_ext {
+        // SAFETY: the extension's feature struct is only chained where the device has it.
+        unsafe { instance.get_physical_device_features2(pd, &mut features2) };
+    }
+    let text =
+        |c: Result<&std::ffi::CStr, _>| c.map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let driver_name = text(driver.driver_name_as_c_str());
+    let driver_info = text(driver.driver_info_as_c_str());
+    DeviceInfo {
+        name: text(props.device_name_as_c_str()),
+        driver: format!("{driver_name} {driver_info}").trim().to_string(),
+        device_type: props.device_type,
+        subgroup_size: subgroup.subgroup_size,
+        max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
+        max_workgroup_invocations: props.limits.max_compute_work_group_invocations,
+        max_shared_memory: props.limits.max_compute_shared_memory_size,
+        timestamp_period_ns: props.limits.timestamp_period,
+        float_atomic_add: has_atomic_ext && atomics.shader_buffer_float32_atomic_add == vk::TRUE,
+        int64_atomics,
+        subgroup_ballot: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT),
+    }
+}

@@ -1,0 +1,49 @@
+//! A small, explicit Vulkan compute layer on `ash` and `gpu-allocator` that knows
+//! nothing of sampling; a renderer can share it (`Context::wrap` works on the
+//! host's own device).
+//!
+//! - `instance`: the instance and the validation layer's messages;
+//! - `device`: device choice and what fsot reads of a device (`DeviceInfo`);
+//! - `context`: a device, its compute queue (submission guarded by a lock) and
+//!   its memory allocator, made here or wrapped around a host's device;
+//! - `commands`: submission through one persistent command pool and fence per
+//!   context, and the barrier and copy helpers;
+//! - `buffer`: buffers that own their memory, with one upload and one download
+//!   path through staging;
+//! - `pipeline`: compute pipelines with their descriptor sets;
+//! - `timer`: timestamp queries;
+//! - `sort`: a reusable radix sort of 32-bit keys with 32-bit payloads.
+//!
+//! Every handle is destroyed in `Drop` and holds the context alive. Errors are
+//! the crate's one `Error`; `FSOT_FAULT` injects failures for tests (`fault`).
+
+pub mod buffer;
+pub mod commands;
+pub mod context;
+pub mod device;
+pub(crate) mod fault;
+pub mod instance;
+pub mod pipeline;
+pub mod sort;
+pub mod timer;
+
+pub use buffer::{Buffer, Location};
+pub use context::{Context, ContextOptions, ExternalDevice};
+pub use device::DeviceInfo;
+pub use pipeline::{ComputeDesc, ComputePipeline};
+pub use sort::{RadixSort, SortCount};
+pub use timer::Timer;
+
+pub mod shaders {
+    //! SPIR-V of `glsl/sort/*.comp`, compiled by `build.rs`.
+    include!(concat!(env!("OUT_DIR"), "/sort_shaders.rs"));
+}
+
+use ash::vk;
+
+use crate::error::Error;
+
+/// Maps a failed Vulkan call to the crate's error, naming the call.
+pub(crate) fn check<T>(call: &'static str, result: Result<T, vk::Result>) -> Result<T, Error> {
+    result.map_err(|result| Error::Vulkan { call, result })
+}

@@ -1,0 +1,236 @@
+//! The compiled SPIR-V agrees with its Rust mirror: every storage block's binding
+//! index, every push-constant struct's member names and offsets, and the layout
+//! of the structs inside buffers, read from the shaders build.rs compiled (with
+//! rspirv, an independent SPIR-V reader). GLSL and Rust cannot drift apart.
+
+use std::collections::HashMap;
+
+use fsot::gpu::layout::{
+    self, HashPush, LargeMetaHead, LargeSegment, ScatterPush, TransportPush, UpdatePush,
+};
+use fsot::vk::sort::{self, RadixPush};
+use rspirv::dr::{load_bytes, Module, Operand};
+use rspirv::spirv::{Decoration, Op, StorageClass};
+
+/// (member name, byte offset) of a Rust struct, in declaration order.
+macro_rules! fields {
+    ($t:ty; $($f:ident),* $(,)?) => {
+        (stringify!($t), std::mem::size_of::<$t>(), vec![$((stringify!($f), std::mem::offset_of!($t, $f))),*])
+    };
+}
+
+type Mirror = (&'static str, usize, Vec<(&'static str, usize)>);
+
+fn mirrors() -> Vec<Mirror> {
+    vec![
+        fields!(TransportPush; slice_key, iteration, width, height, frames, spp, dims, taps, slices, cost_slot, large_capacity, pad),
+        fields!(UpdatePush; values, rule, step_t, scale, inv_hits, p0, p1, p2, p3, bias1, bias2, pad),
+        fields!(ScatterPush; count),
+        fields!(HashPush; key, count),
+        fields!(LargeSegment; slice, first, size, pad),
+        fields!(RadixPush; shift, blocks, chunks, pad),
+    ]
+}
+
+/// What one shader declares.
+#[derive(Default)]
+struct Reflection {
+    names: HashMap<u32, String>,
+    member_names: HashMap<(u32, u32), String>,
+    offsets: HashMap<(u32, u32), u32>,
+    strides: HashMap<u32, u32>,
+    bindings: HashMap<u32, u32>,
+    /// Struct type id -> member type ids.
+    structs: HashMap<u32, Vec<u32>>,
+    /// Pointer type id -> pointee; runtime array id -> element.
+    pointee: HashMap<u32, u32>,
+    element: HashMap<u32, u32>,
+    /// (variable, pointer type, storage class).
+    variables: Vec<(u32, u32, StorageClass)>,
+}
+
+fn word(op: &Operand) -> u32 {
+    match op {
+        Operand::LiteralBit32(v) => *v,
+        Operand::IdRef(v) => *v,
+        other => panic!("unexpected operand {other:?}"),
+    }
+}
+
+fn reflect(module: &Module) -> Reflection {
+    let mut r = Reflection::default();
+    for i in &module.debug_names {
+        match i.class.opcode {
+            Op::Name => {
+                if let (Operand::IdRef(id), Operand::LiteralString(s)) = (&i.operands[0], &i.operands[1]) {
+                    r.names.insert(*id, s.clone());
+                }
+            }
+            Op::MemberName => {
+                if let Operand::LiteralString(s) = &i.operands[2] {
+                    r.member_names.insert((word(&i.operands[0]), word(&i.operands[1])), s.clone());
+                }
+            }
+            _ => {}
+        }
+    }
+    for i in &module.annotations {
+        match (i.class.opcode, &i.operands[..]) {
+            (Op::Decorate, [target, Operand::Decoration(Decoration::Binding), value]) => {
+                r.bindings.insert(word(target), word(value));
+            }
+            (Op::Decorate, [target, Operand::Decoration(Decoration::ArrayStride), value]) => {
+                r.strides.insert(word(target), word(value));
+            }
+            (Op::MemberDecorate, [target, member, Operand::Decoration(Decoration::Offset), value]) => {
+                r.offsets.insert((word(target), word(member)), word(value));
+            }
+            _ => {}
+        }
+    }
+    for i in &module.types_global_values {
+        let id = i.result_id.unwrap_or(0);
+        match i.class.opcode {
+            Op::TypeStruct => {
+                r.structs.insert(id, i.operands.iter().map(word).collect());
+            }
+            Op::TypePointer => {
+                r.pointee.insert(id, word(&i.operands[1]));
+            }
+            Op::TypeRuntimeArray | Op::TypeArray => {
+                r.element.insert(id, word(&i.operands[0]));
+            }
+            Op::Variable => {
+                if let Operand::StorageClass(class) = i.operands[0] {
+                    r.variables.push((id, i.result_type.unwrap_or(0), class));
+                }
+            }
+            _ => {}
+        }
+    }
+    r
+}
+
+impl Reflection {
+    /// The member names and offsets of struct type `id`.
+    fn layout(&self, id: u32) -> Vec<(String, u32)> {
+        let n = self.structs[&id].len() as u32;
+        (0..n)
+            .map(|m| (self.member_names.get(&(id, m)).cloned().unwrap_or_default(), self.offsets[&(id, m)]))
+            .collect()
+    }
+
+    /// Every struct type by name (the first of a name).
+    fn struct_named(&self, name: &str) -> Option<u32> {
+        let mut ids: Vec<u32> = self
+            .structs
+            .keys()
+            .copied()
+            .filter(|id| self.names.get(id).map(String::as_str) == Some(name))
+            .collect();
+        ids.sort();
+        ids.first().copied()
+    }
+}
+
+/// Checks a shader family against its binding table; returns the blocks seen.
+fn check_family(
+    family: &str,
+    shaders: &[(&str, &[u8])],
+    blocks: &[(&str, u32)],
+    bindings: u32,
+) -> Vec<String> {
+    let mirrors = mirrors();
+    let mut seen = Vec::new();
+    for (shader, spirv) in shaders {
+        let module = load_bytes(spirv).unwrap_or_else(|e| panic!("{family}/{shader}: {e:?}"));
+        let r = reflect(&module);
+        for &(var, ptr, class) in &r.variables {
+            let block = r.pointee[&ptr];
+            let name = r.names.get(&block).cloned().unwrap_or_default();
+            match class {
+                StorageClass::StorageBuffer | StorageClass::Uniform => {
+                    let binding = r.bindings[&var];
+                    let expected = blocks.iter().find(|b| b.0 == name).map(|b| b.1);
+                    assert_eq!(
+                        expected,
+                        Some(binding),
+                        "{family}/{shader}: block {name:?} at binding {binding}"
+                    );
+                    assert!(binding < bindings, "{family}/{shader}: binding {binding} outside the layout");
+                    seen.push(name);
+                }
+                StorageClass::PushConstant => {
+                    // `uniform Push { Struct pc; }`: its one member is the mirrored struct.
+                    let inner = r.structs[&block][0];
+                    assert_eq!(r.offsets[&(block, 0)], 0, "{family}/{shader}: push block offset");
+                    let inner_name = r.names[&inner].clone();
+                    let mirror = mirrors.iter().find(|m| m.0 == inner_name);
+                    let mirror =
+                        mirror.unwrap_or_else(|| panic!("{family}/{shader}: no Rust mirror of {inner_name}"));
+                    let want: Vec<(String, u32)> =
+                        mirror.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
+                    assert_eq!(r.layout(inner), want, "{family}/{shader}: push struct {inner_name}");
+                }
+                _ => {}
+            }
+        }
+        // Structs inside buffers.
+        if let Some(seg) = r.struct_named("LargeSegment") {
+            let m = mirrors.iter().find(|m| m.0 == "LargeSegment").unwrap();
+            let want: Vec<(String, u32)> = m.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
+            assert_eq!(r.layout(seg), want, "{shader}: LargeSegment");
+        }
+        if let Some(meta) = r.struct_named("LargeMeta") {
+            let got = r.layout(meta);
+            let head = [
+                ("large_count", std::mem::offset_of!(LargeMetaHead, large_count)),
+                ("large_segments", std::mem::offset_of!(LargeMetaHead, large_segments)),
+                ("large_overflow", std::mem::offset_of!(LargeMetaHead, large_overflow)),
+                ("large_pad", std::mem::offset_of!(LargeMetaHead, large_pad)),
+                ("segments", std::mem::size_of::<LargeMetaHead>()),
+            ];
+            let want: Vec<(String, u32)> = head.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
+            assert_eq!(got, want, "{shader}: LargeMeta");
+            let array = r.structs[&meta][4];
+            assert_eq!(
+                r.strides[&array] as usize,
+                std::mem::size_of::<LargeSegment>(),
+                "{shader}: segment stride"
+            );
+        }
+    }
+    seen.sort();
+    seen.dedup();
+    seen
+}
+
+#[test]
+fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
+    let seen =
+        check_family("fsot", fsot::gpu::shaders::ALL, &layout::binding::BLOCKS, layout::binding::BINDINGS);
+    // Every Rust binding is used by some pass (no stale entry in the mirror).
+    for (name, _) in layout::binding::BLOCKS {
+        assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no fsot pass");
+    }
+    assert_eq!(layout::binding::BLOCKS.len() as u32, layout::binding::BINDINGS);
+}
+
+#[test]
+fn every_sort_binding_and_struct_matches_its_rust_mirror() {
+    let seen = check_family("sort", fsot::vk::shaders::ALL, &sort::binding::BLOCKS, sort::binding::BINDINGS);
+    for (name, _) in sort::binding::BLOCKS {
+        assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no sort pass");
+    }
+}
+
+#[test]
+fn a_mirror_that_drifted_is_caught() {
+    // Two bindings swapped in the Rust table: the check must fail.
+    let mut drifted = layout::binding::BLOCKS;
+    (drifted[0].1, drifted[2].1) = (drifted[2].1, drifted[0].1);
+    let caught = std::panic::catch_unwind(|| {
+        check_family("fsot", fsot::gpu::shaders::ALL, &drifted, layout::binding::BINDINGS);
+    });
+    assert!(caught.is_err(), "a swapped binding went unnoticed");
+}
