@@ -37,17 +37,16 @@ impl Tile {
         if spp == 0 || spp > MAX_SPP {
             return Err(Error::invalid(format!("samples per pixel must be 1 to {MAX_SPP}, got {spp}")));
         }
-        let points = width
+        let fits = width
             .checked_mul(height)
             .and_then(|p| p.checked_mul(frames))
             .and_then(|p| p.checked_mul(spp))
-            .filter(|&p| p <= MAX_POINTS)
-            .ok_or_else(|| {
-                Error::invalid(format!(
-                    "tile {width}x{height}x{frames} with {spp} spp holds more than {MAX_POINTS} points"
-                ))
-            })?;
-        let _ = points;
+            .is_some_and(|p| p <= MAX_POINTS);
+        if !fits {
+            return Err(Error::invalid(format!(
+                "tile {width}x{height}x{frames} with {spp} spp holds more than {MAX_POINTS} points"
+            )));
+        }
         Ok(Self { width, height, frames, spp, dims })
     }
 

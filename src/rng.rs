@@ -1,6 +1,6 @@
 //! Counter-based random numbers: every draw is a pure function of (key, counter),
 //! so slices can be drawn in any order, on any thread, on the CPU or the GPU
-//! (`glsl/common.glsl` mirrors these functions bit for bit), and give the same
+//! (`glsl/fsot/common.glsl` mirrors these functions bit for bit), and give the same
 //! values.
 
 /// 32-bit integer finaliser with good avalanche (the "lowbias32" constants).

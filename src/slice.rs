@@ -53,7 +53,7 @@ pub const fn probability_bits(probability: f64) -> u32 {
 }
 
 /// Draws the slices of one run. The order and use of the draws is mirrored by
-/// `fsot_draw_slice` in `glsl/common.glsl`: integer decisions (axis, pair,
+/// `fsot_draw_slice` in `glsl/fsot/common.glsl`: integer decisions (axis, pair,
 /// centre, level) are bit-identical on both backends; angles and Gaussian
 /// directions agree to float32 rounding.
 #[derive(Clone, Debug)]

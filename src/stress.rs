@@ -446,7 +446,7 @@ fn determinism(ctx: Option<&Context>, taa: KernelSpec) -> Result<Vec<Check>> {
             runs.push(samples.iter().map(|v| v.to_bits()).collect::<Vec<u32>>());
         }
         out.push(same_check(
-            format!("GPU --deterministic, {}, 60 iterations, 3 runs", tile.describe()),
+            format!("GPU deterministic mode, {}, 60 iterations, 3 runs", tile.describe()),
             &runs,
             start_time,
         ));

@@ -38,7 +38,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
             |taa| records.iter().find(|r| r.scene == scene && r.method == "white" && r.taa == taa).unwrap();
         assert!(get(true).relmse < 0.5 * get(false).relmse, "{scene}");
     }
-    let json = to_json(&records);
+    let json = to_json(&records).unwrap();
     assert_eq!(json.matches("\"scene\"").count(), records.len());
     for key in ["\"method\"", "\"taa\"", "\"sigma\"", "\"prelmse\"", "\"relmse\""] {
         assert_eq!(json.matches(key).count(), records.len(), "{key}");

@@ -66,8 +66,10 @@ fn the_validation_layer_is_live_and_its_messages_are_caught() {
         return;
     };
     let info = ash::vk::BufferCreateInfo::default().size(16).usage(ash::vk::BufferUsageFlags::empty());
+    // SAFETY: a deliberately invalid create info; the layer reports it, the driver may still make the buffer.
     let made = unsafe { ctx.device().create_buffer(&info, None) };
     if let Ok(buffer) = made {
+        // SAFETY: the buffer was made above and is unused.
         unsafe { ctx.device().destroy_buffer(buffer, None) };
     }
     let messages = ctx.validation_messages();

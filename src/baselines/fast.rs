@@ -184,9 +184,7 @@ impl Combine {
                 }
             }
         }
-        Err(Error::invalid(format!(
-            "--fast-combine `{text}`: expected `product` or `sum:W` with W in [0, 1]"
-        )))
+        Err(Error::invalid(format!("combination `{text}`: expected `product` or `sum:W` with W in [0, 1]")))
     }
 }
 

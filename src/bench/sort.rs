@@ -40,7 +40,7 @@ impl SortBench {
 /// checks the GPU result against the CPU's.
 pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     if n == 0 || repeats == 0 {
-        return Err(Error::invalid("--n and --repeats must be at least 1"));
+        return Err(Error::invalid("the sort benchmark needs at least one pair and one repeat"));
     }
     let mut rng = Stream::new(derive(0xbe7c, n));
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();

@@ -81,7 +81,7 @@ impl EvalSize {
 }
 
 /// One table cell.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Record {
     pub scene: String,
     pub method: String,
@@ -223,17 +223,11 @@ pub fn run_eval(
 
 /// The records as JSON: a list of {"scene", "method", "taa", "sigma",
 /// "prelmse", "relmse"}.
-pub fn to_json(records: &[Record]) -> String {
-    let rows: Vec<String> = records
-        .iter()
-        .map(|r| {
-            format!(
-                "  {{\"scene\": \"{}\", \"method\": \"{}\", \"taa\": {}, \"sigma\": {}, \"prelmse\": {:e}, \"relmse\": {:e}}}",
-                r.scene, r.method, r.taa, r.sigma, r.prelmse, r.relmse
-            )
-        })
-        .collect();
-    format!("[\n{}\n]\n", rows.join(",\n"))
+pub fn to_json(records: &[Record]) -> Result<String> {
+    let mut text = serde_json::to_string_pretty(records)
+        .map_err(|e| Error::invalid(format!("cannot write the records as JSON: {e}")))?;
+    text.push('\n');
+    Ok(text)
 }
 
 /// Markdown tables laid out like the seed's Table 2: scenes x methods, one

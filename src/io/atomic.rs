@@ -68,7 +68,7 @@ impl Drop for AtomicFile {
     /// never touched).
     fn drop(&mut self) {
         if !self.temp.as_os_str().is_empty() && self.temp.exists() {
-            let _ = fs::remove_file(&self.temp);
+            let _ = fs::remove_file(&self.temp); // best effort: nothing to report from drop
         }
     }
 }

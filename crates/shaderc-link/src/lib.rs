@@ -1,3 +1,4 @@
-//! Re-exports `shaderc`, linked so that it works with Debian 12's libraries.
-//! Used only by fsot's `build.rs`.
+//! Re-exports `shaderc`, linked so that it works with the system's libraries
+//! (Debian's and Ubuntu's split archives included) or built from source where
+//! there are none (see build.rs). Used only by fsot's `build.rs`.
 pub use shaderc;

@@ -17,6 +17,10 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             println!("{}", format_line(slices, seconds, peak_resident_bytes().unwrap_or(0)));
             Ok(())
         }
+        Some(
+            BenchSuite::Sort(KernelBench { n, repeats, .. })
+            | BenchSuite::Scatter(KernelBench { n, repeats, .. }),
+        ) if n == 0 || repeats == 0 => Err(Error::invalid("--n and --repeats must be at least 1")),
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
             let b = fsot::bench::bench_sort(&ctx, n, repeats)?;

@@ -56,7 +56,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let records = run_eval(&size, &args.sigma, &scenes, &cache, Some(&pictures), &published, |line| {
         eprintln!("{line}")
     })?;
-    let json = to_json(&records);
+    let json = to_json(&records)?;
     let t = size.tile;
     let table = format!(
         "# fsot eval{}\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \

@@ -226,7 +226,8 @@ pub(crate) fn make_baseline(
             spec: fsot::baselines::fast::FastSpec {
                 spatial: Filter::parse(&args.fast_spatial, false)?,
                 temporal: Filter::parse(&args.fast_temporal, true)?,
-                combine: Combine::parse(&args.fast_combine)?,
+                combine: Combine::parse(&args.fast_combine)
+                    .map_err(|e| Error::invalid(format!("--fast-combine: {e}")))?,
             },
             passes: args.passes,
         },

@@ -1,0 +1,143 @@
+//! The library's run, with no command line: checkpoints, cancellation through the
+//! caller's flag, resumption, and the guarantee that an interrupted and resumed
+//! run equals an uninterrupted one bit for bit.
+
+mod common;
+
+use fsot::backend::{BackendChoice, BackendKind};
+use fsot::error::Error;
+use fsot::gpu::VulkanOptions;
+use fsot::kernel::KernelSpec;
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+use fsot::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+use fsot::settings::Settings;
+
+fn settings(iterations: u32) -> Settings {
+    let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 11);
+    s.iterations = iterations;
+    s
+}
+
+fn bits(mask: &Mask) -> Vec<u32> {
+    mask.samples.iter().map(|v| v.to_bits()).collect()
+}
+
+/// Runs `options` to the end, uninterrupted.
+fn straight(tile: Tile, s: Settings, options: RunOptions) -> Mask {
+    let mut run = Run::start(tile, s, None, options).unwrap();
+    assert_eq!(run.run(&CancelFlag::new(), &mut |_| {}).unwrap(), Outcome::Reached);
+    run.finish().unwrap()
+}
+
+/// Cancels at the first progress at or past `stop`, then resumes in a new run.
+fn interrupted_then_resumed(tile: Tile, s: Settings, options: RunOptions, stop: u32) -> (u32, Mask) {
+    let path = options.checkpoint.as_ref().unwrap().path.clone();
+    let cancel = CancelFlag::new();
+    let mut run = Run::start(tile, s, None, options.clone()).unwrap();
+    let mut checkpoints = Vec::new();
+    let outcome = run
+        .run(&cancel, &mut |event| match event {
+            Event::Progress { iteration, .. } if iteration >= stop => cancel.cancel(),
+            Event::Checkpoint { iteration, .. } => checkpoints.push(iteration),
+            _ => {}
+        })
+        .unwrap();
+    let Outcome::Cancelled { iteration, saved } = outcome else { panic!("not cancelled: {outcome:?}") };
+    assert!(iteration >= stop && iteration < s.iterations, "stopped at {iteration}");
+    assert_eq!(saved.as_deref(), Some(path.as_path()), "the state is saved when cancelled");
+    assert!(!checkpoints.is_empty() && checkpoints.iter().all(|&c| c % 7 == 0), "every 7: {checkpoints:?}");
+    drop(run);
+
+    // The same run again without resuming refuses to overwrite the checkpoint.
+    let mut fresh = options.clone();
+    fresh.checkpoint.as_mut().unwrap().resume = false;
+    assert!(matches!(Run::start(tile, s, None, fresh), Err(Error::CheckpointExists(_))));
+    let mut resumed = options;
+    resumed.checkpoint.as_mut().unwrap().resume = true;
+    // Another run (another seed) cannot resume it.
+    let mut other = s;
+    other.seed += 1;
+    let err = Run::start(tile, other, None, resumed.clone()).err().expect("another run's checkpoint");
+    assert!(err.to_string().contains("different run"), "{err}");
+    let mut run = Run::start(tile, s, None, resumed).unwrap();
+    assert_eq!(run.resumed_from(), Some(iteration));
+    assert_eq!(run.run(&CancelFlag::new(), &mut |_| {}).unwrap(), Outcome::Reached);
+    let mask = run.finish().unwrap();
+    assert!(!path.exists(), "a completed run removes its checkpoint");
+    (iteration, mask)
+}
+
+fn checkpointed(options: RunOptions, dir: &tempfile::TempDir) -> RunOptions {
+    let checkpoint = Checkpointing { path: dir.path().join("run.ckpt"), every: 7, resume: false };
+    RunOptions { checkpoint: Some(checkpoint), ..options }
+}
+
+#[test]
+fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    let s = settings(60);
+    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let reference = straight(tile, s, cpu.clone());
+    let dir = tempfile::tempdir().unwrap();
+    let (stopped, resumed) = interrupted_then_resumed(tile, s, checkpointed(cpu, &dir), 25);
+    assert_eq!(stopped, 25, "the CPU path stops after the iteration that saw the flag");
+    assert_eq!(bits(&resumed), bits(&reference), "resumed and uninterrupted runs differ");
+}
+
+#[test]
+fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    let s = settings(60);
+    let vulkan = RunOptions {
+        backend: BackendChoice::Vulkan,
+        context: Some(ctx.clone()),
+        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        ..RunOptions::default()
+    };
+    let reference = straight(tile, s, vulkan.clone());
+    let dir = tempfile::tempdir().unwrap();
+    let (stopped, resumed) = interrupted_then_resumed(tile, s, checkpointed(vulkan, &dir), 25);
+    // Batches end at checkpoints (every 7): the flag is seen at 28.
+    assert_eq!(stopped, 28);
+    assert_eq!(bits(&resumed), bits(&reference), "resumed and uninterrupted runs differ");
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
+    let tile = Tile::new(8, 8, 2, 1, 3).unwrap(); // d = 3: the CPU path only
+    let run = Run::start(tile, settings(5), None, RunOptions::default()).unwrap();
+    assert_eq!(run.backend().kind(), BackendKind::Cpu);
+    assert!(run.note().starts_with("cpu"), "{}", run.note());
+    let Some(ctx) = common::gpu_context() else { return };
+    let handed = RunOptions { context: Some(ctx.clone()), ..RunOptions::default() };
+    let on_gpu = Run::start(Tile::new(8, 8, 2, 1, 2).unwrap(), settings(5), None, handed.clone()).unwrap();
+    assert_eq!(on_gpu.backend().kind(), BackendKind::Vulkan, "a handed context is taken whatever its type");
+    let refused = Run::start(tile, settings(5), None, handed).unwrap();
+    assert_eq!(refused.backend().kind(), BackendKind::Cpu);
+    assert!(
+        refused.note().contains("no Vulkan GPU used") && refused.note().contains("d <= 2"),
+        "{}",
+        refused.note()
+    );
+    drop((on_gpu, refused));
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[test]
+fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
+    let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
+    let mut run = Run::start(
+        tile,
+        settings(40),
+        None,
+        RunOptions { backend: BackendChoice::Cpu, ..Default::default() },
+    )
+    .unwrap();
+    let cancel = CancelFlag::new();
+    cancel.cancel();
+    let outcome = run.run(&cancel, &mut |_| panic!("no iteration after the flag")).unwrap();
+    assert_eq!(outcome, Outcome::Cancelled { iteration: 0, saved: None });
+}
