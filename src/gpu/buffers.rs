@@ -126,7 +126,8 @@ impl RunBuffers {
             0 => Some([device(16, "no-large-keys")?, device(16, "no-large-vals")?]),
             _ => None,
         };
-        let readback_len = (values * 8).max(BATCH as u64 * 16 + 16);
+        // Room for two state vectors (each rounded up to 16 bytes) or a batch's costs and counters.
+        let readback_len = (values * 8 + 32).max(BATCH as u64 * 16 + 16);
         let me = Self {
             samples: samples_buf,
             first,

@@ -27,7 +27,7 @@ use crate::rng::seed_key;
 use crate::settings::{initial_samples, run_mask, slices_and_hits, RunState, Settings};
 use crate::slice::{level_thresholds, slice_key};
 use crate::step_rule::{schedule, StepRule};
-use crate::vk::buffer::upload_batch;
+use crate::vk::buffer::{download_batch, upload_batch};
 use crate::vk::commands::{barrier, copy, zero};
 use crate::vk::{Buffer, Context, RadixSort, Timer};
 
@@ -269,11 +269,8 @@ impl VulkanRun {
     /// readback buffer (no allocation).
     fn fetch<T: bytemuck::Pod>(&self, buffer: &Buffer, count: usize) -> Result<Vec<T>> {
         let bytes = (count * std::mem::size_of::<T>()) as u64;
-        self.ctx.submit(|cmd| {
-            copy(&self.ctx, cmd, buffer, &self.buffers.readback, bytes, 0);
-            barrier(&self.ctx, cmd);
-        })?;
-        self.buffers.readback.read(count)
+        let parts = download_batch(&self.ctx, &[(buffer, bytes)], Some(&self.buffers.readback))?;
+        Ok(bytemuck::pod_collect_to_vec(&parts[0]))
     }
 }
 
@@ -328,17 +325,11 @@ impl Backend for VulkanRun {
         let bytes = values as u64 * 4;
         let adam = matches!(self.settings.rule, StepRule::Adam { .. });
         let b = &self.buffers;
-        self.ctx.submit(|cmd| {
-            copy(&self.ctx, cmd, &b.samples, &b.readback, bytes, 0);
-            copy(&self.ctx, cmd, &b.first, &b.readback, bytes, bytes);
-            barrier(&self.ctx, cmd);
-        })?;
-        let both: Vec<f32> = b.readback.read(2 * values)?;
-        let (samples, first) = both.split_at(values);
+        let parts = download_batch(&self.ctx, &[(&b.samples, bytes), (&b.first, bytes)], Some(&b.readback))?;
         Ok(RunState {
             iteration: self.iteration,
-            samples: samples.to_vec(),
-            first: first.to_vec(),
+            samples: bytemuck::pod_collect_to_vec(&parts[0]),
+            first: bytemuck::pod_collect_to_vec(&parts[1]),
             second: if adam { self.fetch(&b.second, values)? } else { Vec::new() },
         })
     }

@@ -122,24 +122,14 @@ impl Buffer {
     }
 
     /// The first `count` values of type T in the buffer (through a staging buffer
-    /// when the buffer is device-local).
+    /// made for it when the buffer is device-local).
     pub fn download<T: Pod>(&self, count: usize) -> Result<Vec<T>> {
         let bytes = (count * std::mem::size_of::<T>()) as u64;
-        if bytes > self.size {
-            return Err(Error::invalid(format!(
-                "a download of {bytes} bytes from a buffer of {}",
-                self.size
-            )));
-        }
         match self.location {
             Location::Readback | Location::Upload => self.read(count),
             Location::Device => {
-                let staging = Buffer::new(&self.ctx, bytes.max(4), Location::Readback, "download-staging")?;
-                self.ctx.submit(|cmd| {
-                    copy(&self.ctx, cmd, self, &staging, bytes, 0);
-                    barrier(&self.ctx, cmd);
-                })?;
-                staging.read(count)
+                let parts = download_batch(&self.ctx, &[(self, bytes)], None)?;
+                Ok(bytemuck::pod_collect_to_vec(&parts[0]))
             }
         }
     }
@@ -213,6 +203,54 @@ pub fn upload_batch(
         barrier(ctx, cmd);
         after(cmd);
     })
+}
+
+/// Downloads from device-local buffers (the first `bytes` of each), all in one
+/// submission, through `staging` (a host-visible buffer the caller keeps, so
+/// nothing is allocated) or one made for the call; the bytes of each.
+pub fn download_batch(
+    ctx: &Context,
+    sources: &[(&Buffer, u64)],
+    staging: Option<&Buffer>,
+) -> Result<Vec<Vec<u8>>> {
+    let mut offsets = Vec::with_capacity(sources.len());
+    let mut total = 0u64;
+    for (buffer, bytes) in sources {
+        if *bytes > buffer.size {
+            return Err(Error::invalid(format!(
+                "a download of {bytes} bytes from a buffer of {}",
+                buffer.size
+            )));
+        }
+        offsets.push(total);
+        total += bytes.div_ceil(16) * 16;
+    }
+    let own;
+    let staging = match staging {
+        Some(s) if s.location == Location::Readback && s.size >= total => s,
+        Some(s) => {
+            return Err(Error::invalid(format!(
+                "a staging buffer of {} bytes ({:?}) for {total} bytes of read-back",
+                s.size, s.location
+            )))
+        }
+        None => {
+            own = Buffer::new(ctx, total.max(4), Location::Readback, "download-staging")?;
+            &own
+        }
+    };
+    ctx.submit(|cmd| {
+        for ((buffer, bytes), &at) in sources.iter().zip(&offsets) {
+            copy(ctx, cmd, buffer, staging, *bytes, at);
+        }
+        barrier(ctx, cmd);
+    })?;
+    let all: Vec<u8> = staging.read(total as usize)?;
+    Ok(sources
+        .iter()
+        .zip(&offsets)
+        .map(|((_, bytes), &at)| all[at as usize..(at + bytes) as usize].to_vec())
+        .collect())
 }
 
 impl Drop for Buffer {
