@@ -16,6 +16,7 @@ pub mod method;
 pub mod problem;
 pub mod rng;
 pub mod run;
+pub mod scene;
 pub mod score;
 pub mod settings;
 pub mod slice;

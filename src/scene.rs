@@ -1,0 +1,194 @@
+//! A scene file: what a renderer samples and how its frames are seen (TOML).
+//!
+//! ```toml
+//! [display]
+//! fps = 60            # frame rate, for the perceptual filter
+//! taa_alpha = 0.1     # TAA blend weight of the current frame; absent: no TAA
+//! sigma = 2.1         # the eye's spatial Gaussian in pixels; default 2.1
+//! animated = true     # false: still camera and scene (accumulation)
+//!
+//! [tile]              # optional; the planner chooses what is absent
+//! size = "64x64x32"
+//!
+//! [[group]]           # one per sampling decision, in the order the renderer consumes them
+//! name = "pick"       # unique, [a-z0-9_]
+//! dims = 1            # 1 to 8
+//! spp = 1             # optional, default 1
+//! visible = true      # optional; false: its error is not seen directly
+//! ```
+//!
+//! Unknown keys are refused; every error names its line.
+
+use std::ops::Range;
+use std::path::Path;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::error::{Error, Result};
+use crate::kernel::DEFAULT_SIGMA;
+use crate::problem::{Tile, MAX_DIMS, MAX_SPP};
+
+/// How the renderer's frames are shown and seen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Display {
+    pub fps: f64,
+    /// TAA's blend weight of the current frame; None: no TAA.
+    pub taa_alpha: Option<f64>,
+    /// The eye's spatial Gaussian exp(-r^2 / sigma^2), pixels.
+    pub sigma: f64,
+    /// False: a still camera and scene, frames accumulated.
+    pub animated: bool,
+}
+
+/// One sampling decision of the renderer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    pub name: String,
+    pub dims: usize,
+    pub spp: usize,
+    /// False: its error is not seen directly (deep bounces, roulette).
+    pub visible: bool,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file's stem.
+    pub name: String,
+    pub display: Display,
+    /// W, H, T when the file gives them.
+    pub size: Option<(usize, usize, usize)>,
+    /// In the order the renderer consumes them.
+    pub groups: Vec<Group>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileScene {
+    display: Option<Spanned<FileDisplay>>,
+    tile: Option<FileTile>,
+    #[serde(default)]
+    group: Vec<Spanned<FileGroup>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileDisplay {
+    fps: Option<Spanned<f64>>,
+    taa_alpha: Option<Spanned<f64>>,
+    sigma: Option<Spanned<f64>>,
+    animated: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileTile {
+    size: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileGroup {
+    name: Spanned<String>,
+    dims: Spanned<i64>,
+    spp: Option<Spanned<i64>>,
+    visible: Option<bool>,
+}
+
+impl Scene {
+    /// Reads and checks a scene file.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::io(format!("cannot read the scene {}", path.display()), e))?;
+        let name =
+            path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        Self::parse(&text, &name).map_err(|reason| Error::bad_file(path, reason))
+    }
+
+    /// Parses and checks scene text; the error names the line.
+    pub fn parse(text: &str, name: &str) -> std::result::Result<Self, String> {
+        let at = |span: Range<usize>, what: String| format!("line {}: {what}", line_of(text, span.start));
+        let file: FileScene = toml::from_str(text).map_err(|e| match e.span() {
+            Some(span) => at(span, e.message().trim().to_string()),
+            None => e.message().trim().to_string(),
+        })?;
+        let display = match &file.display {
+            Some(d) => check_display(d.get_ref(), &at)?,
+            None => Display { fps: 60.0, taa_alpha: None, sigma: DEFAULT_SIGMA, animated: true },
+        };
+        let size = match file.tile.as_ref().and_then(|t| t.size.as_ref()) {
+            Some(s) => Some(Tile::parse_size(s.get_ref()).map_err(|e| at(s.span(), e.to_string()))?),
+            None => None,
+        };
+        if file.group.is_empty() {
+            return Err("no [[group]]: a scene needs at least one sampling decision".into());
+        }
+        let mut groups: Vec<Group> = Vec::new();
+        for g in &file.group {
+            let group = check_group(g.get_ref(), &at)?;
+            if groups.iter().any(|o| o.name == group.name) {
+                return Err(at(g.get_ref().name.span(), format!("a second group named {:?}", group.name)));
+            }
+            groups.push(group);
+        }
+        Ok(Self { name: name.to_string(), display, size, groups })
+    }
+}
+
+fn check_display(
+    d: &FileDisplay,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<Display, String> {
+    let fps = match &d.fps {
+        Some(f) if !(f.get_ref().is_finite() && *f.get_ref() > 0.0 && *f.get_ref() <= 1000.0) => {
+            return Err(at(f.span(), format!("fps must be in (0, 1000], got {}", f.get_ref())))
+        }
+        Some(f) => *f.get_ref(),
+        None => 60.0,
+    };
+    let taa_alpha = match &d.taa_alpha {
+        Some(a) if !(a.get_ref().is_finite() && *a.get_ref() > 0.0 && *a.get_ref() <= 1.0) => {
+            return Err(at(a.span(), format!("taa_alpha must be in (0, 1], got {}", a.get_ref())))
+        }
+        Some(a) => Some(*a.get_ref()),
+        None => None,
+    };
+    let sigma = match &d.sigma {
+        Some(s) if !(s.get_ref().is_finite() && *s.get_ref() > 0.0 && *s.get_ref() <= 8.0) => {
+            return Err(at(s.span(), format!("sigma must be in (0, 8] pixels, got {}", s.get_ref())))
+        }
+        Some(s) => *s.get_ref(),
+        None => DEFAULT_SIGMA,
+    };
+    Ok(Display { fps, taa_alpha, sigma, animated: d.animated.unwrap_or(true) })
+}
+
+fn check_group(
+    g: &FileGroup,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<Group, String> {
+    let name = g.name.get_ref();
+    let valid =
+        !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    if !valid {
+        return Err(at(g.name.span(), format!("group name {name:?} must be non-empty [a-z0-9_]")));
+    }
+    let dims = *g.dims.get_ref();
+    if !(1..=MAX_DIMS as i64).contains(&dims) {
+        return Err(at(g.dims.span(), format!("dims must be 1 to {MAX_DIMS}, got {dims}")));
+    }
+    let spp = match &g.spp {
+        Some(s) if !(1..=MAX_SPP as i64).contains(s.get_ref()) => {
+            return Err(at(s.span(), format!("spp must be 1 to {MAX_SPP}, got {}", s.get_ref())))
+        }
+        Some(s) => *s.get_ref() as usize,
+        None => 1,
+    };
+    Ok(Group { name: name.clone(), dims: dims as usize, spp, visible: g.visible.unwrap_or(true) })
+}
+
+/// The 1-based line of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}

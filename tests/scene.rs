@@ -1,0 +1,90 @@
+//! Scene files: what a renderer samples, read strictly; every mistake is named
+//! with its line.
+
+use fsot::scene::{Group, Scene};
+
+const EXAMPLE: &str = r#"
+[display]
+fps = 60
+taa_alpha = 0.1
+sigma = 2.1
+animated = true
+
+[tile]
+size = "64x64x32"
+
+[[group]]
+name = "pick"
+dims = 1
+spp = 1
+[[group]]
+name = "lens"
+dims = 2
+[[group]]
+name = "bounce2"
+dims = 2
+visible = false
+"#;
+
+#[test]
+fn the_example_scene_reads_as_written() {
+    let s = Scene::parse(EXAMPLE, "example").unwrap();
+    assert_eq!(s.display.taa_alpha, Some(0.1));
+    assert_eq!((s.display.fps, s.display.sigma, s.display.animated), (60.0, 2.1, true));
+    assert_eq!(s.size, Some((64, 64, 32)));
+    let names: Vec<&str> = s.groups.iter().map(|g| g.name.as_str()).collect();
+    assert_eq!(names, ["pick", "lens", "bounce2"], "the renderer's order");
+    assert_eq!(s.groups[2], Group { name: "bounce2".into(), dims: 2, spp: 1, visible: false });
+}
+
+#[test]
+fn what_is_absent_takes_its_default() {
+    let s = Scene::parse("[[group]]\nname = \"a\"\ndims = 2\n", "minimal").unwrap();
+    assert_eq!(s.display.taa_alpha, None, "no [display]: no TAA");
+    assert_eq!((s.display.fps, s.display.sigma, s.display.animated), (60.0, 2.1, true));
+    assert_eq!(s.size, None);
+    assert_eq!(s.groups[0], Group { name: "a".into(), dims: 2, spp: 1, visible: true });
+}
+
+#[test]
+fn every_mistake_is_refused_naming_its_line() {
+    let group = "[[group]]\nname = \"a\"\ndims = 2\n";
+    let cases: &[(String, &str, &str)] = &[
+        (format!("[display]\nfsp = 60\n{group}"), "line 2", "unknown field"),
+        (format!("{group}colour = 1\n"), "line 4", "unknown field"),
+        ("[display]\nfps = 60\n".to_string(), "", "no [[group]]"),
+        ("[[group]]\nname = \"a\"\ndims = 0\n".to_string(), "line 3", "dims must be 1 to 8"),
+        ("[[group]]\nname = \"a\"\ndims = 9\n".to_string(), "line 3", "dims must be 1 to 8"),
+        ("[[group]]\nname = \"a\"\n".to_string(), "line 1", "missing field `dims`"),
+        (format!("{group}[[group]]\nname = \"a\"\ndims = 1\n"), "line 5", "a second group named \"a\""),
+        ("[[group]]\nname = \"Lens\"\ndims = 2\n".to_string(), "line 2", "[a-z0-9_]"),
+        ("[[group]]\nname = \"\"\ndims = 2\n".to_string(), "line 2", "[a-z0-9_]"),
+        (format!("[display]\ntaa_alpha = 1.5\n{group}"), "line 2", "taa_alpha must be in (0, 1]"),
+        (format!("[display]\ntaa_alpha = 0\n{group}"), "line 2", "taa_alpha must be in (0, 1]"),
+        (format!("[display]\nfps = -5\n{group}"), "line 2", "fps"),
+        (format!("[display]\nsigma = nan\n{group}"), "line 2", "sigma"),
+        (format!("[tile]\nsize = \"64xx\"\n{group}"), "line 2", "size must look like"),
+        (format!("{group}spp = 0\n"), "line 4", "spp must be 1 to 64"),
+        (format!("{group}dims = 3\n"), "line 4", "duplicate key"),
+        ("[[group]\nname = 1".to_string(), "line 1", ""),
+        (format!("[display]\nanimated = \"yes\"\n{group}"), "line 2", "invalid type"),
+    ];
+    for (text, line, what) in cases {
+        let err = Scene::parse(text, "bad").err().unwrap_or_else(|| panic!("accepted: {text}"));
+        assert!(
+            err.contains(line) && err.contains(what),
+            "{text:?}: expected {line:?} and {what:?} in {err:?}"
+        );
+    }
+}
+
+#[test]
+fn a_file_that_cannot_be_read_says_so() {
+    let err = Scene::read(std::path::Path::new("no/such/scene.toml")).unwrap_err();
+    assert!(err.to_string().contains("cannot read the scene"), "{err}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("s.toml");
+    std::fs::write(&path, "[[group]]\nname = \"a\"\ndims = 12\n").unwrap();
+    let err = Scene::read(&path).unwrap_err().to_string();
+    assert!(err.contains("s.toml") && err.contains("line 3"), "{err}");
+}
