@@ -83,5 +83,9 @@ pub trait Backend: Send {
     /// Diagnostics: the summed displacement of every coordinate from the slices
     /// of iteration `iteration`, without moving anything.
     fn displacements(&mut self, iteration: u32) -> Result<Vec<f64>>;
+    /// The step scale of the following iterations, set by an end-agnostic
+    /// schedule (`step_rule::Plateau`); None: the cosine schedule over the run's
+    /// iterations.
+    fn set_scale(&mut self, scale: Option<f32>);
     fn report(&self) -> Report;
 }

@@ -14,7 +14,8 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::problem::Tile;
-use crate::settings::{RunState, Settings};
+use crate::settings::{RunState, Settings, Until};
+use crate::step_rule::PlateauState;
 
 const MAGIC: &[u8; 8] = b"FSOTCKP1";
 
@@ -22,10 +23,17 @@ const MAGIC: &[u8; 8] = b"FSOTCKP1";
 /// changes the run's iterations (kernel, iterations, slices, seed, step rule).
 /// The backend is not part of it: a run may resume on the other backend.
 pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
-    format!(
-        "tile {}x{}x{} spp {} d {}; {:?}",
-        tile.width, tile.height, tile.frames, tile.spp, tile.dims, settings
-    )
+    let s = settings;
+    // Written out as the settings' Debug was before they had `until`, so that
+    // fixed-length runs keep their fingerprints.
+    let mut f = format!(
+        "tile {}x{}x{} spp {} d {}; Settings {{ kernel: {:?}, iterations: {}, slices: {:?}, seed: {}, rule: {:?} }}",
+        tile.width, tile.height, tile.frames, tile.spp, tile.dims, s.kernel, s.iterations, s.slices, s.seed, s.rule
+    );
+    if s.until != Until::Iterations {
+        f += &format!("; until {:?}", s.until);
+    }
+    f
 }
 
 fn fnv1a(bytes: &[u8]) -> u64 {
@@ -38,13 +46,23 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 }
 
 pub fn encode(fingerprint: &str, state: &RunState) -> Vec<u8> {
-    let header = format!(
+    let mut header = format!(
         "fingerprint={fingerprint}\niteration={}\nsamples={}\nfirst={}\nsecond={}\n",
         state.iteration,
         state.samples.len(),
         state.first.len(),
         state.second.len()
     );
+    if let Some(p) = &state.plateau {
+        // Bit patterns: the schedule resumes exactly.
+        header += &format!(
+            "plateau={:08x},{:016x},{:016x},{}\n",
+            p.scale.to_bits(),
+            p.previous.to_bits(),
+            p.sum.to_bits(),
+            p.count
+        );
+    }
     let mut out = Vec::with_capacity(
         20 + header.len() + 4 * (state.samples.len() + state.first.len() + state.second.len()),
     );
@@ -112,7 +130,22 @@ pub fn decode(bytes: &[u8], expected: &str, tile: &Tile) -> std::result::Result<
     if first.iter().chain(&second).any(|v| !v.is_finite()) {
         return Err("holds a non-finite optimizer state".into());
     }
-    Ok(RunState { iteration, samples, first, second })
+    let plateau = match header.lines().find_map(|l| l.strip_prefix("plateau=")) {
+        Some(p) => Some(parse_plateau(p).ok_or("bad plateau in header")?),
+        None => None,
+    };
+    Ok(RunState { iteration, samples, first, second, plateau })
+}
+
+fn parse_plateau(text: &str) -> Option<PlateauState> {
+    let f: Vec<&str> = text.split(',').collect();
+    let [scale, previous, sum, count] = f[..] else { return None };
+    Some(PlateauState {
+        scale: f32::from_bits(u32::from_str_radix(scale, 16).ok()?),
+        previous: f64::from_bits(u64::from_str_radix(previous, 16).ok()?),
+        sum: f64::from_bits(u64::from_str_radix(sum, 16).ok()?),
+        count: count.parse().ok()?,
+    })
 }
 
 /// Writes a checkpoint atomically (the previous one stays until the new one is
@@ -141,15 +174,35 @@ mod tests {
             samples: (0..n).map(|i| i as f32 / n as f32).collect(),
             first: (0..n).map(|i| i as f32 * -1e-3).collect(),
             second: Vec::new(),
+            plateau: None,
         };
         (tile, fingerprint(&tile, &settings), state)
     }
 
     #[test]
     fn a_checkpoint_round_trips_bit_for_bit() {
-        let (tile, fp, state) = setup();
+        let (tile, fp, mut state) = setup();
         let back = decode(&encode(&fp, &state), &fp, &tile).unwrap();
         assert_eq!(back, state);
+        state.plateau = Some(PlateauState { scale: 0.125, previous: 1.0 / 3.0, sum: 0.1 + 0.2, count: 7 });
+        let back = decode(&encode(&fp, &state), &fp, &tile).unwrap();
+        assert_eq!(back, state);
+    }
+
+    #[test]
+    fn a_fixed_run_keeps_the_fingerprint_it_had_before_stopping_rules() {
+        let tile = Tile::new(4, 4, 2, 1, 2).unwrap();
+        let s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 3);
+        let fp = fingerprint(&tile, &s);
+        assert!(fp.starts_with("tile 4x4x2 spp 1 d 2; Settings { kernel: "), "{fp}");
+        assert!(
+            fp.ends_with(
+                ", iterations: 1000, slices: None, seed: 3, rule: Momentum { step: 2.0, beta: 0.8 } }"
+            ),
+            "{fp}"
+        );
+        let until = Settings { until: Until::Plateau(crate::step_rule::Plateau::DEFAULT), ..s };
+        assert_ne!(fingerprint(&tile, &until), fp);
     }
 
     #[test]

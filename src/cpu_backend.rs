@@ -51,8 +51,8 @@ impl Accumulator {
 }
 
 /// Runs one iteration: `slices` slices of iteration number `iteration`, then the
-/// update with schedule position `iteration` of `iterations`. Returns the
-/// iteration's objective estimate (before its update).
+/// update with step scale `scale` (the schedule's). Returns the iteration's
+/// objective estimate (before its update).
 #[allow(clippy::too_many_arguments)]
 pub fn iterate(
     samples: &mut [f32],
@@ -62,7 +62,7 @@ pub fn iterate(
     state: &mut OptimizerState,
     acc: &Accumulator,
     iteration: u32,
-    iterations: u32,
+    scale: f32,
     slices: u32,
     hits_per_value: f64,
 ) -> f64 {
@@ -87,7 +87,6 @@ pub fn iterate(
     state.steps += 1;
     let t = state.steps;
     let rule = state.rule;
-    let scale = schedule(iteration, iterations);
     let inv_hits = 1.0 / hits_per_value;
     const CHUNK: usize = 4096;
     let update = |(c, (xs, ms)): (usize, (&mut [f32], &mut [f32])), vs: Option<&mut [f32]>| {
@@ -142,6 +141,9 @@ pub struct CpuRun {
     iteration: u32,
     slices: u32,
     hits_per_value: f64,
+    /// A step scale set by the caller (an end-agnostic schedule); None: the
+    /// cosine schedule over the run's iterations.
+    scale: Option<f32>,
 }
 
 impl CpuRun {
@@ -164,6 +166,7 @@ impl CpuRun {
             iteration: 0,
             slices,
             hits_per_value,
+            scale: None,
         })
     }
 
@@ -186,7 +189,7 @@ impl CpuRun {
             &mut self.state,
             &self.acc,
             self.iteration,
-            self.settings.iterations,
+            self.scale.unwrap_or_else(|| schedule(self.iteration, self.settings.iterations)),
             self.slices,
             self.hits_per_value,
         );
@@ -223,6 +226,7 @@ impl Backend for CpuRun {
             samples: self.samples.clone(),
             first: self.state.first.clone(),
             second: self.state.second.clone(),
+            plateau: None,
         })
     }
 
@@ -264,6 +268,10 @@ impl Backend for CpuRun {
             });
         });
         Ok((0..self.acc.len()).map(|i| self.acc.take(i)).collect())
+    }
+
+    fn set_scale(&mut self, scale: Option<f32>) {
+        self.scale = scale;
     }
 
     fn report(&self) -> Report {

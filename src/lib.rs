@@ -13,6 +13,7 @@ pub mod io;
 pub mod kernel;
 pub mod mask;
 pub mod method;
+pub mod plan;
 pub mod problem;
 pub mod rng;
 pub mod run;

@@ -17,7 +17,8 @@ use crate::gpu::{VulkanOptions, VulkanRun};
 use crate::io::atomic::AtomicFile;
 use crate::mask::Mask;
 use crate::problem::Tile;
-use crate::settings::{RunState, Settings};
+use crate::settings::{RunState, Settings, Until};
+use crate::step_rule::{Plateau, PlateauState};
 use crate::vk::{Context, ContextOptions};
 
 /// Checkpoints of a run.
@@ -106,6 +107,10 @@ pub struct Run {
     fingerprint: String,
     resumed_from: Option<u32>,
     next_checkpoint: u32,
+    /// The end-agnostic schedule of a run that stops by a rule, and where it stands.
+    plateau: Option<(Plateau, PlateauState)>,
+    /// The stopping rule ended the run.
+    stopped: bool,
 }
 
 impl Run {
@@ -118,9 +123,13 @@ impl Run {
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
+        let mut plateau = settings.until.plateau().map(|p| (p, PlateauState::default()));
         let resumed_from = match saved {
             Some(state) => {
                 backend.restore(&state)?;
+                if let (Some((_, s)), Some(saved)) = (&mut plateau, state.plateau) {
+                    *s = saved;
+                }
                 Some(state.iteration)
             }
             None => None,
@@ -137,6 +146,8 @@ impl Run {
             fingerprint,
             resumed_from,
             next_checkpoint,
+            plateau,
+            stopped: false,
         })
     }
 
@@ -163,8 +174,13 @@ impl Run {
     pub fn iteration(&self) -> u32 {
         self.backend.iteration()
     }
+    /// The run's length reached, or its stopping rule ended it.
     pub fn finished(&self) -> bool {
-        self.iteration() >= self.settings.iterations
+        self.stopped || self.iteration() >= self.settings.iterations
+    }
+    /// The iterations asked for: the run's length, or its cap under a stopping rule.
+    pub fn iterations(&self) -> u32 {
+        self.settings.iterations
     }
 
     /// Runs to the end (see `advance`).
@@ -177,7 +193,7 @@ impl Run {
     /// `BackendChoice::Auto` hands over to the CPU path, from the last checkpoint.
     pub fn advance(&mut self, to: u32, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
         let to = to.min(self.settings.iterations);
-        while self.iteration() < to {
+        while self.iteration() < to && !self.stopped {
             if cancel.is_cancelled() {
                 let saved = self.save()?;
                 return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
@@ -196,11 +212,25 @@ impl Run {
     /// One step of the backend towards `to` (a batch on the GPU, stopping at the
     /// next checkpoint), then the checkpoint when one is due.
     fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
-        let stop = match &self.options.checkpoint {
+        let mut stop = match &self.options.checkpoint {
             Some(_) => to.min(self.next_checkpoint),
             None => to,
         };
+        if let Some((rule, state)) = &self.plateau {
+            // Batches end at windows' ends, where the schedule decides.
+            stop = stop.min(self.iteration() + rule.window.max(1) - state.count);
+            self.backend.set_scale(Some(state.scale));
+        }
         let costs = self.backend.step_up_to(stop.saturating_sub(self.iteration()).max(1))?;
+        if let Some((rule, state)) = &mut self.plateau {
+            for &c in &costs {
+                let window_end = state.count + 1 == rule.window.max(1);
+                self.stopped |= state.observe(rule, c);
+                if let (true, Until::Objective(target)) = (window_end, self.settings.until) {
+                    self.stopped |= state.previous <= target;
+                }
+            }
+        }
         let iteration = self.iteration();
         on(Event::Progress {
             iteration,
@@ -229,10 +259,17 @@ impl Run {
         Ok(mask)
     }
 
+    /// Where the run stands (the backend's state and the schedule's).
+    pub fn state(&self) -> Result<RunState> {
+        let mut state = self.backend.state()?;
+        state.plateau = self.plateau.map(|(_, s)| s);
+        Ok(state)
+    }
+
     /// Writes a checkpoint when checkpointing; where it went.
     fn save(&mut self) -> Result<Option<PathBuf>> {
         let Some(c) = &self.options.checkpoint else { return Ok(None) };
-        checkpoint::write(&c.path, &self.fingerprint, &self.backend.state()?)?;
+        checkpoint::write(&c.path, &self.fingerprint, &self.state()?)?;
         self.next_checkpoint = self.iteration().saturating_add(c.every);
         Ok(Some(c.path.clone()))
     }
@@ -248,9 +285,15 @@ impl Run {
         let at = self.iteration();
         let mut cpu = CpuRun::new(self.tile, self.settings, self.init.as_ref())?;
         let checkpoint = self.options.checkpoint.as_ref().map(|c| c.path.clone()).filter(|p| p.exists());
+        let mut plateau = self.settings.until.plateau().map(|p| (p, PlateauState::default()));
         if let Some(p) = &checkpoint {
-            cpu.restore(&checkpoint::read(p, &self.fingerprint, &self.tile)?)?;
+            let saved = checkpoint::read(p, &self.fingerprint, &self.tile)?;
+            cpu.restore(&saved)?;
+            if let (Some((_, s)), Some(saved)) = (&mut plateau, saved.plateau) {
+                *s = saved;
+            }
         }
+        self.plateau = plateau;
         self.backend = Box::new(cpu);
         self.note = self.backend.describe();
         let from = self.iteration();

@@ -6,37 +6,74 @@ use crate::error::{Error, Result};
 use crate::kernel::{Kernel, KernelSpec};
 use crate::mask::Mask;
 use crate::problem::Tile;
-use crate::step_rule::StepRule;
+use crate::step_rule::{Plateau, PlateauState, StepRule};
 
 /// Default number of times each sample is in a slice's class per iteration; sets
 /// the default slices per iteration.
 pub const DEFAULT_HITS: f64 = 16.0;
 pub const DEFAULT_ITERATIONS: u32 = 1000;
 
+/// A cap on the iterations of a run that stops by a rule.
+pub const DEFAULT_CAP: u32 = 10_000;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Settings {
     pub kernel: KernelSpec,
+    /// The run's length (`Until::Iterations`) or its cap (the other rules).
     pub iterations: u32,
     /// Slices per iteration; `None`: enough for DEFAULT_HITS hits per sample.
     pub slices: Option<u32>,
     pub seed: u64,
     pub rule: StepRule,
+    pub until: Until,
+}
+
+/// When a run ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Until {
+    /// After exactly `iterations` iterations, with the cosine schedule over them.
+    Iterations,
+    /// When the plateau schedule says further iterations no longer pay.
+    Plateau(Plateau),
+    /// When a window's mean objective estimate is at most this (or the plateau
+    /// schedule stops first).
+    Objective(f64),
+}
+
+impl Until {
+    /// The end-agnostic schedule the rule runs, if any.
+    pub fn plateau(&self) -> Option<Plateau> {
+        match self {
+            Until::Iterations => None,
+            Until::Plateau(p) => Some(*p),
+            Until::Objective(_) => Some(Plateau::DEFAULT),
+        }
+    }
 }
 
 impl Settings {
     pub fn new(kernel: KernelSpec, seed: u64) -> Self {
-        Self { kernel, iterations: DEFAULT_ITERATIONS, slices: None, seed, rule: StepRule::DEFAULT }
+        Self {
+            kernel,
+            iterations: DEFAULT_ITERATIONS,
+            slices: None,
+            seed,
+            rule: StepRule::DEFAULT,
+            until: Until::Iterations,
+        }
     }
 }
 
 /// Where a run stands after some iterations: enough to continue it exactly
-/// (`checkpoint.rs` stores it). `second` is empty unless the rule is Adam.
+/// (`checkpoint.rs` stores it). `second` is empty unless the rule is Adam;
+/// `plateau` is the end-agnostic schedule's state, for runs that stop by a rule.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunState {
     pub iteration: u32,
     pub samples: Vec<f32>,
     pub first: Vec<f32>,
     pub second: Vec<f32>,
+    pub plateau: Option<PlateauState>,
 }
 
 impl RunState {
@@ -46,6 +83,9 @@ impl RunState {
         let adam = matches!(settings.rule, StepRule::Adam { .. });
         if self.samples.len() != n || self.first.len() != n || self.second.len() != if adam { n } else { 0 } {
             return Err(Error::invalid("the saved state does not match this run's tile or step rule"));
+        }
+        if self.plateau.is_some() != settings.until.plateau().is_some() {
+            return Err(Error::invalid("the saved state does not match this run's stopping rule"));
         }
         if self.iteration > settings.iterations {
             return Err(Error::invalid(format!(

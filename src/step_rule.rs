@@ -30,6 +30,65 @@ pub fn schedule(iteration: u32, iterations: u32) -> f32 {
     FINAL_FRACTION + (1.0 - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
 }
 
+/// An end-agnostic schedule, for runs that stop when iterations no longer pay:
+/// the step scale starts at 1 and halves (down to `FINAL_FRACTION`) whenever a
+/// window's mean objective estimate gains less than `decay_below` (relative) on
+/// the previous window's; at the smallest scale, a window that gains less than
+/// `stop_below` ends the run. Nothing in it depends on the run's length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plateau {
+    /// Iterations per window (the Vulkan backend's batch, so that both backends
+    /// decide at the same iterations).
+    pub window: u32,
+    pub decay_below: f64,
+    pub stop_below: f64,
+}
+
+impl Plateau {
+    /// The default rule (chosen by measurement, see BENCHMARKS.md).
+    pub const DEFAULT: Plateau = Plateau { window: 32, decay_below: 0.01, stop_below: 0.002 };
+}
+
+/// Where a plateau schedule stands: enough to resume it exactly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlateauState {
+    pub scale: f32,
+    /// The last complete window's mean objective (NaN before the first).
+    pub previous: f64,
+    /// The current window's objectives so far.
+    pub sum: f64,
+    pub count: u32,
+}
+
+impl Default for PlateauState {
+    fn default() -> Self {
+        Self { scale: 1.0, previous: f64::NAN, sum: 0.0, count: 0 }
+    }
+}
+
+impl PlateauState {
+    /// Takes one iteration's objective estimate; true when the run should stop
+    /// (at a window's end).
+    pub fn observe(&mut self, rule: &Plateau, objective: f64) -> bool {
+        self.sum += objective;
+        self.count += 1;
+        if self.count < rule.window.max(1) {
+            return false;
+        }
+        let mean = self.sum / self.count as f64;
+        let gain = (self.previous - mean) / self.previous; // NaN for the first window
+        (self.previous, self.sum, self.count) = (mean, 0.0, 0);
+        let at_floor = self.scale <= FINAL_FRACTION;
+        if at_floor {
+            return gain < rule.stop_below;
+        }
+        if gain < rule.decay_below {
+            self.scale = (self.scale * 0.5).max(FINAL_FRACTION);
+        }
+        false
+    }
+}
+
 /// Per-coordinate optimizer state.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimizerState {
@@ -106,6 +165,37 @@ mod tests {
         assert_eq!(schedule(0, 100), 1.0);
         assert!((schedule(99, 100) - FINAL_FRACTION).abs() < 1e-6);
         assert!(schedule(30, 100) > schedule(60, 100));
+    }
+
+    #[test]
+    fn a_plateau_halves_the_step_until_the_floor_then_stops() {
+        let rule = Plateau { window: 4, decay_below: 0.01, stop_below: 0.002 };
+        let mut s = PlateauState::default();
+        // Falling 10% a window: the step stays; the first window only sets the mark.
+        for w in 0..3 {
+            for _ in 0..4 {
+                assert!(!s.observe(&rule, 0.9f64.powi(w)));
+            }
+            assert_eq!(s.scale, 1.0);
+        }
+        // A drop to 0.5 still pays; then flat: halves every window down to the
+        // floor, then stops at the next flat window.
+        let stops: Vec<bool> = (0..4).map(|_| s.observe(&rule, 0.5)).collect();
+        assert!(!stops.contains(&true));
+        assert_eq!(s.scale, 1.0);
+        let mut halvings = 0;
+        loop {
+            let before = s.scale;
+            let stop = (0..4).map(|_| s.observe(&rule, 0.5)).last().unwrap();
+            if stop {
+                break;
+            }
+            assert!(s.scale < before || s.scale == FINAL_FRACTION);
+            halvings += 1;
+            assert!(halvings < 10, "never stopped");
+        }
+        assert_eq!(s.scale, FINAL_FRACTION);
+        assert_eq!(halvings, 5, "1 -> 0.5 -> 0.25 -> 0.125 -> 0.0625 -> 0.05");
     }
 
     #[test]

@@ -91,6 +91,8 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--out", "no/such/folder/m.exr"], "does not exist"),
         (&["--backend", "vulkan", "--dims", "3"], "d <= 2"),
         (&["--backend", "vulkan", "--device", "no-such-gpu"], "no device matches"),
+        (&["--until", "sometimes"], "--until must be"),
+        (&["--until", "objective:-1"], "--until must be"),
     ];
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.
@@ -331,4 +333,42 @@ fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_b
         read_samples(&dir.path().join("straight.exr")),
         "resumed and uninterrupted runs differ"
     );
+}
+
+#[test]
+fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let plan = fsot(&["plan", "s.toml", "--backend", "cpu"], dir.path());
+    assert!(plan.status.success(), "{}", stderr(&plan));
+    let text = String::from_utf8_lossy(&plan.stdout);
+    assert!(text.contains("pick (d = 1") && text.contains("skipped: not visible"), "{text}");
+    let json = fsot(&["plan", "s.toml", "--backend", "cpu", "--json"], dir.path());
+    let doc: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(doc["tile"], serde_json::json!([8, 8, 4]));
+
+    let o = fsot(&["optimize", "--scene", "s.toml", "--out", "masks", "--backend", "cpu"], dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.exr", "deep.exr", "plan.json"] {
+        assert!(dir.path().join("masks").join(f).exists(), "{f}");
+    }
+
+    std::fs::write(dir.path().join("bad.toml"), "[[group]]\nname = \"a\"\ndims = 2\nsppp = 1\n").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["optimize", "--scene", "bad.toml", "--out", "bad"], "line 4"),
+        (&["optimize", "--scene", "missing.toml", "--out", "bad"], "cannot read the scene"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
+        (&["plan", "bad.toml"], "line 4"),
+    ];
+    for (args, expect) in cases {
+        let o = fsot(args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: expected {expect:?} in {err:?}");
+        assert!(!dir.path().join("bad").exists() && !dir.path().join("bad.exr").exists(), "{args:?} wrote");
+    }
 }

@@ -141,3 +141,82 @@ fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
     let outcome = run.run(&cancel, &mut |_| panic!("no iteration after the flag")).unwrap();
     assert_eq!(outcome, Outcome::Cancelled { iteration: 0, saved: None });
 }
+
+#[test]
+fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would_have() {
+    use fsot::settings::Until;
+    use fsot::step_rule::Plateau;
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    // A quick rule: 8-iteration windows.
+    let rule = Plateau { window: 8, decay_below: 0.01, stop_below: 0.002 };
+    let s = Settings { until: Until::Plateau(rule), iterations: 5000, ..settings(5000) };
+    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let mut run = Run::start(tile, s, None, cpu.clone()).unwrap();
+    assert_eq!(run.run(&CancelFlag::new(), &mut |_| {}).unwrap(), Outcome::Reached);
+    let stopped_at = run.iteration();
+    assert!(run.finished() && stopped_at < 5000, "the rule stopped it: {stopped_at}");
+    assert_eq!(stopped_at % 8, 0, "at a window's end");
+    let reference = run.finish().unwrap();
+    assert_eq!(reference.meta("iterations"), Some(stopped_at.to_string().as_str()));
+
+    // Cancelled mid-window (checkpoints every 5, windows of 8), then resumed.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.ckpt");
+    let mut options = RunOptions { checkpoint: Some(Checkpointing { path, every: 5, resume: false }), ..cpu };
+    let cancel = CancelFlag::new();
+    let mut first = Run::start(tile, s, None, options.clone()).unwrap();
+    let stop = stopped_at / 2 + 3;
+    let outcome = first
+        .run(&cancel, &mut |e| {
+            if matches!(e, Event::Progress { iteration, .. } if iteration >= stop) {
+                cancel.cancel()
+            }
+        })
+        .unwrap();
+    assert!(matches!(outcome, Outcome::Cancelled { iteration, .. } if iteration % 8 != 0), "{outcome:?}");
+    drop(first);
+    options.checkpoint.as_mut().unwrap().resume = true;
+    let mut resumed = Run::start(tile, s, None, options).unwrap();
+    resumed.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    assert_eq!(resumed.iteration(), stopped_at, "the resumed run stops where the straight one did");
+    assert_eq!(bits(&resumed.finish().unwrap()), bits(&reference));
+}
+
+#[test]
+fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
+    use fsot::settings::Until;
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    // Where a plateau run's objective estimate goes, then a target short of it.
+    let mut probe = Run::start(tile, settings(64), None, cpu.clone()).unwrap();
+    let mut costs = Vec::new();
+    probe
+        .run(&CancelFlag::new(), &mut |e| {
+            if let Event::Progress { objective: Some(c), .. } = e {
+                costs.push(c)
+            }
+        })
+        .unwrap();
+    let target = costs[..32].iter().sum::<f64>() / 32.0 * 0.8;
+    let s = Settings { until: Until::Objective(target), iterations: 5000, ..settings(5000) };
+    let mut run = Run::start(tile, s, None, cpu).unwrap();
+    let mut windows = Vec::new();
+    let mut window = Vec::new();
+    run.run(&CancelFlag::new(), &mut |e| {
+        if let Event::Progress { objective: Some(c), .. } = e {
+            window.push(c);
+            if window.len() == 32 {
+                windows.push(window.iter().sum::<f64>() / 32.0);
+                window.clear();
+            }
+        }
+    })
+    .unwrap();
+    assert!(run.finished() && run.iteration() < 5000);
+    let last = *windows.last().unwrap();
+    assert!(last <= target, "stopped at a window of mean {last:e}, target {target:e}");
+    assert!(
+        windows[..windows.len() - 1].iter().all(|&w| w > target),
+        "it went on past the target: {windows:?}"
+    );
+}

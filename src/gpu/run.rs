@@ -44,6 +44,8 @@ pub struct VulkanRun {
     large: LargePlan,
     profile: Profile,
     overflowed: u64,
+    /// A step scale set by the caller; None: the cosine schedule.
+    scale: Option<f32>,
     // Pipelines and the sort before the buffers they are bound to: dropped first.
     pipelines: RunPipelines,
     sort: Option<RadixSort>,
@@ -102,6 +104,7 @@ impl VulkanRun {
             large,
             profile: Profile::default(),
             overflowed: 0,
+            scale: None,
             pipelines,
             sort,
             timer,
@@ -181,7 +184,7 @@ impl VulkanRun {
         let mut p = UpdatePush {
             values: self.tile.values() as u32,
             step_t: t,
-            scale: schedule(iteration, self.settings.iterations),
+            scale: self.scale.unwrap_or_else(|| schedule(iteration, self.settings.iterations)),
             inv_hits: (1.0 / self.hits_per_value) as f32,
             ..Default::default()
         };
@@ -331,6 +334,7 @@ impl Backend for VulkanRun {
             samples: bytemuck::pod_collect_to_vec(&parts[0]),
             first: bytemuck::pod_collect_to_vec(&parts[1]),
             second: if adam { self.fetch(&b.second, values)? } else { Vec::new() },
+            plateau: None,
         })
     }
 
@@ -384,6 +388,10 @@ impl Backend for VulkanRun {
         } else {
             self.buffers.readback.read::<i64>(values)?.into_iter().map(|v| v as f64 / FIXED_SCALE).collect()
         })
+    }
+
+    fn set_scale(&mut self, scale: Option<f32>) {
+        self.scale = scale;
     }
 
     fn report(&self) -> Report {

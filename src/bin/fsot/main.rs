@@ -4,6 +4,7 @@ mod bench;
 mod env;
 mod eval;
 mod optimize;
+mod plan;
 mod score;
 mod stress;
 
@@ -24,7 +25,7 @@ use fsot::mask::Mask;
 use fsot::problem::Tile;
 use fsot::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 use fsot::score::{score, SCORE_SLICES};
-use fsot::settings::Settings;
+use fsot::settings::{Settings, Until};
 
 #[derive(Parser)]
 #[command(
@@ -53,6 +54,25 @@ enum Command {
     /// Render animated scenes with every method's mask, with and without TAA,
     /// and measure the perceptual error (pRelMSE) and RelMSE.
     Eval(EvalArgs),
+    /// What a scene file needs: per sampling decision, the mask it reads and why,
+    /// the kernel and tile, and the estimated time on this machine and backend.
+    Plan(PlanArgs),
+}
+
+#[derive(Args)]
+struct PlanArgs {
+    /// The scene file (TOML; see the README).
+    scene: PathBuf,
+    /// Print the plan as JSON.
+    #[arg(long)]
+    json: bool,
+    /// The backend the time estimate is for.
+    #[arg(long, value_enum, default_value = "auto")]
+    backend: Backend,
+    /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else the
+    /// first discrete GPU].
+    #[arg(long)]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -197,6 +217,16 @@ enum Backend {
     Vulkan,
 }
 
+impl Backend {
+    fn choice(self) -> BackendChoice {
+        match self {
+            Backend::Auto => BackendChoice::Auto,
+            Backend::Cpu => BackendChoice::Cpu,
+            Backend::Vulkan => BackendChoice::Vulkan,
+        }
+    }
+}
+
 #[derive(Args, Clone)]
 struct KernelArgs {
     /// Temporal filter of the kernel.
@@ -246,9 +276,17 @@ struct OptimizeArgs {
     method: Method,
     #[command(flatten)]
     kernel: KernelArgs,
-    /// Iterations of the optimizer.
-    #[arg(long, default_value_t = fsot::settings::DEFAULT_ITERATIONS, allow_negative_numbers = true)]
-    iterations: u32,
+    /// Iterations of the optimizer [default: 1000]; with --until, the most it may take
+    /// [default: 10000].
+    #[arg(long, allow_negative_numbers = true)]
+    iterations: Option<u32>,
+    /// Stop by a rule instead of after a count: `plateau` (when further iterations
+    /// no longer pay: the step halves whenever a 32-iteration window gains less
+    /// than 1% on the last, and the run ends at the smallest step when a window
+    /// gains less than 0.2%) or `objective:X` (once a window's mean objective
+    /// estimate is at most X).
+    #[arg(long)]
+    until: Option<String>,
     /// Slices per iteration [default: enough for each sample to be in 16 classes
     /// per iteration].
     #[arg(long, allow_negative_numbers = true)]
@@ -303,7 +341,11 @@ struct OptimizeArgs {
     /// uninterrupted run.
     #[arg(long)]
     resume: bool,
-    /// Output EXR file.
+    /// Make every mask a scene file plans (see `fsot plan`) into the folder --out,
+    /// with plan.json; each mask stops when further iterations no longer pay.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Output EXR file (with --scene: the output folder).
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
     /// Also write 16-bit PNG slices into this folder.
@@ -347,6 +389,7 @@ fn main() -> ExitCode {
         Command::Stress(args) => stress::stress_command(args),
         Command::Bench(args) => bench::bench_command(args),
         Command::Eval(args) => eval::eval_command(args),
+        Command::Plan(args) => plan::plan_command(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

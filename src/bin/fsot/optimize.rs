@@ -4,6 +4,9 @@ use super::*;
 
 pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     set_threads(args.threads)?;
+    if let Some(scene) = &args.scene {
+        return super::plan::optimize_scene(&args, scene);
+    }
     let spec = args.kernel.spec()?;
     let init = args.init.as_deref().map(fsot::io::exr::read).transpose()?;
     let (w, h, t) = match (&args.size, &init) {
@@ -14,7 +17,12 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
     let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
     let tile = Tile::new(w, h, t, spp, dims)?;
-    if args.iterations == 0 {
+    let until = parse_until(args.until.as_deref())?;
+    let iterations = args.iterations.unwrap_or(match until {
+        Until::Iterations => fsot::settings::DEFAULT_ITERATIONS,
+        _ => fsot::settings::DEFAULT_CAP,
+    });
+    if iterations == 0 {
         return Err(Error::invalid("--iterations must be at least 1"));
     }
     // Reserve the outputs before the long work: a bad path fails now.
@@ -31,23 +39,30 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         return make_baseline(&args, tile, spec, out);
     }
     let mut settings = Settings::new(spec, args.seed);
-    settings.iterations = args.iterations;
+    settings.iterations = iterations;
+    settings.until = until;
     settings.slices = args.slices;
     let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
     eprintln!("backend: {}", run.note());
     if let (Some(from), Some(p)) = (run.resumed_from(), &args.checkpoint) {
         eprintln!("resumed from {} at iteration {from}", p.display());
     }
+    let length = match until {
+        Until::Iterations => format!("{iterations} iterations"),
+        Until::Plateau(_) => format!("until iterations no longer pay (at most {iterations})"),
+        Until::Objective(x) => {
+            format!("until the objective is at most {x:e} (at most {iterations} iterations)")
+        }
+    };
     eprintln!(
-        "optimizing {} for kernel {}: {} iterations x {} slices",
+        "optimizing {} for kernel {}: {length} x {} slices",
         tile.describe(),
         spec.describe(),
-        args.iterations,
         run.backend().slices_per_iteration()
     );
     let start_samples = fsot::settings::initial_samples(&tile, &settings, init.as_ref())?;
     let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
-    let bar = iteration_bar(args.iterations, run.iteration());
+    let bar = iteration_bar(iterations, run.iteration());
     // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
     let cancel = CancelFlag::on_interrupt()?;
     let start = Instant::now();
@@ -75,13 +90,11 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if let Outcome::Cancelled { iteration, saved } = outcome {
         match saved {
             Some(p) => eprintln!(
-                "interrupted at iteration {iteration} of {}: state saved to {}; continue with the same command and --resume",
-                args.iterations,
+                "interrupted at iteration {iteration} of {iterations}: state saved to {}; continue with the same command and --resume",
                 p.display()
             ),
             None => eprintln!(
-                "interrupted at iteration {iteration} of {}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
-                args.iterations,
+                "interrupted at iteration {iteration} of {iterations}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
                 args.out.display()
             ),
         }
@@ -109,6 +122,20 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     backend_report(&report)
 }
 
+/// `--until`: plateau, objective:X, or none (a fixed count).
+fn parse_until(text: Option<&str>) -> Result<Until> {
+    let Some(text) = text else { return Ok(Until::Iterations) };
+    if text == "plateau" {
+        return Ok(Until::Plateau(fsot::step_rule::Plateau::DEFAULT));
+    }
+    match text.strip_prefix("objective:").map(|x| x.trim().parse::<f64>()) {
+        Some(Ok(x)) if x.is_finite() && x > 0.0 => Ok(Until::Objective(x)),
+        _ => Err(Error::invalid(format!(
+            "--until must be `plateau` or `objective:X` with X > 0, got {text:?}"
+        ))),
+    }
+}
+
 /// The library run's options from the flags and the environment.
 fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
     let checkpoint = match (&args.checkpoint, args.resume) {
@@ -123,11 +150,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
             Some(Checkpointing { path: path.clone(), every: args.checkpoint_every, resume })
         }
     };
-    let backend = match args.backend {
-        Backend::Auto => BackendChoice::Auto,
-        Backend::Cpu => BackendChoice::Cpu,
-        Backend::Vulkan => BackendChoice::Vulkan,
-    };
+    let backend = args.backend.choice();
     let vulkan = VulkanOptions {
         deterministic: args.deterministic,
         profile: args.profile,

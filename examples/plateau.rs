@@ -1,0 +1,53 @@
+//! The end-agnostic plateau schedule against fixed cosine runs: a CPU run stepped
+//! until the plateau rule stops it, timed and judged by the independent
+//! perceived-error test under TAA.
+//!
+//! cargo run --release --example plateau -- [kernel] [WxHxT] [decay_below] [stop_below]
+use std::time::Instant;
+
+use fsot::backend::Backend;
+use fsot::cpu_backend::CpuRun;
+use fsot::eval::perceived::{ratio_to_white, TestSetup};
+use fsot::kernel::KernelSpec;
+use fsot::problem::Tile;
+use fsot::score::{score, SCORE_SLICES};
+use fsot::settings::Settings;
+use fsot::step_rule::{Plateau, PlateauState};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let kernel = args.get(1).map(String::as_str).unwrap_or("taa");
+    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
+    let decay_below = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.decay_below);
+    let stop_below = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.stop_below);
+    let rule = Plateau { decay_below, stop_below, ..Plateau::DEFAULT };
+    let tile = Tile::new(w, h, t, 1, 2).unwrap();
+    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
+    let mut settings = Settings::new(spec, 7);
+    settings.iterations = 20_000; // a cap only
+    let mut run = CpuRun::new(tile, settings, None).unwrap();
+    let mut state = PlateauState::default();
+    let start = Instant::now();
+    let mut trace = Vec::new();
+    loop {
+        run.set_scale(Some(state.scale));
+        let cost = run.step();
+        if state.observe(&rule, cost) || run.finished() {
+            break;
+        }
+        if state.count == 0 {
+            trace.push(format!("{}:{}", run.iteration(), state.scale));
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let mask = run.mask().unwrap();
+    println!(
+        "{} {} {rule:?}: {} iterations, {seconds:.2} s, objective {:.5e}, perceived (TAA) {:.4}",
+        tile.describe(),
+        spec.describe(),
+        run.iteration(),
+        score(&mask, spec, SCORE_SLICES).objective,
+        ratio_to_white(&mask, &TestSetup::default(), 4)
+    );
+    println!("windows (iteration:scale): {}", trace.join(" "));
+}

@@ -1,0 +1,432 @@
+//! The planner: from a scene (what a renderer samples and how its frames are
+//! seen) to the masks that pay off, each with the reason for it.
+//!
+//! - The kernel follows the display: TAA -> `perceptual-taa` at its alpha and frame
+//!   rate, no TAA -> `perceptual`, a still camera (frames accumulated) -> `spatial`.
+//! - The tile: W = H from the scene or 64; T from the scene, or the TAA history
+//!   that carries 95% of the blend's weight rounded up to a power of two (alpha 0.1
+//!   -> 32), or a quarter second of the eye's temporal filter without TAA (60 fps
+//!   -> 16), or 16 for a still camera.
+//! - Each visible group gets masks of its own, one per pair of dimensions and one
+//!   for a last single dimension (a 1-D decision a scalar mask, a 2-D one a 2-D
+//!   mask, a 3-D one a pair and a single): renderers consume dimensions in pairs,
+//!   and a mask's quality in directions no decision reads is wasted. An invisible
+//!   group reads white noise (nothing is optimized for it). No group shares a mask
+//!   with another: that has not been measured to cost nothing.
+//! - Every optimized mask runs until further iterations no longer pay
+//!   (`Until::Plateau`); the estimate of its iterations is the measured stopping
+//!   point of the rule, its time a cost model: a calibration run on this machine
+//!   and backend scaled by the scaling suite's factors for dimension and spp.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::io::atomic::AtomicFile;
+use crate::kernel::KernelSpec;
+use crate::mask::Mask;
+use crate::problem::Tile;
+use crate::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+use crate::scene::{Display, Scene};
+use crate::settings::{Settings, Until, DEFAULT_CAP};
+use crate::step_rule::Plateau;
+
+/// Tile width and height when the scene does not give them.
+pub const DEFAULT_SIZE: usize = 64;
+/// Iterations the plateau rule took on the measured tiles (BENCHMARKS.md: 640 to
+/// 672 on 32x32x16 `taa` and 64x64x32 `perceptual-taa`): the plan's estimate.
+pub const EXPECTED_ITERATIONS: u32 = 660;
+
+/// One mask file of the plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlannedMask {
+    /// File name in the output folder.
+    pub file: String,
+    pub dims: usize,
+    pub spp: usize,
+    /// White noise (nothing optimized).
+    pub white: bool,
+    pub seed: u64,
+    pub estimated_iterations: u32,
+    pub estimated_seconds: f64,
+}
+
+/// What one sampling decision reads.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Part {
+    /// The mask file (its own or one it shares).
+    pub mask: String,
+    /// The decision's dimensions this part covers, from `first`.
+    pub first: usize,
+    pub dims: usize,
+    /// Pixel and frame offset at which the decision reads the mask.
+    pub offset: [u32; 3],
+    /// Toroidal (Cranley-Patterson) shift per dimension.
+    pub shift: Vec<f32>,
+}
+
+/// One sampling decision's plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlannedGroup {
+    pub name: String,
+    pub dims: usize,
+    pub spp: usize,
+    pub parts: Vec<Part>,
+    /// Why nothing is optimized for it, when nothing is.
+    pub skipped: Option<String>,
+    pub reason: String,
+}
+
+/// A scene's plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Plan {
+    pub scene: String,
+    pub tile: [usize; 3],
+    pub tile_reason: String,
+    pub kernel: String,
+    pub kernel_reason: String,
+    pub backend: String,
+    pub groups: Vec<PlannedGroup>,
+    pub masks: Vec<PlannedMask>,
+    pub estimated_seconds: f64,
+    pub cost_model: String,
+}
+
+/// The kernel a display calls for, and why.
+pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
+    let (name, why) = match (display.animated, display.taa_alpha) {
+        (false, _) => (
+            "spatial",
+            "a still camera: frames are accumulated, each frame's error is seen alone".to_string(),
+        ),
+        (true, Some(a)) => ("perceptual-taa", format!("TAA (alpha {a}) then the eye at {} fps", display.fps)),
+        (true, None) => ("perceptual", format!("no TAA: the eye's temporal filter at {} fps", display.fps)),
+    };
+    let spec =
+        KernelSpec::from_name(name, display.sigma, None, display.taa_alpha.unwrap_or(0.1), display.fps)?;
+    Ok((spec, why))
+}
+
+/// The tile's size, and why.
+pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
+    if let Some(size) = scene.size {
+        return (size, "as the scene gives it".into());
+    }
+    let d = &scene.display;
+    let (t, why) = match (d.animated, d.taa_alpha) {
+        (false, _) => (16, "a still camera: 16 frames to accumulate over".to_string()),
+        (true, Some(a)) => {
+            // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight.
+            let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (1.0 - a).ln()).ceil() };
+            let t = (frames as usize).clamp(1, 256).next_power_of_two();
+            (t, format!("TAA alpha {a}: {frames} frames carry 95% of the history, rounded up to {t}"))
+        }
+        (true, None) => {
+            let frames = (0.25 * d.fps).ceil() as usize;
+            let t = frames.clamp(1, 256).next_power_of_two();
+            (t, format!("no TAA: the eye's filter spans about a quarter second, {frames} frames, rounded up to {t}"))
+        }
+    };
+    ((DEFAULT_SIZE, DEFAULT_SIZE, t), format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default); T {why}"))
+}
+
+/// Per-point cost of an iteration relative to d = 2 (the scaling suite: 64x64x16,
+/// `perceptual-taa`, CPU path, 2 cores; BENCHMARKS.md "How cost grows").
+const DIMS_FACTOR: [f64; 8] = [0.52, 1.0, 1.04, 1.43, 2.37, 2.90, 4.28, 8.53];
+/// Per-point cost relative to spp 1 (the same suite: 32x32x8, d = 2, spp 1 to 16).
+const SPP_FACTOR: [(usize, f64); 5] = [(1, 1.0), (2, 0.73), (4, 0.60), (8, 0.58), (16, 0.63)];
+
+/// Seconds per iteration: a calibration on this machine and backend, scaled by
+/// the scaling suite's factors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CostModel {
+    /// Seconds per point and iteration at d = 2, spp 1 (the calibration tile's).
+    pub seconds_per_point: f64,
+    pub backend: String,
+}
+
+impl CostModel {
+    /// Times a few iterations of a 32x32x8, d = 2 `perceptual-taa` run (after a
+    /// warm-up) on the backend `options` choose.
+    pub fn calibrate(options: &RunOptions) -> Result<Self> {
+        let tile = Tile::new(32, 32, 8, 1, 2)?;
+        let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0)?, 1);
+        settings.iterations = 40;
+        let options = RunOptions { checkpoint: None, ..options.clone() };
+        let mut run = Run::start(tile, settings, None, options)?;
+        let never = CancelFlag::new();
+        run.advance(8, &never, &mut |_| {})?;
+        let start = Instant::now();
+        run.advance(40, &never, &mut |_| {})?;
+        let seconds = start.elapsed().as_secs_f64() / 32.0;
+        Ok(Self { seconds_per_point: seconds / tile.points() as f64, backend: run.note().to_string() })
+    }
+
+    /// Estimated seconds per iteration on `tile`.
+    pub fn seconds_per_iteration(&self, tile: &Tile) -> f64 {
+        let d = DIMS_FACTOR[tile.dims.clamp(1, 8) - 1];
+        let s = SPP_FACTOR.iter().rev().find(|(spp, _)| *spp <= tile.spp).map(|x| x.1).unwrap_or(1.0);
+        self.seconds_per_point * tile.points() as f64 * d * s
+    }
+}
+
+/// A stable seed per mask file, so a plan makes the same masks every time.
+fn seed_of(scene: &str, file: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in scene.bytes().chain([0]).chain(file.bytes()) {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The parts of a visible decision of `dims` dimensions: pairs, then a single.
+fn split(dims: usize) -> Vec<(usize, usize)> {
+    (0..dims).step_by(2).map(|first| (first, (dims - first).min(2))).collect()
+}
+
+impl Plan {
+    /// Plans a scene with the cost model `cost`.
+    pub fn new(scene: &Scene, cost: &CostModel) -> Result<Self> {
+        let (kernel, kernel_reason) = kernel_for(&scene.display)?;
+        let ((w, h, t), tile_reason) = tile_size(scene);
+        let mut groups = Vec::new();
+        let mut masks: Vec<PlannedMask> = Vec::new();
+        for g in &scene.groups {
+            let mut parts = Vec::new();
+            let (skipped, reason) = if !g.visible {
+                let file = format!("{}.exr", g.name);
+                masks.push(PlannedMask {
+                    file: file.clone(),
+                    dims: g.dims,
+                    spp: g.spp,
+                    white: true,
+                    seed: seed_of(&scene.name, &file),
+                    estimated_iterations: 0,
+                    estimated_seconds: 0.0,
+                });
+                parts.push(Part {
+                    mask: file,
+                    first: 0,
+                    dims: g.dims,
+                    offset: [0; 3],
+                    shift: vec![0.0; g.dims],
+                });
+                (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
+            } else {
+                let pieces = split(g.dims);
+                for &(first, dims) in &pieces {
+                    let file = match pieces.len() {
+                        1 => format!("{}.exr", g.name),
+                        _ => format!("{}-{first}.exr", g.name),
+                    };
+                    let tile = Tile::new(w, h, t, g.spp, dims)?;
+                    let per = cost.seconds_per_iteration(&tile);
+                    masks.push(PlannedMask {
+                        file: file.clone(),
+                        dims,
+                        spp: g.spp,
+                        white: false,
+                        seed: seed_of(&scene.name, &file),
+                        estimated_iterations: EXPECTED_ITERATIONS,
+                        estimated_seconds: per * EXPECTED_ITERATIONS as f64,
+                    });
+                    parts.push(Part { mask: file, first, dims, offset: [0; 3], shift: vec![0.0; dims] });
+                }
+                let reason = match g.dims {
+                    1 => "a 1-D decision: a scalar mask of its own".to_string(),
+                    2 => "a 2-D decision: a 2-D mask of its own".to_string(),
+                    d => format!("{d}-D: split into pairs and a single, as renderers consume them"),
+                };
+                (None, reason)
+            };
+            groups.push(PlannedGroup {
+                name: g.name.clone(),
+                dims: g.dims,
+                spp: g.spp,
+                parts,
+                skipped,
+                reason,
+            });
+        }
+        let estimated_seconds = masks.iter().map(|m| m.estimated_seconds).sum();
+        Ok(Self {
+            scene: scene.name.clone(),
+            tile: [w, h, t],
+            tile_reason,
+            kernel: kernel.describe(),
+            kernel_reason,
+            backend: cost.backend.clone(),
+            groups,
+            masks,
+            estimated_seconds,
+            cost_model: format!(
+                "{:.3e} s per point and iteration at d = 2, measured here, times the scaling suite's factors for d and spp; {EXPECTED_ITERATIONS} iterations each (where the plateau rule stopped on the measured tiles)",
+                cost.seconds_per_point
+            ),
+        })
+    }
+
+    /// The settings of an optimized mask of the plan.
+    pub fn settings(&self, scene: &Scene, mask: &PlannedMask) -> Result<Settings> {
+        let (kernel, _) = kernel_for(&scene.display)?;
+        let mut s = Settings::new(kernel, mask.seed);
+        s.iterations = DEFAULT_CAP;
+        s.until = Until::Plateau(Plateau::DEFAULT);
+        Ok(s)
+    }
+
+    /// The tile of a mask of the plan.
+    pub fn tile(&self, mask: &PlannedMask) -> Result<Tile> {
+        Tile::new(self.tile[0], self.tile[1], self.tile[2], mask.spp, mask.dims)
+    }
+}
+
+/// What running a plan tells its observer.
+#[derive(Debug)]
+pub enum PlanEvent<'a> {
+    /// Mask `index` of the plan's masks starts (`iteration` when it resumes).
+    Start { index: usize, file: &'a str, iteration: u32 },
+    /// Its run's event.
+    Run { index: usize, event: Event<'a> },
+    /// It is written.
+    Done { index: usize, file: &'a str, iterations: u32, seconds: f64 },
+}
+
+/// What a made mask took.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Made {
+    pub file: String,
+    pub iterations: u32,
+    pub seconds: f64,
+}
+
+/// The plan as a renderer reads it (`plan.json`): per group, the mask it reads
+/// (its first part's), the offset and shift, the kernel, what making it took.
+#[derive(Serialize)]
+struct PlanFile<'a> {
+    scene: &'a str,
+    tile: [usize; 3],
+    kernel: &'a str,
+    groups: Vec<GroupFile<'a>>,
+}
+
+#[derive(Serialize)]
+struct GroupFile<'a> {
+    name: &'a str,
+    dims: usize,
+    spp: usize,
+    mask: &'a str,
+    offset: [u32; 3],
+    shift: &'a [f32],
+    /// Every mask the group reads, in dimension order (more than one when split).
+    parts: &'a [Part],
+    kernel: Option<&'a str>,
+    iterations: Option<u32>,
+    seconds: Option<f64>,
+    skipped: Option<&'a str>,
+}
+
+impl Plan {
+    /// Makes every mask of the plan into `dir` (each written atomically), then
+    /// `dir/plan.json`. Each optimized mask checkpoints to `dir/.NAME.ckpt` (every
+    /// `every` iterations and when cancelled); with `resume`, masks already written
+    /// are kept and a checkpoint is continued.
+    #[allow(clippy::too_many_arguments)]
+    pub fn execute(
+        &self,
+        scene: &Scene,
+        dir: &Path,
+        options: &RunOptions,
+        every: u32,
+        resume: bool,
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(PlanEvent),
+    ) -> Result<Outcome> {
+        crate::io::atomic::make_folder(dir)?;
+        let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
+        let mut made = Vec::new();
+        for (index, m) in self.masks.iter().enumerate() {
+            let path = dir.join(&m.file);
+            let out = AtomicFile::create(&path)?;
+            let tile = self.tile(m)?;
+            if m.white {
+                let mut mask = Mask::white(tile, m.seed);
+                mask.set_meta("version", env!("CARGO_PKG_VERSION"));
+                crate::io::exr::write(&mask, out)?;
+                made.push(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
+                continue;
+            }
+            let settings = self.settings(scene, m)?;
+            if resume {
+                if let Some(done) = already_made(&path, &tile, &settings) {
+                    made.push(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
+                    continue;
+                }
+            }
+            let checkpoint = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
+            let resume_this = resume && checkpoint.exists();
+            let run_options = RunOptions {
+                checkpoint: Some(Checkpointing { path: checkpoint, every, resume: resume_this }),
+                ..options.clone()
+            };
+            let mut run = Run::start(tile, settings, None, run_options)?;
+            on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
+            let start = Instant::now();
+            let outcome = run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))?;
+            if let Outcome::Cancelled { .. } = outcome {
+                return Ok(outcome);
+            }
+            let seconds = start.elapsed().as_secs_f64();
+            let iterations = run.iteration();
+            crate::io::exr::write(&run.finish()?, out)?;
+            on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
+            made.push(Made { file: m.file.clone(), iterations, seconds });
+        }
+        plan_file.commit(self.document(&made)?.as_bytes())?;
+        Ok(Outcome::Reached)
+    }
+
+    /// `plan.json` with what making each mask took.
+    pub fn document(&self, made: &[Made]) -> Result<String> {
+        let took = |file: &str| made.iter().find(|m| m.file == file);
+        let groups = self
+            .groups
+            .iter()
+            .map(|g| {
+                let first = &g.parts[0];
+                let own: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                let optimized = g.skipped.is_none();
+                GroupFile {
+                    name: &g.name,
+                    dims: g.dims,
+                    spp: g.spp,
+                    mask: &first.mask,
+                    offset: first.offset,
+                    shift: &first.shift,
+                    parts: &g.parts,
+                    kernel: optimized.then_some(self.kernel.as_str()),
+                    iterations: optimized.then(|| own.iter().map(|m| m.iterations).sum()),
+                    seconds: optimized.then(|| own.iter().map(|m| m.seconds).sum()),
+                    skipped: g.skipped.as_deref(),
+                }
+            })
+            .collect();
+        let file = PlanFile { scene: &self.scene, tile: self.tile, kernel: &self.kernel, groups };
+        let mut text = serde_json::to_string_pretty(&file)
+            .map_err(|e| Error::invalid(format!("cannot write the plan as JSON: {e}")))?;
+        text.push('\n');
+        Ok(text)
+    }
+}
+
+/// The iterations of a mask already written by this very plan (same tile, seed
+/// and kernel), if there is one at `path`.
+fn already_made(path: &Path, tile: &Tile, settings: &Settings) -> Option<u32> {
+    let mask = crate::io::exr::read(path).ok()?;
+    let same = mask.tile == *tile
+        && mask.meta("seed") == Some(settings.seed.to_string().as_str())
+        && mask.meta("kernel") == Some(settings.kernel.describe().as_str());
+    same.then(|| mask.meta("iterations").and_then(|i| i.parse().ok())).flatten()
+}

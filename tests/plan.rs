@@ -1,0 +1,168 @@
+//! Scene plans: what each sampling decision reads and why, and the masks made
+//! from a plan.
+
+use fsot::backend::BackendChoice;
+use fsot::plan::{kernel_for, tile_size, CostModel, Plan, PlanEvent};
+use fsot::problem::Tile;
+use fsot::run::{CancelFlag, Outcome, RunOptions};
+use fsot::scene::Scene;
+use fsot::score::score;
+
+fn scene(display: &str, groups: &str) -> Scene {
+    Scene::parse(&format!("[display]\n{display}\n{groups}"), "test").unwrap()
+}
+
+const ONE: &str = "[[group]]\nname = \"a\"\ndims = 2\n";
+
+/// A cost model with a round figure (no calibration run).
+fn model() -> CostModel {
+    CostModel { seconds_per_point: 1e-6, backend: "test".into() }
+}
+
+#[test]
+fn the_display_chooses_the_kernel() {
+    let k = |d: &str| kernel_for(&scene(d, ONE).display).unwrap().0.describe();
+    assert!(k("taa_alpha = 0.1").starts_with("perceptual-taa"), "{}", k("taa_alpha = 0.1"));
+    assert!(k("fps = 30").starts_with("perceptual ("), "{}", k("fps = 30"));
+    assert!(k("fps = 30").contains("fps = 30"));
+    assert!(k("animated = false\ntaa_alpha = 0.1").starts_with("spatial"));
+    assert!(
+        k("sigma = 1.5\ntaa_alpha = 0.2").contains("sigma = 1.5")
+            && k("taa_alpha = 0.2").contains("alpha = 0.2")
+    );
+}
+
+#[test]
+fn the_taa_history_that_matters_sets_the_frames() {
+    let t = |d: &str| tile_size(&scene(d, ONE)).0;
+    assert_eq!(t("taa_alpha = 0.1"), (64, 64, 32), "0.9^29 < 5%: 29 frames, rounded up to 32");
+    assert_eq!(t("taa_alpha = 0.2"), (64, 64, 16));
+    assert_eq!(t("taa_alpha = 1.0"), (64, 64, 1));
+    assert_eq!(t("fps = 60"), (64, 64, 16), "no TAA: a quarter second of the eye's filter");
+    assert_eq!(t("fps = 120"), (64, 64, 32));
+    assert_eq!(t("animated = false"), (64, 64, 16));
+    let given = Scene::parse(&format!("[tile]\nsize = \"16x8x4\"\n{ONE}"), "t").unwrap();
+    assert_eq!(tile_size(&given).0, (16, 8, 4));
+}
+
+#[test]
+fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white_noise() {
+    let groups = "[[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
+                  [[group]]\nname = \"vol\"\ndims = 3\nspp = 2\n[[group]]\nname = \"quad\"\ndims = 4\n\
+                  [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
+    let parts = |name: &str| {
+        let g = plan.groups.iter().find(|g| g.name == name).unwrap();
+        g.parts.iter().map(|p| (p.mask.clone(), p.first, p.dims)).collect::<Vec<_>>()
+    };
+    assert_eq!(parts("pick"), [("pick.exr".to_string(), 0, 1)]);
+    assert_eq!(parts("lens"), [("lens.exr".to_string(), 0, 2)]);
+    assert_eq!(parts("vol"), [("vol-0.exr".to_string(), 0, 2), ("vol-2.exr".to_string(), 2, 1)]);
+    assert_eq!(parts("quad"), [("quad-0.exr".to_string(), 0, 2), ("quad-2.exr".to_string(), 2, 2)]);
+    let deep = plan.groups.iter().find(|g| g.name == "deep").unwrap();
+    assert_eq!(deep.skipped.as_deref(), Some("not visible: white noise"));
+    let white: Vec<&str> = plan.masks.iter().filter(|m| m.white).map(|m| m.file.as_str()).collect();
+    assert_eq!(white, ["deep.exr"]);
+    assert!(plan.masks.iter().filter(|m| m.file.starts_with("vol")).all(|m| m.spp == 2));
+    // Every mask its own seed; estimates from the cost model.
+    let mut seeds: Vec<u64> = plan.masks.iter().map(|m| m.seed).collect();
+    seeds.dedup();
+    assert_eq!(seeds.len(), plan.masks.len());
+    let lens = plan.masks.iter().find(|m| m.file == "lens.exr").unwrap();
+    let per = model().seconds_per_iteration(&Tile::new(64, 64, 32, 1, 2).unwrap());
+    assert!((per - 1e-6 * 64.0 * 64.0 * 32.0).abs() < 1e-12, "d = 2, spp 1 is the calibration's unit");
+    assert_eq!(lens.estimated_seconds, per * lens.estimated_iterations as f64);
+    let total: f64 = plan.masks.iter().map(|m| m.estimated_seconds).sum();
+    assert_eq!(plan.estimated_seconds, total);
+}
+
+#[test]
+fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
+                [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    let scene = Scene::parse(text, "small").unwrap();
+    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let plan = Plan::new(&scene, &CostModel::calibrate(&options).unwrap()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut done = Vec::new();
+    let outcome = plan
+        .execute(&scene, dir.path(), &options, 50, false, &CancelFlag::new(), &mut |e| {
+            if let PlanEvent::Done { file, iterations, .. } = e {
+                done.push((file.to_string(), iterations))
+            }
+        })
+        .unwrap();
+    assert_eq!(outcome, Outcome::Reached);
+    assert_eq!(done.iter().map(|d| d.0.as_str()).collect::<Vec<_>>(), ["pick.exr", "lens.exr"]);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("plan.json")).unwrap()).unwrap();
+    assert_eq!(json["tile"], serde_json::json!([8, 8, 4]));
+    let groups = json["groups"].as_array().unwrap();
+    assert_eq!(groups.len(), 3);
+    for (g, (name, dims)) in groups.iter().zip([("pick", 1), ("lens", 2), ("deep", 2)]) {
+        assert_eq!(g["name"], name);
+        assert_eq!(g["dims"], dims);
+        assert_eq!(g["mask"], format!("{name}.exr"));
+        assert_eq!(g["offset"], serde_json::json!([0, 0, 0]));
+        assert_eq!(g["shift"].as_array().unwrap().len(), dims);
+        let mask = fsot::io::exr::read(&dir.path().join(format!("{name}.exr"))).unwrap();
+        assert_eq!((mask.tile.dims, mask.tile.width, mask.tile.frames), (dims, 8, 4));
+        if name == "deep" {
+            assert_eq!(g["skipped"], "not visible: white noise");
+            assert!(g["iterations"].is_null() && g["kernel"].is_null());
+            assert_eq!(mask.meta("method"), Some("white"));
+        } else {
+            assert!(g["skipped"].is_null());
+            let iterations = g["iterations"].as_u64().unwrap();
+            assert_eq!(done.iter().find(|d| d.0 == format!("{name}.exr")).unwrap().1 as u64, iterations);
+            assert!(iterations > 0 && iterations < 10_000, "stopped by the rule: {iterations}");
+            let s = score(&mask, fsot::plan::kernel_for(&scene.display).unwrap().0, 4096);
+            assert!(s.ratio() < 0.8, "{name}: {} x white", s.ratio());
+        }
+    }
+    assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".ckpt")));
+}
+
+#[test]
+fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
+    let scene = Scene::parse(text, "resumable").unwrap();
+    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let plan = Plan::new(&scene, &model()).unwrap();
+    let straight = tempfile::tempdir().unwrap();
+    plan.execute(&scene, straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
+
+    let dir = tempfile::tempdir().unwrap();
+    let cancel = CancelFlag::new();
+    let outcome = plan
+        .execute(&scene, dir.path(), &options, 10, false, &cancel, &mut |e| {
+            if let PlanEvent::Run { index: 1, event: fsot::run::Event::Progress { iteration: 25, .. } } = e {
+                cancel.cancel()
+            }
+        })
+        .unwrap();
+    assert!(matches!(outcome, Outcome::Cancelled { iteration: 25, .. }), "{outcome:?}");
+    assert!(dir.path().join("a.exr").exists() && !dir.path().join("b.exr").exists());
+    assert!(!dir.path().join("plan.json").exists(), "plan.json only once every mask is made");
+    let made_a = std::fs::read(dir.path().join("a.exr")).unwrap();
+    let mut started = Vec::new();
+    plan.execute(&scene, dir.path(), &options, 10, true, &CancelFlag::new(), &mut |e| {
+        if let PlanEvent::Start { file, iteration, .. } = e {
+            started.push((file.to_string(), iteration))
+        }
+    })
+    .unwrap();
+    assert_eq!(started, [("b.exr".to_string(), 25)], "a kept; b from the checkpoint written when cancelled");
+    assert_eq!(std::fs::read(dir.path().join("a.exr")).unwrap(), made_a);
+    for name in ["a.exr", "b.exr"] {
+        let x = fsot::io::exr::read(&dir.path().join(name)).unwrap();
+        let y = fsot::io::exr::read(&straight.path().join(name)).unwrap();
+        assert!(x.samples.iter().zip(&y.samples).all(|(p, q)| p.to_bits() == q.to_bits()), "{name} differs");
+    }
+}
