@@ -164,6 +164,12 @@ impl CostModel {
         Ok(Self { seconds_per_point: seconds / tile.points() as f64, backend: run.note().to_string() })
     }
 
+    /// A model with no calibration (estimates of 0 s): for plans whose masks are
+    /// made without asking how long they take.
+    pub fn unmeasured() -> Self {
+        Self { seconds_per_point: 0.0, backend: "not measured".into() }
+    }
+
     /// Estimated seconds per iteration on `tile`.
     pub fn seconds_per_iteration(&self, tile: &Tile) -> f64 {
         let d = DIMS_FACTOR[tile.dims.clamp(1, 8) - 1];

@@ -16,6 +16,7 @@ fn tiny() -> EvalSize {
         warmup: 16,
         renders: 1,
         reference_samples: 16,
+        planned: false,
     }
 }
 
@@ -76,4 +77,35 @@ fn a_blue_noise_mask_beats_white_noise_in_every_scene_under_taa() {
         };
         assert!(get("ours-taa") < get("white"), "{}: {} vs {}", scene.name(), get("ours-taa"), get("white"));
     }
+}
+
+#[test]
+fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = EvalSize { planned: true, ..tiny() };
+    let scenes = [Scene::LightPick, Scene::DefocusMotion];
+    let records = run_eval(&size, &[2.1], &scenes, dir.path(), None, &[], |_| {}).unwrap();
+    assert_eq!(records.len(), scenes.len() * (METHODS.len() + 1) * 2);
+    for scene in ["light-pick", "defocus-motion"] {
+        for taa in [false, true] {
+            let r = records
+                .iter()
+                .find(|r| r.scene == scene && r.method == "fsot-planned" && r.taa == taa)
+                .unwrap();
+            let white =
+                records.iter().find(|r| r.scene == scene && r.method == "white" && r.taa == taa).unwrap();
+            assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
+            assert!(r.prelmse < white.prelmse, "{r:?} against {white:?}");
+        }
+    }
+    // defocus-motion: a 2-D lens mask and a 1-D time mask; light-pick: one 1-D mask.
+    let (masks, _) =
+        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, &size, dir.path()).unwrap();
+    let shape: Vec<(usize, usize)> = masks.iter().map(|(m, first)| (m.tile.dims, *first)).collect();
+    assert_eq!(shape, [(2, 0), (1, 2)]);
+    let (masks, seconds) =
+        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, &size, dir.path()).unwrap();
+    assert_eq!(masks.iter().map(|(m, _)| m.tile.dims).collect::<Vec<_>>(), [1]);
+    assert_eq!(seconds, 0.0, "read from the cache");
+    assert!(masks[0].0.meta("kernel").unwrap().starts_with("perceptual ("), "no TAA: the perceptual kernel");
 }

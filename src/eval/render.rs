@@ -18,48 +18,67 @@ pub struct Shot {
     pub frames: usize,
 }
 
-/// How a render takes its numbers from a mask. The scene's dimension k is
-/// component k mod d of the mask's sample (d the mask's dimension), in group
-/// k / d; each group reads the tile at its own random pixel offset and adds its
-/// own random toroidal shift, so groups are decorrelated.
-pub struct MaskSampler<'a> {
+/// One source of a render's numbers: the scene's dimensions `first..first + d`
+/// (d the mask's dimension) read from `mask` at a pixel and frame offset, plus a
+/// toroidal shift per component.
+struct Source<'a> {
     mask: &'a Mask,
-    /// Per group: pixel offset (x, y, frame) and value shift per component.
-    groups: Vec<([usize; 3], Vec<f64>)>,
+    first: usize,
+    offset: [usize; 3],
+    shift: Vec<f64>,
+}
+
+/// How a render takes its numbers from masks. With one mask (`new`), the scene's
+/// dimension k is component k mod d of the mask's sample, in group k / d; with a
+/// plan (`planned`), each decision's dimensions come from its own mask. Every
+/// group reads its tile at its own random pixel offset and adds its own random
+/// toroidal shift, so groups are decorrelated.
+pub struct MaskSampler<'a> {
+    sources: Vec<Source<'a>>,
 }
 
 impl<'a> MaskSampler<'a> {
     pub fn new(mask: &'a Mask, scene_dims: usize, seed: u64) -> Self {
-        let t = mask.tile;
-        let d = t.dims;
+        let d = mask.tile.dims;
+        let parts: Vec<(&Mask, usize)> = (0..scene_dims.div_ceil(d)).map(|g| (mask, g * d)).collect();
+        Self::planned(&parts, seed)
+    }
+
+    /// Numbers from several masks: `(mask, first)`, the scene's dimensions from
+    /// `first` on read from that mask (as many as it has).
+    pub fn planned(parts: &[(&'a Mask, usize)], seed: u64) -> Self {
         let mut rng = Stream::new(derive(seed_key(seed), 0x5ca1));
-        let groups = (0..scene_dims.div_ceil(d))
-            .map(|_| {
+        let sources = parts
+            .iter()
+            .map(|&(mask, first)| {
+                let t = mask.tile;
                 let offset = [
                     rng.below(t.width as u32) as usize,
                     rng.below(t.height as u32) as usize,
                     rng.below(t.frames as u32) as usize,
                 ];
-                (offset, (0..d).map(|_| rng.next_f64()).collect())
+                Source { mask, first, offset, shift: (0..t.dims).map(|_| rng.next_f64()).collect() }
             })
             .collect();
-        Self { mask, groups }
+        Self { sources }
     }
 
     /// The numbers of pixel (x, y) in frame f, into u (the scene's dimension).
     pub fn numbers(&self, x: usize, y: usize, f: usize, u: &mut [f64]) {
-        let t = self.mask.tile;
-        let d = t.dims;
-        for (k, slot) in u.iter_mut().enumerate() {
-            let (offset, shift) = &self.groups[k / d];
-            let s = self.mask.sample(
-                (x + offset[0]) % t.width,
-                (y + offset[1]) % t.height,
-                (f + offset[2]) % t.frames,
+        for src in &self.sources {
+            let t = src.mask.tile;
+            let s = src.mask.sample(
+                (x + src.offset[0]) % t.width,
+                (y + src.offset[1]) % t.height,
+                (f + src.offset[2]) % t.frames,
                 0,
             );
-            let v = s[k % d] as f64 + shift[k % d];
-            *slot = v - v.floor();
+            for (j, (&v, shift)) in s.iter().zip(&src.shift).enumerate() {
+                if let Some(slot) = u.get_mut(src.first + j) {
+                    let v = v as f64 + shift;
+                    *slot = v - v.floor();
+                }
+            }
         }
     }
 }
@@ -157,14 +176,34 @@ mod tests {
         let s = MaskSampler::new(&mask, 4, 9);
         let mut u = [0.0; 4];
         s.numbers(1, 2, 1, &mut u);
-        for k in 0..4 {
-            let (o, shift) = &s.groups[k / 2];
-            let v =
-                mask.sample((1 + o[0]) % 4, (2 + o[1]) % 4, (1 + o[2]) % 2, 0)[k % 2] as f64 + shift[k % 2];
-            assert_eq!(u[k], v - v.floor());
-            assert!((0.0..1.0).contains(&u[k]));
+        for (k, &got) in u.iter().enumerate() {
+            let src = &s.sources[k / 2];
+            let o = src.offset;
+            assert_eq!(src.first, 2 * (k / 2));
+            let v = mask.sample((1 + o[0]) % 4, (2 + o[1]) % 4, (1 + o[2]) % 2, 0)[k % 2] as f64
+                + src.shift[k % 2];
+            assert_eq!(got, v - v.floor());
+            assert!((0.0..1.0).contains(&got));
         }
-        assert_ne!(s.groups[0].1, s.groups[1].1);
+        assert_ne!(s.sources[0].shift, s.sources[1].shift);
+    }
+
+    #[test]
+    fn a_plan_gives_each_decision_its_own_mask() {
+        let one = Mask::white(Tile::new(4, 4, 2, 1, 1).unwrap(), 1);
+        let two = Mask::white(Tile::new(4, 4, 2, 1, 2).unwrap(), 2);
+        // A 2-D decision then a 1-D one (defocus-motion's lens, then time).
+        let s = MaskSampler::planned(&[(&two, 0), (&one, 2)], 5);
+        let mut u = [0.0; 3];
+        s.numbers(3, 0, 1, &mut u);
+        let at = |src: &Source, m: &Mask, j: usize| {
+            let o = src.offset;
+            let v = m.sample((3 + o[0]) % 4, o[1] % 4, (1 + o[2]) % 2, 0)[j] as f64 + src.shift[j];
+            v - v.floor()
+        };
+        assert_eq!(u[0], at(&s.sources[0], &two, 0));
+        assert_eq!(u[1], at(&s.sources[0], &two, 1));
+        assert_eq!(u[2], at(&s.sources[1], &one, 0));
     }
 
     #[test]

@@ -23,6 +23,7 @@ use crate::io::atomic::AtomicFile;
 use crate::kernel::KernelSpec;
 use crate::mask::Mask;
 use crate::method::{make, Method};
+use crate::plan::{CostModel, Plan};
 use crate::problem::Tile;
 use crate::settings::Settings;
 
@@ -51,6 +52,10 @@ pub struct EvalSize {
     pub warmup: usize,
     pub renders: u32,
     pub reference_samples: usize,
+    /// Also measure `fsot-planned`: each scene's plan (`scenes/*.toml`), every
+    /// decision reading its own mask, made until iterations no longer pay (at most
+    /// ten times `iterations`).
+    pub planned: bool,
 }
 
 impl EvalSize {
@@ -64,6 +69,7 @@ impl EvalSize {
             warmup: 48,
             renders: 3,
             reference_samples: 256,
+            planned: true,
         }
     }
 
@@ -76,6 +82,7 @@ impl EvalSize {
             warmup: 48,
             renders: 3,
             reference_samples: 1024,
+            planned: true,
         }
     }
 }
@@ -135,6 +142,83 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> R
     crate::io::atomic::make_folder(cache)?;
     crate::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)
+}
+
+/// The scene files of the evaluation's scenes (`scenes/*.toml`).
+pub const SCENE_FILES: [(&str, &str); 6] = [
+    ("light-pick", include_str!("../../scenes/light-pick.toml")),
+    ("soft-shadow", include_str!("../../scenes/soft-shadow.toml")),
+    ("occlusion", include_str!("../../scenes/occlusion.toml")),
+    ("highlight", include_str!("../../scenes/highlight.toml")),
+    ("defocus-motion", include_str!("../../scenes/defocus-motion.toml")),
+    ("veach-mis", include_str!("../../scenes/veach-mis.toml")),
+];
+
+/// The `fsot-planned` masks of a scene for eye sigma `sigma`, with TAA or not:
+/// the scene file's plan on the evaluation's tile, each part's mask and the first
+/// scene dimension it serves; cached like the other methods' masks. Also the
+/// seconds making them took (0 when all came from the cache).
+pub fn planned_masks(
+    scene: Scene,
+    sigma: f64,
+    taa: bool,
+    size: &EvalSize,
+    cache: &Path,
+) -> Result<(Vec<(Mask, usize)>, f64)> {
+    let text = SCENE_FILES
+        .iter()
+        .find(|(name, _)| *name == scene.name())
+        .map(|s| s.1)
+        .ok_or_else(|| Error::invalid(format!("no scene file for {}", scene.name())))?;
+    let mut file = crate::scene::Scene::parse(text, scene.name())
+        .map_err(|e| Error::invalid(format!("scenes/{}.toml: {e}", scene.name())))?;
+    file.display.sigma = sigma;
+    file.display.taa_alpha = taa.then_some(TAA_ALPHA);
+    let t = size.tile;
+    file.size = Some((t.width, t.height, t.frames));
+    let plan = Plan::new(&file, &CostModel::unmeasured())?;
+    let mut out = Vec::new();
+    let mut seconds = 0.0;
+    let mut base = 0; // the scene dimension where this group's decision starts
+    for group in &plan.groups {
+        for part in &group.parts {
+            let planned = plan
+                .masks
+                .iter()
+                .find(|m| m.file == part.mask)
+                .ok_or_else(|| Error::invalid("a part without its mask"))?;
+            let tile = plan.tile(planned)?;
+            let name = format!(
+                "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-{}",
+                scene.name(),
+                if taa { "taa" } else { "no-taa" },
+                t.width,
+                t.height,
+                t.frames,
+                10 * size.iterations,
+                part.mask
+            );
+            let path = cache.join(name);
+            let cached = crate::io::exr::read(&path).ok().filter(|m| m.tile == tile);
+            let mask = match (cached, planned.white) {
+                (Some(m), _) => m,
+                (None, true) => Mask::white(tile, planned.seed),
+                (None, false) => {
+                    let mut s = plan.settings(&file, planned)?;
+                    s.iterations = 10 * size.iterations;
+                    let start = std::time::Instant::now();
+                    let m = crate::run::optimize(tile, s, None)?;
+                    seconds += start.elapsed().as_secs_f64();
+                    crate::io::atomic::make_folder(cache)?;
+                    crate::io::exr::write(&m, AtomicFile::create(&path)?)?;
+                    m
+                }
+            };
+            out.push((mask, base + part.first));
+        }
+        base += group.dims;
+    }
+    Ok((out, seconds))
 }
 
 /// Filtered references of one scene: per TAA setting, the frames after TAA
@@ -211,12 +295,63 @@ pub fn run_eval(
                     sums[1].0
                 ));
             }
+            if size.planned {
+                records
+                    .extend(planned_records(scene, sigma, size, cache, &reference, &eye, start, &mut log)?);
+            }
             if let (Some(dir), false) = (pictures, kept.is_empty()) {
                 crate::io::atomic::make_folder(dir)?;
                 let refs = (&reference.frames[0][..], &reference.frames[1][..]);
                 scene_pictures(dir, scene.name(), n, &eye, refs, &kept)?;
             }
         }
+    }
+    Ok(records)
+}
+
+/// The two records of `fsot-planned` (without and with TAA, each from its own
+/// plan) for one scene and sigma.
+#[allow(clippy::too_many_arguments)]
+fn planned_records(
+    scene: Scene,
+    sigma: f64,
+    size: &EvalSize,
+    cache: &Path,
+    reference: &SceneReference,
+    eye: &Eye,
+    start: usize,
+    log: &mut impl FnMut(&str),
+) -> Result<Vec<Record>> {
+    let n = size.shot.image;
+    let mut records = Vec::new();
+    for (k, with_taa) in [false, true].into_iter().enumerate() {
+        let (masks, seconds) = planned_masks(scene, sigma, with_taa, size, cache)?;
+        let parts: Vec<(&Mask, usize)> = masks.iter().map(|(m, first)| (m, *first)).collect();
+        let (mut prelmse, mut relmse) = (0.0, 0.0);
+        for r in 0..size.renders {
+            let image = render(scene, size.shot, &MaskSampler::planned(&parts, 100 + r as u64));
+            let frames = if with_taa { taa(&image, TAA_ALPHA) } else { image };
+            let (p, rel) = relative_errors(&frames, &reference.frames[k], &reference.seen[k], eye, start, n);
+            prelmse += p / size.renders as f64;
+            relmse += rel / size.renders as f64;
+        }
+        let iterations: Vec<String> =
+            masks.iter().map(|(m, _)| m.meta("iterations").unwrap_or("white").to_string()).collect();
+        log(&format!(
+            "{} sigma {sigma} fsot-planned ({}): pRelMSE {prelmse:.4e}; masks of {} iterations, made in {seconds:.1} s{}",
+            scene.name(),
+            if with_taa { "TAA plan" } else { "no-TAA plan" },
+            iterations.join(" + "),
+            if seconds == 0.0 { " (cached)" } else { "" }
+        ));
+        records.push(Record {
+            scene: scene.name().to_string(),
+            method: "fsot-planned".to_string(),
+            taa: with_taa,
+            sigma,
+            prelmse,
+            relmse,
+        });
     }
     Ok(records)
 }
