@@ -2,7 +2,7 @@
 //! until the plateau rule stops it, timed and judged by the independent
 //! perceived-error test under TAA.
 //!
-//! cargo run --release --example plateau -- [kernel] [WxHxT] [decay_below] [stop_below]
+//! cargo run --release --example plateau -- [kernel] [WxHxT] [decay_below] [stop_below] [factor]
 use std::time::Instant;
 
 use fsot::backend::Backend;
@@ -20,7 +20,8 @@ fn main() {
     let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
     let decay_below = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.decay_below);
     let stop_below = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.stop_below);
-    let rule = Plateau { decay_below, stop_below, ..Plateau::DEFAULT };
+    let factor = args.get(5).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.factor);
+    let rule = Plateau { decay_below, stop_below, factor, ..Plateau::DEFAULT };
     let tile = Tile::new(w, h, t, 1, 2).unwrap();
     let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
     let mut settings = Settings::new(spec, 7);

@@ -42,11 +42,13 @@ pub struct Plateau {
     pub window: u32,
     pub decay_below: f64,
     pub stop_below: f64,
+    /// What the step is multiplied by when a window does not pay.
+    pub factor: f32,
 }
 
 impl Plateau {
     /// The default rule (chosen by measurement, see BENCHMARKS.md).
-    pub const DEFAULT: Plateau = Plateau { window: 32, decay_below: 0.01, stop_below: 0.002 };
+    pub const DEFAULT: Plateau = Plateau { window: 32, decay_below: 0.01, stop_below: 0.002, factor: 0.5 };
 }
 
 /// Where a plateau schedule stands: enough to resume it exactly.
@@ -83,7 +85,7 @@ impl PlateauState {
             return gain < rule.stop_below;
         }
         if gain < rule.decay_below {
-            self.scale = (self.scale * 0.5).max(FINAL_FRACTION);
+            self.scale = (self.scale * rule.factor).max(FINAL_FRACTION);
         }
         false
     }
@@ -169,7 +171,7 @@ mod tests {
 
     #[test]
     fn a_plateau_halves_the_step_until_the_floor_then_stops() {
-        let rule = Plateau { window: 4, decay_below: 0.01, stop_below: 0.002 };
+        let rule = Plateau { window: 4, decay_below: 0.01, stop_below: 0.002, factor: 0.5 };
         let mut s = PlateauState::default();
         // Falling 10% a window: the step stays; the first window only sets the mark.
         for w in 0..3 {

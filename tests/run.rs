@@ -148,7 +148,7 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
     use fsot::step_rule::Plateau;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     // A quick rule: 8-iteration windows.
-    let rule = Plateau { window: 8, decay_below: 0.01, stop_below: 0.002 };
+    let rule = Plateau { window: 8, ..Plateau::DEFAULT };
     let s = Settings { until: Until::Plateau(rule), iterations: 5000, ..settings(5000) };
     let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
     let mut run = Run::start(tile, s, None, cpu.clone()).unwrap();
