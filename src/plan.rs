@@ -386,6 +386,13 @@ impl Plan {
             }
             let seconds = start.elapsed().as_secs_f64();
             let iterations = run.iteration();
+            // With Vulkan's validation layer on, any message means a fault: stop.
+            if let Some(first) = run.backend().report().validation_messages.first() {
+                return Err(Error::invalid(format!(
+                    "the Vulkan validation layer reported, making {}: {first}",
+                    m.file
+                )));
+            }
             crate::io::exr::write(&run.finish()?, out)?;
             on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
             made.push(Made { file: m.file.clone(), iterations, seconds });
