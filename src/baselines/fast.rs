@@ -143,7 +143,7 @@ impl Filter {
     }
 
     /// Circular autocorrelation of the filter folded onto a wrapping axis of
-    /// length n: A[tau] = sum_j F[j] F[(j + tau) mod n], normalised to sum 1.
+    /// length n: `A[tau] = sum_j F[j] F[(j + tau) mod n]`, normalised to sum 1.
     pub fn autocorrelation(&self, n: usize) -> Vec<f64> {
         let mut folded = vec![0.0f64; n];
         for (k, w) in self.taps() {

@@ -12,7 +12,7 @@ pub enum Family {
     Edge,
     /// 2-D: sin^2(pi (a u + b v + phase)), a smooth ripple that travels.
     Ripple,
-    /// 1-D: threshold 1[u < s]; s drifts.
+    /// 1-D: threshold `1[u < s]`; s drifts.
     Threshold,
     /// 1-D: smooth ramp u^p with an exponent that drifts.
     Ramp,
@@ -112,7 +112,7 @@ fn ramp_exponent(p: Params) -> f64 {
     1.5 + 1.2 * p.angle.sin()
 }
 
-/// Area of {(u, v) in [0,1]^2 : n0 u + n1 v < c}, by clipping the square's polygon.
+/// Area of `{(u, v) in [0,1]^2 : n0 u + n1 v < c}`, by clipping the square's polygon.
 pub fn half_plane_area(n0: f64, n1: f64, c: f64) -> f64 {
     let square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
     let side = |p: (f64, f64)| n0 * p.0 + n1 * p.1 - c;
