@@ -46,6 +46,10 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   step $B/fsot optimize --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa-det.exr"
   step $B/fsot optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile --out "$OUT/h100-32x32x16-taa.exr"
   step $B/fsot score --kernel taa "$OUT/h100-32x32x16-taa.exr"
+  # Issue 13: a scene plan on the GPU (1-D + 2-D + invisible, 64x64x32), and the
+  # plateau rule on the paper's tile.
+  step $B/fsot optimize --scene bench/results/issue13-new-scene.toml --out "$OUT/scene" --backend vulkan
+  step $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile --out "$OUT/h100-128x128x30-ptaa-plateau.exr"
   [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --backend cpu --size 128x128x30 --dims 2 --kernel perceptual-taa --out "$OUT/cpu16-128x128x30-ptaa.exr"
   fi
   if want tests; then
