@@ -17,7 +17,7 @@ use crate::rng::seed_key;
 use crate::settings::{initial_samples, run_mask, slices_and_hits, RunState, Settings};
 use crate::slice::SliceSampler;
 use crate::step_rule::{schedule, step_value, OptimizerState};
-use crate::transport::{transport_slice, Scratch, SliceCost};
+use crate::transport::{mean_cost, transport_slice, Scratch, SliceCost};
 
 /// Fixed-point scale of the displacement accumulators: 2^40 (resolution 1e-12;
 /// 2^23 of headroom over the largest sums that occur).
@@ -120,13 +120,7 @@ pub fn iterate(
             .enumerate()
             .for_each(|(c, ((xs, ms), vs))| update((c, (xs, ms)), Some(vs)));
     }
-    let squared: f64 = costs.iter().map(|c| c.squared).sum();
-    let count: usize = costs.iter().map(|c| c.count).sum();
-    if count == 0 {
-        0.0
-    } else {
-        squared / count as f64
-    }
+    mean_cost(&costs)
 }
 
 /// An optimization in progress on the CPU.

@@ -87,6 +87,9 @@ pub struct Plan {
     pub tile_reason: String,
     pub kernel: String,
     pub kernel_reason: String,
+    /// The kernel itself (`kernel` is its description).
+    #[serde(skip)]
+    pub spec: KernelSpec,
     pub backend: String,
     pub groups: Vec<PlannedGroup>,
     pub masks: Vec<PlannedMask>,
@@ -263,6 +266,7 @@ impl Plan {
             tile_reason,
             kernel: kernel.describe(),
             kernel_reason,
+            spec: kernel,
             backend: cost.backend.clone(),
             groups,
             masks,
@@ -275,12 +279,11 @@ impl Plan {
     }
 
     /// The settings of an optimized mask of the plan.
-    pub fn settings(&self, scene: &Scene, mask: &PlannedMask) -> Result<Settings> {
-        let (kernel, _) = kernel_for(&scene.display)?;
-        let mut s = Settings::new(kernel, mask.seed);
+    pub fn settings(&self, mask: &PlannedMask) -> Settings {
+        let mut s = Settings::new(self.spec, mask.seed);
         s.iterations = DEFAULT_CAP;
         s.until = Until::Plateau(Plateau::DEFAULT);
-        Ok(s)
+        s
     }
 
     /// The tile of a mask of the plan.
@@ -342,7 +345,6 @@ impl Plan {
     #[allow(clippy::too_many_arguments)]
     pub fn execute(
         &self,
-        scene: &Scene,
         dir: &Path,
         options: &RunOptions,
         every: u32,
@@ -364,7 +366,7 @@ impl Plan {
                 made.push(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
                 continue;
             }
-            let settings = self.settings(scene, m)?;
+            let settings = self.settings(m);
             if resume {
                 if let Some(done) = already_made(&path, &tile, &settings) {
                     made.push(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });

@@ -123,17 +123,11 @@ impl Run {
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
-        let mut plateau = settings.until.plateau().map(|p| (p, PlateauState::default()));
-        let resumed_from = match saved {
-            Some(state) => {
-                backend.restore(&state)?;
-                if let (Some((_, s)), Some(saved)) = (&mut plateau, state.plateau) {
-                    *s = saved;
-                }
-                Some(state.iteration)
-            }
-            None => None,
-        };
+        if let Some(state) = &saved {
+            backend.restore(state)?;
+        }
+        let plateau = schedule(&settings, saved.as_ref());
+        let resumed_from = saved.map(|s| s.iteration);
         let every = options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
         let next_checkpoint = backend.iteration().saturating_add(every);
         Ok(Self {
@@ -285,15 +279,12 @@ impl Run {
         let at = self.iteration();
         let mut cpu = CpuRun::new(self.tile, self.settings, self.init.as_ref())?;
         let checkpoint = self.options.checkpoint.as_ref().map(|c| c.path.clone()).filter(|p| p.exists());
-        let mut plateau = self.settings.until.plateau().map(|p| (p, PlateauState::default()));
-        if let Some(p) = &checkpoint {
-            let saved = checkpoint::read(p, &self.fingerprint, &self.tile)?;
-            cpu.restore(&saved)?;
-            if let (Some((_, s)), Some(saved)) = (&mut plateau, saved.plateau) {
-                *s = saved;
-            }
+        let saved =
+            checkpoint.as_ref().map(|p| checkpoint::read(p, &self.fingerprint, &self.tile)).transpose()?;
+        if let Some(state) = &saved {
+            cpu.restore(state)?;
         }
-        self.plateau = plateau;
+        self.plateau = schedule(&self.settings, saved.as_ref());
         self.backend = Box::new(cpu);
         self.note = self.backend.describe();
         let from = self.iteration();
@@ -302,6 +293,13 @@ impl Run {
         on(Event::FellBack { error: e, at, backend: &self.note, from, checkpoint: checkpoint.as_deref() });
         Ok(())
     }
+}
+
+/// The end-agnostic schedule of a run that stops by a rule: where a saved state
+/// left it, or from the start.
+fn schedule(settings: &Settings, saved: Option<&RunState>) -> Option<(Plateau, PlateauState)> {
+    let rule = settings.until.plateau()?;
+    Some((rule, saved.and_then(|s| s.plateau).unwrap_or_default()))
 }
 
 /// The checkpoint rules: with `resume`, the file must hold a checkpoint of this

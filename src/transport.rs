@@ -99,6 +99,12 @@ pub fn objective(samples: &[f32], tile: &Tile, kernel: &Kernel, slices: &[Slice]
             transport_slice(samples, tile, kernel, s, scratch, |_, _| {})
         })
         .collect();
+    mean_cost(&costs)
+}
+
+/// The objective over slices: squared distances to the targets per class member,
+/// classes weighted by size (0 for no members).
+pub fn mean_cost(costs: &[SliceCost]) -> f64 {
     let squared: f64 = costs.iter().map(|c| c.squared).sum();
     let count: usize = costs.iter().map(|c| c.count).sum();
     if count == 0 {

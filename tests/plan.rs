@@ -87,7 +87,7 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
     let dir = tempfile::tempdir().unwrap();
     let mut done = Vec::new();
     let outcome = plan
-        .execute(&scene, dir.path(), &options, 50, false, &CancelFlag::new(), &mut |e| {
+        .execute(dir.path(), &options, 50, false, &CancelFlag::new(), &mut |e| {
             if let PlanEvent::Done { file, iterations, .. } = e {
                 done.push((file.to_string(), iterations))
             }
@@ -136,12 +136,12 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
     let plan = Plan::new(&scene, &model()).unwrap();
     let straight = tempfile::tempdir().unwrap();
-    plan.execute(&scene, straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
+    plan.execute(straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
 
     let dir = tempfile::tempdir().unwrap();
     let cancel = CancelFlag::new();
     let outcome = plan
-        .execute(&scene, dir.path(), &options, 10, false, &cancel, &mut |e| {
+        .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
             if let PlanEvent::Run { index: 1, event: fsot::run::Event::Progress { iteration: 25, .. } } = e {
                 cancel.cancel()
             }
@@ -152,7 +152,7 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     assert!(!dir.path().join("plan.json").exists(), "plan.json only once every mask is made");
     let made_a = std::fs::read(dir.path().join("a.exr")).unwrap();
     let mut started = Vec::new();
-    plan.execute(&scene, dir.path(), &options, 10, true, &CancelFlag::new(), &mut |e| {
+    plan.execute(dir.path(), &options, 10, true, &CancelFlag::new(), &mut |e| {
         if let PlanEvent::Start { file, iteration, .. } = e {
             started.push((file.to_string(), iteration))
         }

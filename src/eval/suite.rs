@@ -204,7 +204,7 @@ pub fn planned_masks(
                 (Some(m), _) => m,
                 (None, true) => Mask::white(tile, planned.seed),
                 (None, false) => {
-                    let mut s = plan.settings(&file, planned)?;
+                    let mut s = plan.settings(planned);
                     s.iterations = 10 * size.iterations;
                     let start = std::time::Instant::now();
                     let m = crate::run::optimize(tile, s, None)?;

@@ -231,8 +231,13 @@ impl VulkanRun {
                 stamp(cmd, 4 * k + 1);
                 self.record_large(cmd, &push);
                 stamp(cmd, 4 * k + 2);
-                let update = bytemuck::bytes_of(&self.update_push(it)).to_vec();
-                self.pipelines.update.dispatch(cmd, 0, two_d(values.div_ceil(256)), &update);
+                let update = self.update_push(it);
+                self.pipelines.update.dispatch(
+                    cmd,
+                    0,
+                    two_d(values.div_ceil(256)),
+                    bytemuck::bytes_of(&update),
+                );
                 barrier(ctx, cmd);
                 stamp(cmd, 4 * k + 3);
             }

@@ -103,23 +103,21 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     let mut before = 0u64; // iterations of the masks already made
     let mut current = 0u64;
     let outcome =
-        plan.execute(&scene, &args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| {
-            match e {
-                PlanEvent::Start { file, iteration, .. } => {
-                    bar.set_message(file.to_string());
-                    current = iteration as u64;
-                    bar.set_position(before + current);
-                }
-                PlanEvent::Run { event: Event::Progress { iteration, .. }, .. } => {
-                    current = iteration as u64;
-                    bar.set_position(before + current);
-                }
-                PlanEvent::Run { .. } => {}
-                PlanEvent::Done { file, iterations, seconds, .. } => {
-                    before += iterations as u64;
-                    current = 0;
-                    bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
-                }
+        plan.execute(&args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| match e {
+            PlanEvent::Start { file, iteration, .. } => {
+                bar.set_message(file.to_string());
+                current = iteration as u64;
+                bar.set_position(before + current);
+            }
+            PlanEvent::Run { event: Event::Progress { iteration, .. }, .. } => {
+                current = iteration as u64;
+                bar.set_position(before + current);
+            }
+            PlanEvent::Run { .. } => {}
+            PlanEvent::Done { file, iterations, seconds, .. } => {
+                before += iterations as u64;
+                current = 0;
+                bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
             }
         })?;
     bar.finish_and_clear();
