@@ -11,8 +11,13 @@
 //!   for a last single dimension (a 1-D decision a scalar mask, a 2-D one a 2-D
 //!   mask, a 3-D one a pair and a single): renderers consume dimensions in pairs,
 //!   and a mask's quality in directions no decision reads is wasted. An invisible
-//!   group reads white noise (nothing is optimized for it). No group shares a mask
-//!   with another: that has not been measured to cost nothing.
+//!   group reads white noise (nothing is optimized for it).
+//! - A part of a decision whose dimension and spp match a mask an earlier part
+//!   owns reads that mask instead of a new one, at its own pixel and frame offset
+//!   and with its own toroidal shift (the k-th reader at the k-th point of the R3
+//!   and R_d sequences): measured to cost nothing against masks of its own
+//!   (RESULTS.md, `fsot-planned-unshared`), at none of the time. A group with
+//!   `share = false` owns all its masks and lends none.
 //! - Every optimized mask runs until further iterations no longer pay
 //!   (`Until::Plateau`); the estimate of its iterations is the measured stopping
 //!   point of the rule, its time a cost model: a calibration run on this machine
@@ -65,6 +70,8 @@ pub struct Part {
     pub offset: [u32; 3],
     /// Toroidal (Cranley-Patterson) shift per dimension.
     pub shift: Vec<f32>,
+    /// The group whose mask this part reads, when it is not its own.
+    pub shares: Option<String>,
 }
 
 /// One sampling decision's plan.
@@ -195,6 +202,30 @@ fn split(dims: usize) -> Vec<(usize, usize)> {
     (0..dims).step_by(2).map(|first| (first, (dims - first).min(2))).collect()
 }
 
+/// Where the k-th extra reader (k >= 1) of a mask reads it: the k-th point of
+/// the R3 sequence (Roberts' generalised golden ratio) scaled to the tile, so
+/// readers' offsets stay far apart however many there are.
+pub fn share_offset(k: u32, tile: [usize; 3]) -> [u32; 3] {
+    let phi: f64 = 1.220_744_084_605_759_5; // x^4 = x + 1
+    let mut out = [0u32; 3];
+    for (j, (o, n)) in out.iter_mut().zip(tile).enumerate() {
+        let a = phi.powi(-(j as i32 + 1));
+        *o = (((k as f64 * a).fract() * n as f64) as u32).min(n as u32 - 1);
+    }
+    out
+}
+
+/// The toroidal shift of the k-th extra reader of a `dims`-dimensional mask: the
+/// k-th point of the R_d sequence.
+pub fn share_shift(k: u32, dims: usize) -> Vec<f32> {
+    // phi_d: the positive root of x^(d+1) = x + 1.
+    let mut phi = 2.0f64;
+    for _ in 0..64 {
+        phi = (1.0 + phi).powf(1.0 / (dims as f64 + 1.0));
+    }
+    (0..dims).map(|j| (k as f64 * phi.powi(-(j as i32 + 1))).fract() as f32).collect()
+}
+
 impl Plan {
     /// Plans a scene with the cost model `cost`.
     pub fn new(scene: &Scene, cost: &CostModel) -> Result<Self> {
@@ -202,6 +233,15 @@ impl Plan {
         let ((w, h, t), tile_reason) = tile_size(scene);
         let mut groups = Vec::new();
         let mut masks: Vec<PlannedMask> = Vec::new();
+        // Optimized masks other parts may read, and how many extra readers each has.
+        struct Lender {
+            file: String,
+            group: String,
+            dims: usize,
+            spp: usize,
+            readers: u32,
+        }
+        let mut lenders: Vec<Lender> = Vec::new();
         for g in &scene.groups {
             let mut parts = Vec::new();
             let (skipped, reason) = if !g.visible {
@@ -221,11 +261,25 @@ impl Plan {
                     dims: g.dims,
                     offset: [0; 3],
                     shift: vec![0.0; g.dims],
+                    shares: None,
                 });
                 (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
             } else {
                 let pieces = split(g.dims);
                 for &(first, dims) in &pieces {
+                    let lender = lenders.iter_mut().find(|l| l.dims == dims && l.spp == g.spp && g.share);
+                    if let Some(l) = lender {
+                        l.readers += 1;
+                        parts.push(Part {
+                            mask: l.file.clone(),
+                            first,
+                            dims,
+                            offset: share_offset(l.readers, [w, h, t]),
+                            shift: share_shift(l.readers, dims),
+                            shares: Some(l.group.clone()),
+                        });
+                        continue;
+                    }
                     let file = match pieces.len() {
                         1 => format!("{}.exr", g.name),
                         _ => format!("{}-{first}.exr", g.name),
@@ -241,12 +295,40 @@ impl Plan {
                         estimated_iterations: EXPECTED_ITERATIONS,
                         estimated_seconds: per * EXPECTED_ITERATIONS as f64,
                     });
-                    parts.push(Part { mask: file, first, dims, offset: [0; 3], shift: vec![0.0; dims] });
+                    if g.share {
+                        lenders.push(Lender {
+                            file: file.clone(),
+                            group: g.name.clone(),
+                            dims,
+                            spp: g.spp,
+                            readers: 0,
+                        });
+                    }
+                    parts.push(Part {
+                        mask: file,
+                        first,
+                        dims,
+                        offset: [0; 3],
+                        shift: vec![0.0; dims],
+                        shares: None,
+                    });
                 }
-                let reason = match g.dims {
-                    1 => "a 1-D decision: a scalar mask of its own".to_string(),
-                    2 => "a 2-D decision: a 2-D mask of its own".to_string(),
+                let what = match g.dims {
+                    1 => "a 1-D decision: a scalar mask".to_string(),
+                    2 => "a 2-D decision: a 2-D mask".to_string(),
                     d => format!("{d}-D: split into pairs and a single, as renderers consume them"),
+                };
+                let shared: Vec<String> = parts
+                    .iter()
+                    .filter_map(|p| p.shares.as_ref().map(|s| format!("{} ({s}'s)", p.mask)))
+                    .collect();
+                let reason = match (shared.is_empty(), g.share) {
+                    (true, true) => format!("{what} of its own"),
+                    (true, false) => format!("{what} of its own (share = false)"),
+                    (false, _) => format!(
+                        "{what}, sharing {}: as good as a mask of its own, measured, at none of the time",
+                        shared.join(", ")
+                    ),
                 };
                 (None, reason)
             };
@@ -312,7 +394,8 @@ pub struct Made {
 }
 
 /// The plan as a renderer reads it (`plan.json`): per group, the mask it reads
-/// (its first part's), the offset and shift, the kernel, what making it took.
+/// (its first part's), the offset and shift, the kernel, the iterations of the
+/// masks it reads and the seconds making the masks it owns took.
 #[derive(Serialize)]
 struct PlanFile<'a> {
     scene: &'a str,
@@ -411,7 +494,10 @@ impl Plan {
             .iter()
             .map(|g| {
                 let first = &g.parts[0];
-                let own: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                let read: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                // What making it took counts once, for the group that owns the mask.
+                let own: Vec<&Made> =
+                    g.parts.iter().filter(|p| p.shares.is_none()).filter_map(|p| took(&p.mask)).collect();
                 let optimized = g.skipped.is_none();
                 GroupFile {
                     name: &g.name,
@@ -422,7 +508,7 @@ impl Plan {
                     shift: &first.shift,
                     parts: &g.parts,
                     kernel: optimized.then_some(self.kernel.as_str()),
-                    iterations: optimized.then(|| own.iter().map(|m| m.iterations).sum()),
+                    iterations: optimized.then(|| read.iter().map(|m| m.iterations).sum()),
                     seconds: optimized.then(|| own.iter().map(|m| m.seconds).sum()),
                     skipped: g.skipped.as_deref(),
                 }

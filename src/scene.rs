@@ -15,6 +15,7 @@
 //! dims = 1            # 1 to 8
 //! spp = 1             # optional, default 1
 //! visible = true      # optional; false: its error is not seen directly
+//! share = true        # optional; false: never reads another decision's mask
 //! ```
 //!
 //! Unknown keys are refused; every error names its line.
@@ -49,6 +50,8 @@ pub struct Group {
     pub spp: usize,
     /// False: its error is not seen directly (deep bounces, roulette).
     pub visible: bool,
+    /// False: the decision gets masks of its own even where it could share one.
+    pub share: bool,
 }
 
 /// A validated scene.
@@ -94,6 +97,7 @@ struct FileGroup {
     dims: Spanned<i64>,
     spp: Option<Spanned<i64>>,
     visible: Option<bool>,
+    share: Option<bool>,
 }
 
 impl Scene {
@@ -185,7 +189,13 @@ fn check_group(
         Some(s) => *s.get_ref() as usize,
         None => 1,
     };
-    Ok(Group { name: name.clone(), dims: dims as usize, spp, visible: g.visible.unwrap_or(true) })
+    Ok(Group {
+        name: name.clone(),
+        dims: dims as usize,
+        spp,
+        visible: g.visible.unwrap_or(true),
+        share: g.share.unwrap_or(true),
+    })
 }
 
 /// The 1-based line of a byte offset.

@@ -99,13 +99,46 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
         }
     }
     // defocus-motion: a 2-D lens mask and a 1-D time mask; light-pick: one 1-D mask.
-    let (masks, _) =
-        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, &size, dir.path()).unwrap();
-    let shape: Vec<(usize, usize)> = masks.iter().map(|(m, first)| (m.tile.dims, *first)).collect();
+    let planned =
+        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, true, &size, dir.path()).unwrap();
+    let shape: Vec<(usize, usize)> =
+        planned.reads.iter().map(|r| (planned.masks[r.0].tile.dims, r.1)).collect();
     assert_eq!(shape, [(2, 0), (1, 2)]);
-    let (masks, seconds) =
-        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, &size, dir.path()).unwrap();
-    assert_eq!(masks.iter().map(|(m, _)| m.tile.dims).collect::<Vec<_>>(), [1]);
-    assert_eq!(seconds, 0.0, "read from the cache");
-    assert!(masks[0].0.meta("kernel").unwrap().starts_with("perceptual ("), "no TAA: the perceptual kernel");
+    assert!(!planned.shares, "no two decisions of the same dimension");
+    let planned =
+        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, true, &size, dir.path()).unwrap();
+    assert_eq!(planned.masks.iter().map(|m| m.tile.dims).collect::<Vec<_>>(), [1]);
+    assert_eq!(planned.seconds, 0.0, "read from the cache");
+    assert!(
+        planned.masks[0].meta("kernel").unwrap().starts_with("perceptual ("),
+        "no TAA: the perceptual kernel"
+    );
+}
+
+#[test]
+fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that_costs() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = EvalSize { planned: true, ..tiny() };
+    // veach-mis: a 2-D light sample and a 2-D BSDF sample read one mask.
+    let shared =
+        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, true, &size, dir.path()).unwrap();
+    assert!(shared.shares);
+    assert_eq!(shared.masks.len(), 1);
+    let [(a, 0, [0, 0, 0], _), (b, 2, offset, shift)] = &shared.reads[..] else {
+        panic!("two reads: {:?}", shared.reads)
+    };
+    assert_eq!((a, b), (&0, &0), "both read the light's mask");
+    assert_ne!(*offset, [0, 0, 0]);
+    assert!(shift.iter().all(|s| *s > 0.0 && *s < 1.0));
+    let own = fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, false, &size, dir.path()).unwrap();
+    assert!(!own.shares);
+    assert_eq!(own.masks.len(), 2);
+    assert_eq!(own.masks[0].samples, shared.masks[0].samples, "the light's own mask is the one it lends");
+    // Both are measured, with and without TAA; a scene without sharing has no
+    // unshared column.
+    let records =
+        run_eval(&size, &[2.1], &[Scene::VeachMis, Scene::LightPick], dir.path(), None, &[], |_| {}).unwrap();
+    let count = |scene: &str, m: &str| records.iter().filter(|r| r.scene == scene && r.method == m).count();
+    assert_eq!((count("veach-mis", "fsot-planned"), count("veach-mis", "fsot-planned-unshared")), (2, 2));
+    assert_eq!((count("light-pick", "fsot-planned"), count("light-pick", "fsot-planned-unshared")), (2, 0));
 }

@@ -2,7 +2,7 @@
 //! from a plan.
 
 use fsot::backend::BackendChoice;
-use fsot::plan::{kernel_for, tile_size, CostModel, Plan, PlanEvent};
+use fsot::plan::{kernel_for, share_offset, share_shift, tile_size, CostModel, Plan, PlanEvent};
 use fsot::problem::Tile;
 use fsot::run::{CancelFlag, Outcome, RunOptions};
 use fsot::scene::Scene;
@@ -58,7 +58,8 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
     assert_eq!(parts("pick"), [("pick.exr".to_string(), 0, 1)]);
     assert_eq!(parts("lens"), [("lens.exr".to_string(), 0, 2)]);
     assert_eq!(parts("vol"), [("vol-0.exr".to_string(), 0, 2), ("vol-2.exr".to_string(), 2, 1)]);
-    assert_eq!(parts("quad"), [("quad-0.exr".to_string(), 0, 2), ("quad-2.exr".to_string(), 2, 2)]);
+    // quad's pairs are 2-D at spp 1, like lens: they read lens's mask (below).
+    assert_eq!(parts("quad"), [("lens.exr".to_string(), 0, 2), ("lens.exr".to_string(), 2, 2)]);
     let deep = plan.groups.iter().find(|g| g.name == "deep").unwrap();
     assert_eq!(deep.skipped.as_deref(), Some("not visible: white noise"));
     let white: Vec<&str> = plan.masks.iter().filter(|m| m.white).map(|m| m.file.as_str()).collect();
@@ -74,6 +75,53 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
     assert_eq!(lens.estimated_seconds, per * lens.estimated_iterations as f64);
     let total: f64 = plan.masks.iter().map(|m| m.estimated_seconds).sum();
     assert_eq!(plan.estimated_seconds, total);
+}
+
+#[test]
+fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_and_shift() {
+    let groups = "[[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n\
+                  [[group]]\nname = \"quad\"\ndims = 4\n[[group]]\nname = \"many\"\ndims = 2\nspp = 4\n\
+                  [[group]]\nname = \"own\"\ndims = 2\nshare = false\n";
+    let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
+    let files: Vec<&str> = plan.masks.iter().map(|m| m.file.as_str()).collect();
+    assert_eq!(
+        files,
+        ["light.exr", "many.exr", "own.exr"],
+        "other spp and share = false: masks of their own"
+    );
+    let reads: Vec<&fsot::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
+    let lent: Vec<&&fsot::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
+    assert_eq!(lent.len(), 4, "light, bsdf and quad's two pairs");
+    assert_eq!(
+        (lent[0].offset, lent[0].shift.as_slice(), &lent[0].shares),
+        ([0; 3], &[0.0f32, 0.0][..], &None)
+    );
+    for (k, p) in lent.iter().enumerate().skip(1) {
+        assert_eq!(p.offset, share_offset(k as u32, [64, 64, 32]));
+        assert_eq!(p.shift, share_shift(k as u32, 2));
+        assert_eq!(p.shares.as_deref(), Some("light"));
+    }
+    // Readers spread over the tile: no two at the same offset or shift.
+    for i in 0..lent.len() {
+        for j in 0..i {
+            assert_ne!(lent[i].offset, lent[j].offset);
+            assert_ne!(lent[i].shift, lent[j].shift);
+        }
+    }
+    assert!(plan.groups[1].reason.contains("sharing light.exr"), "{}", plan.groups[1].reason);
+    assert!(plan.groups[4].reason.contains("share = false"), "{}", plan.groups[4].reason);
+}
+
+#[test]
+fn shared_offsets_and_shifts_are_the_r_sequences() {
+    // R_1 is the golden ratio's; R3's first point from x^4 = x + 1.
+    assert!((share_shift(1, 1)[0] - 0.618_034).abs() < 1e-6);
+    assert!((share_shift(2, 1)[0] - 0.236_068).abs() < 1e-6);
+    let r2 = share_shift(1, 2);
+    assert!((r2[0] - 0.754_878).abs() < 1e-6 && (r2[1] - 0.569_840).abs() < 1e-6, "{r2:?}");
+    // 1 / 1.2207440846 = 0.81917, its square 0.67104, cube 0.54970.
+    assert_eq!(share_offset(1, [100, 100, 100]), [81, 67, 54]);
+    assert!(share_offset(1000, [64, 64, 32]).iter().zip([64, 64, 32]).all(|(o, n)| *o < n));
 }
 
 #[test]

@@ -34,7 +34,7 @@ fn the_example_scene_reads_as_written() {
     assert_eq!(s.size, Some((64, 64, 32)));
     let names: Vec<&str> = s.groups.iter().map(|g| g.name.as_str()).collect();
     assert_eq!(names, ["pick", "lens", "bounce2"], "the renderer's order");
-    assert_eq!(s.groups[2], Group { name: "bounce2".into(), dims: 2, spp: 1, visible: false });
+    assert_eq!(s.groups[2], Group { name: "bounce2".into(), dims: 2, spp: 1, visible: false, share: true });
 }
 
 #[test]
@@ -43,7 +43,7 @@ fn what_is_absent_takes_its_default() {
     assert_eq!(s.display.taa_alpha, None, "no [display]: no TAA");
     assert_eq!((s.display.fps, s.display.sigma, s.display.animated), (60.0, 2.1, true));
     assert_eq!(s.size, None);
-    assert_eq!(s.groups[0], Group { name: "a".into(), dims: 2, spp: 1, visible: true });
+    assert_eq!(s.groups[0], Group { name: "a".into(), dims: 2, spp: 1, visible: true, share: true });
 }
 
 #[test]

@@ -29,35 +29,80 @@ struct Source<'a> {
 }
 
 /// How a render takes its numbers from masks. With one mask (`new`), the scene's
-/// dimension k is component k mod d of the mask's sample, in group k / d; with a
-/// plan (`planned`), each decision's dimensions come from its own mask. Every
-/// group reads its tile at its own random pixel offset and adds its own random
-/// toroidal shift, so groups are decorrelated.
+/// dimension k is component k mod d of the mask's sample, in group k / d, and
+/// every group reads the tile at its own random pixel offset and toroidal shift,
+/// so groups are decorrelated. With a plan (`planned`), each decision's
+/// dimensions come from the masks the plan gives it: each mask is placed once per
+/// render at a random offset and shift (the renderer's placement of its tile),
+/// and every read of it adds the plan's offset and shift to that placement, as
+/// a renderer following `plan.json` does.
 pub struct MaskSampler<'a> {
     sources: Vec<Source<'a>>,
 }
 
+/// One read of a plan: the scene's dimensions from `first` on (as many as the
+/// mask has) come from `mask` at the plan's pixel and frame `offset`, with its
+/// toroidal `shift`.
+pub struct Read<'a> {
+    pub mask: &'a Mask,
+    pub first: usize,
+    pub offset: [u32; 3],
+    pub shift: &'a [f32],
+}
+
+/// A random placement of a mask's tile: pixel and frame offset, shift per component.
+fn place(rng: &mut Stream, mask: &Mask) -> ([usize; 3], Vec<f64>) {
+    let t = mask.tile;
+    let offset = [
+        rng.below(t.width as u32) as usize,
+        rng.below(t.height as u32) as usize,
+        rng.below(t.frames as u32) as usize,
+    ];
+    (offset, (0..t.dims).map(|_| rng.next_f64()).collect())
+}
+
 impl<'a> MaskSampler<'a> {
     pub fn new(mask: &'a Mask, scene_dims: usize, seed: u64) -> Self {
+        let mut rng = Stream::new(derive(seed_key(seed), 0x5ca1));
         let d = mask.tile.dims;
-        let parts: Vec<(&Mask, usize)> = (0..scene_dims.div_ceil(d)).map(|g| (mask, g * d)).collect();
-        Self::planned(&parts, seed)
+        let sources = (0..scene_dims.div_ceil(d))
+            .map(|g| {
+                let (offset, shift) = place(&mut rng, mask);
+                Source { mask, first: g * d, offset, shift }
+            })
+            .collect();
+        Self { sources }
     }
 
-    /// Numbers from several masks: `(mask, first)`, the scene's dimensions from
-    /// `first` on read from that mask (as many as it has).
-    pub fn planned(parts: &[(&'a Mask, usize)], seed: u64) -> Self {
+    /// Numbers from a plan's reads (see the type).
+    pub fn planned(reads: &[Read<'a>], seed: u64) -> Self {
         let mut rng = Stream::new(derive(seed_key(seed), 0x5ca1));
-        let sources = parts
+        let mut placed: Vec<(&Mask, [usize; 3], Vec<f64>)> = Vec::new();
+        let sources = reads
             .iter()
-            .map(|&(mask, first)| {
-                let t = mask.tile;
-                let offset = [
-                    rng.below(t.width as u32) as usize,
-                    rng.below(t.height as u32) as usize,
-                    rng.below(t.frames as u32) as usize,
-                ];
-                Source { mask, first, offset, shift: (0..t.dims).map(|_| rng.next_f64()).collect() }
+            .map(|r| {
+                // Drawn for every read, so that a plan's masks of their own are
+                // placed the same whether or not other reads share.
+                let drawn = place(&mut rng, r.mask);
+                let (base, base_shift) = match placed.iter().find(|p| std::ptr::eq(p.0, r.mask)) {
+                    Some(p) => (p.1, p.2.clone()),
+                    None => {
+                        placed.push((r.mask, drawn.0, drawn.1.clone()));
+                        drawn
+                    }
+                };
+                let t = r.mask.tile;
+                let size = [t.width, t.height, t.frames];
+                let offset: [usize; 3] = std::array::from_fn(|j| (base[j] + r.offset[j] as usize) % size[j]);
+                let shift = base_shift
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &b)| {
+                        let v = b + r.shift.get(j).copied().unwrap_or(0.0) as f64;
+                        v - v.floor()
+                    })
+                    .collect();
+                Source { mask: r.mask, first: r.first, offset, shift }
             })
             .collect();
         Self { sources }
@@ -193,7 +238,8 @@ mod tests {
         let one = Mask::white(Tile::new(4, 4, 2, 1, 1).unwrap(), 1);
         let two = Mask::white(Tile::new(4, 4, 2, 1, 2).unwrap(), 2);
         // A 2-D decision then a 1-D one (defocus-motion's lens, then time).
-        let s = MaskSampler::planned(&[(&two, 0), (&one, 2)], 5);
+        let read = |mask, first| Read { mask, first, offset: [0; 3], shift: &[] };
+        let s = MaskSampler::planned(&[read(&two, 0), read(&one, 2)], 5);
         let mut u = [0.0; 3];
         s.numbers(3, 0, 1, &mut u);
         let at = |src: &Source, m: &Mask, j: usize| {
@@ -204,6 +250,29 @@ mod tests {
         assert_eq!(u[0], at(&s.sources[0], &two, 0));
         assert_eq!(u[1], at(&s.sources[0], &two, 1));
         assert_eq!(u[2], at(&s.sources[1], &one, 0));
+    }
+
+    #[test]
+    fn reads_of_a_shared_mask_keep_the_plans_offset_and_shift_between_them() {
+        let tile = Tile::new(4, 4, 2, 1, 2).unwrap();
+        let mask = Mask::white(tile, 3);
+        let shift = [0.25f32, 0.75];
+        let reads = [
+            Read { mask: &mask, first: 0, offset: [0; 3], shift: &[0.0, 0.0] },
+            Read { mask: &mask, first: 2, offset: [3, 1, 1], shift: &shift },
+        ];
+        for seed in 0..8 {
+            let s = MaskSampler::planned(&reads, seed);
+            let (a, b) = (&s.sources[0], &s.sources[1]);
+            for j in 0..3 {
+                let n = [4, 4, 2][j];
+                assert_eq!(b.offset[j], (a.offset[j] + reads[1].offset[j] as usize) % n);
+            }
+            for ((&got, &from), &plan) in b.shift.iter().zip(&a.shift).zip(&shift) {
+                let want = (from + plan as f64).fract();
+                assert!((got - want).abs() < 1e-12, "{got} against {want}");
+            }
+        }
     }
 
     #[test]

@@ -17,7 +17,7 @@ use crate::error::{Error, Result};
 use crate::eval::eye::Eye;
 use crate::eval::metric::relative_errors;
 use crate::eval::pictures::scene_pictures;
-use crate::eval::render::{references, render, taa, MaskSampler, Shot};
+use crate::eval::render::{references, render, taa, MaskSampler, Read, Shot};
 use crate::eval::scenes::Scene;
 use crate::io::atomic::AtomicFile;
 use crate::kernel::KernelSpec;
@@ -154,17 +154,44 @@ pub const SCENE_FILES: [(&str, &str); 6] = [
     ("veach-mis", include_str!("../../scenes/veach-mis.toml")),
 ];
 
+/// A scene's planned masks (each file once) and the reads of its decisions.
+pub struct PlannedMasks {
+    pub masks: Vec<Mask>,
+    /// Per part of each decision, in order: (index into `masks`, the first scene
+    /// dimension it serves, the plan's offset and shift).
+    pub reads: Vec<(usize, usize, [u32; 3], Vec<f32>)>,
+    /// Whether some decision reads a mask another one owns.
+    pub shares: bool,
+    /// Seconds making them took (0 when all came from the cache).
+    pub seconds: f64,
+}
+
+impl PlannedMasks {
+    /// The reads, for `MaskSampler::planned`.
+    pub fn reads(&self) -> Vec<Read<'_>> {
+        self.reads
+            .iter()
+            .map(|(m, first, offset, shift)| Read {
+                mask: &self.masks[*m],
+                first: *first,
+                offset: *offset,
+                shift,
+            })
+            .collect()
+    }
+}
+
 /// The `fsot-planned` masks of a scene for eye sigma `sigma`, with TAA or not:
-/// the scene file's plan on the evaluation's tile, each part's mask and the first
-/// scene dimension it serves; cached like the other methods' masks. Also the
-/// seconds making them took (0 when all came from the cache).
+/// the scene file's plan on the evaluation's tile (with `share` false, no
+/// decision reads another's mask); cached like the other methods' masks.
 pub fn planned_masks(
     scene: Scene,
     sigma: f64,
     taa: bool,
+    share: bool,
     size: &EvalSize,
     cache: &Path,
-) -> Result<(Vec<(Mask, usize)>, f64)> {
+) -> Result<PlannedMasks> {
     let text = SCENE_FILES
         .iter()
         .find(|(name, _)| *name == scene.name())
@@ -176,49 +203,55 @@ pub fn planned_masks(
     file.display.taa_alpha = taa.then_some(TAA_ALPHA);
     let t = size.tile;
     file.size = Some((t.width, t.height, t.frames));
+    for g in &mut file.groups {
+        g.share &= share;
+    }
     let plan = Plan::new(&file, &CostModel::unmeasured())?;
-    let mut out = Vec::new();
-    let mut seconds = 0.0;
+    let mut out = PlannedMasks { masks: Vec::new(), reads: Vec::new(), shares: false, seconds: 0.0 };
+    for planned in &plan.masks {
+        let tile = plan.tile(planned)?;
+        let name = format!(
+            "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-{}",
+            scene.name(),
+            if taa { "taa" } else { "no-taa" },
+            t.width,
+            t.height,
+            t.frames,
+            10 * size.iterations,
+            planned.file
+        );
+        let path = cache.join(name);
+        let cached = crate::io::exr::read(&path).ok().filter(|m| m.tile == tile);
+        let mask = match (cached, planned.white) {
+            (Some(m), _) => m,
+            (None, true) => Mask::white(tile, planned.seed),
+            (None, false) => {
+                let mut s = plan.settings(planned);
+                s.iterations = 10 * size.iterations;
+                let start = std::time::Instant::now();
+                let m = crate::run::optimize(tile, s, None)?;
+                out.seconds += start.elapsed().as_secs_f64();
+                crate::io::atomic::make_folder(cache)?;
+                crate::io::exr::write(&m, AtomicFile::create(&path)?)?;
+                m
+            }
+        };
+        out.masks.push(mask);
+    }
     let mut base = 0; // the scene dimension where this group's decision starts
     for group in &plan.groups {
         for part in &group.parts {
-            let planned = plan
+            let index = plan
                 .masks
                 .iter()
-                .find(|m| m.file == part.mask)
+                .position(|m| m.file == part.mask)
                 .ok_or_else(|| Error::invalid("a part without its mask"))?;
-            let tile = plan.tile(planned)?;
-            let name = format!(
-                "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-{}",
-                scene.name(),
-                if taa { "taa" } else { "no-taa" },
-                t.width,
-                t.height,
-                t.frames,
-                10 * size.iterations,
-                part.mask
-            );
-            let path = cache.join(name);
-            let cached = crate::io::exr::read(&path).ok().filter(|m| m.tile == tile);
-            let mask = match (cached, planned.white) {
-                (Some(m), _) => m,
-                (None, true) => Mask::white(tile, planned.seed),
-                (None, false) => {
-                    let mut s = plan.settings(planned);
-                    s.iterations = 10 * size.iterations;
-                    let start = std::time::Instant::now();
-                    let m = crate::run::optimize(tile, s, None)?;
-                    seconds += start.elapsed().as_secs_f64();
-                    crate::io::atomic::make_folder(cache)?;
-                    crate::io::exr::write(&m, AtomicFile::create(&path)?)?;
-                    m
-                }
-            };
-            out.push((mask, base + part.first));
+            out.shares |= part.shares.is_some();
+            out.reads.push((index, base + part.first, part.offset, part.shift.clone()));
         }
         base += group.dims;
     }
-    Ok((out, seconds))
+    Ok(out)
 }
 
 /// Filtered references of one scene: per TAA setting, the frames after TAA
@@ -309,8 +342,10 @@ pub fn run_eval(
     Ok(records)
 }
 
-/// The two records of `fsot-planned` (without and with TAA, each from its own
-/// plan) for one scene and sigma.
+/// The records of `fsot-planned` (without and with TAA, each from its own plan)
+/// for one scene and sigma; where the plan shares a mask between decisions, also
+/// `fsot-planned-unshared`, the same plan with masks of their own, to show what
+/// sharing costs.
 #[allow(clippy::too_many_arguments)]
 fn planned_records(
     scene: Scene,
@@ -324,34 +359,44 @@ fn planned_records(
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
     let mut records = Vec::new();
-    for (k, with_taa) in [false, true].into_iter().enumerate() {
-        let (masks, seconds) = planned_masks(scene, sigma, with_taa, size, cache)?;
-        let parts: Vec<(&Mask, usize)> = masks.iter().map(|(m, first)| (m, *first)).collect();
-        let (mut prelmse, mut relmse) = (0.0, 0.0);
-        for r in 0..size.renders {
-            let image = render(scene, size.shot, &MaskSampler::planned(&parts, 100 + r as u64));
-            let frames = if with_taa { taa(&image, TAA_ALPHA) } else { image };
-            let (p, rel) = relative_errors(&frames, &reference.frames[k], &reference.seen[k], eye, start, n);
-            prelmse += p / size.renders as f64;
-            relmse += rel / size.renders as f64;
+    let mut any_shares = false;
+    for share in [true, false] {
+        for (k, with_taa) in [false, true].into_iter().enumerate() {
+            if !share && !any_shares {
+                continue;
+            }
+            let planned = planned_masks(scene, sigma, with_taa, share, size, cache)?;
+            any_shares |= planned.shares;
+            let reads = planned.reads();
+            let (mut prelmse, mut relmse) = (0.0, 0.0);
+            for r in 0..size.renders {
+                let image = render(scene, size.shot, &MaskSampler::planned(&reads, 100 + r as u64));
+                let frames = if with_taa { taa(&image, TAA_ALPHA) } else { image };
+                let (p, rel) =
+                    relative_errors(&frames, &reference.frames[k], &reference.seen[k], eye, start, n);
+                prelmse += p / size.renders as f64;
+                relmse += rel / size.renders as f64;
+            }
+            let iterations: Vec<String> =
+                planned.masks.iter().map(|m| m.meta("iterations").unwrap_or("white").to_string()).collect();
+            let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
+            log(&format!(
+                "{} sigma {sigma} {method} ({}): pRelMSE {prelmse:.4e}; masks of {} iterations, made in {:.1} s{}",
+                scene.name(),
+                if with_taa { "TAA plan" } else { "no-TAA plan" },
+                iterations.join(" + "),
+                planned.seconds,
+                if planned.seconds == 0.0 { " (cached)" } else { "" }
+            ));
+            records.push(Record {
+                scene: scene.name().to_string(),
+                method: method.to_string(),
+                taa: with_taa,
+                sigma,
+                prelmse,
+                relmse,
+            });
         }
-        let iterations: Vec<String> =
-            masks.iter().map(|(m, _)| m.meta("iterations").unwrap_or("white").to_string()).collect();
-        log(&format!(
-            "{} sigma {sigma} fsot-planned ({}): pRelMSE {prelmse:.4e}; masks of {} iterations, made in {seconds:.1} s{}",
-            scene.name(),
-            if with_taa { "TAA plan" } else { "no-TAA plan" },
-            iterations.join(" + "),
-            if seconds == 0.0 { " (cached)" } else { "" }
-        ));
-        records.push(Record {
-            scene: scene.name().to_string(),
-            method: "fsot-planned".to_string(),
-            taa: with_taa,
-            sigma,
-            prelmse,
-            relmse,
-        });
     }
     Ok(records)
 }

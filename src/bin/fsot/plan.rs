@@ -31,8 +31,17 @@ pub(crate) fn describe(plan: &Plan) -> String {
         plan.scene, plan.tile_reason, plan.kernel, plan.kernel_reason, plan.backend
     );
     for g in &plan.groups {
-        let reads: Vec<String> =
-            g.parts.iter().map(|p| format!("{} (dims {}..{})", p.mask, p.first, p.first + p.dims)).collect();
+        let reads: Vec<String> = g
+            .parts
+            .iter()
+            .map(|p| {
+                let at = match p.shares {
+                    Some(_) => format!(" at offset {:?}, shift {:.4?}", p.offset, p.shift),
+                    None => String::new(),
+                };
+                format!("{} (dims {}..{}){at}", p.mask, p.first, p.first + p.dims)
+            })
+            .collect();
         s += &format!(
             "  {} (d = {}, spp {}): reads {}; {}{}\n",
             g.name,
