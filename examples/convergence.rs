@@ -36,11 +36,30 @@ fn main() {
         rule,
         rayon::current_num_threads()
     );
+    println!(
+        "# slices {:?} (FSOT_SLICES), step {:?} beta {:?} (FSOT_STEP, FSOT_BETA)",
+        std::env::var("FSOT_SLICES").ok(),
+        std::env::var("FSOT_STEP").ok(),
+        std::env::var("FSOT_BETA").ok()
+    );
     println!("iterations,seconds,objective,perceived_taa_ratio");
     for n in counts {
         let mut settings = Settings::new(spec, 7);
         settings.iterations = n;
         settings.rule = rule;
+        // Exploration knobs: FSOT_SLICES (slices per iteration), FSOT_STEP and
+        // FSOT_BETA (the momentum rule's step and beta).
+        if let Some(v) = std::env::var("FSOT_SLICES").ok().and_then(|v| v.parse().ok()) {
+            settings.slices = Some(v);
+        }
+        if let StepRule::Momentum { step, beta } = &mut settings.rule {
+            if let Some(v) = std::env::var("FSOT_STEP").ok().and_then(|v| v.parse().ok()) {
+                *step = v;
+            }
+            if let Some(v) = std::env::var("FSOT_BETA").ok().and_then(|v| v.parse().ok()) {
+                *beta = v;
+            }
+        }
         let mut run = CpuRun::new(tile, settings, None).unwrap();
         let start = Instant::now();
         while !run.finished() {
