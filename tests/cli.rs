@@ -372,3 +372,102 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         assert!(!dir.path().join("bad").exists() && !dir.path().join("bad.exr").exists(), "{args:?} wrote");
     }
 }
+
+#[test]
+fn a_ktx2_from_optimize_decodes_to_the_exr_of_the_same_command_within_one_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &str, extra: &[&str]| {
+        let mut args =
+            vec!["optimize", "--backend", "cpu", "--size", "32x32x16", "--dims", "2", "--kernel", "taa"];
+        args.extend(["--seed", "7", "--iterations", "20", "--out", out]);
+        args.extend(extra);
+        let o = fsot(&args, dir.path());
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run("m.exr", &[]);
+    run("m.ktx2", &["--ktx2-format", "r16g16_unorm"]);
+    let exr = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+    let bytes = std::fs::read(dir.path().join("m.ktx2")).unwrap();
+    let r = ktx2::Reader::new(&bytes[..]).unwrap();
+    assert_eq!(r.header().format, Some(ktx2::Format::R16G16_UNORM));
+    assert_eq!(r.header().layer_count, 16);
+    let data = r.levels().next().unwrap().data;
+    let mut worst = 0.0f64;
+    for (i, pair) in data.chunks_exact(4).enumerate() {
+        let (x, y, t) = (i % 32, (i / 32) % 32, i / 1024);
+        for c in 0..2 {
+            let q = u16::from_le_bytes([pair[2 * c], pair[2 * c + 1]]) as f64 / 65535.0;
+            worst = worst.max((q - exr.sample(x, y, t, 0)[c] as f64).abs());
+        }
+    }
+    assert!(worst <= 1.0 / 65535.0, "worst {worst}");
+}
+
+#[test]
+fn a_c_header_compiles_and_holds_the_masks_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(
+        &["optimize", "--backend", "cpu", "--size", "4x4x2", "--spp", "2", "--iterations", "5"]
+            .into_iter()
+            .chain(["--out", "blue-4.h"])
+            .collect::<Vec<_>>(),
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let header = std::fs::read_to_string(dir.path().join("blue-4.h")).unwrap();
+    assert!(header.contains("static const uint16_t blue_4[128]"), "{header}");
+    assert!(header.contains("BLUE_4_SPP = 2"));
+    let c = "#include <stdio.h>\n#include \"blue-4.h\"\nint main(void) { for (int i = 0; i < 128; i++) \
+             printf(\"%u\\n\", blue_4[i]); return BLUE_4_WIDTH * BLUE_4_HEIGHT * BLUE_4_FRAMES * BLUE_4_SPP * \
+             BLUE_4_DIMS == 128 ? 0 : 1; }\n";
+    std::fs::write(dir.path().join("main.c"), c).unwrap();
+    let cc = Command::new("cc")
+        .args(["-std=c99", "-Wall", "-Werror", "main.c", "-o", "main"])
+        .current_dir(dir.path())
+        .output();
+    let Ok(cc) = cc else {
+        eprintln!("SKIPPED the compile half: no C compiler (cc) on this machine");
+        return;
+    };
+    assert!(cc.status.success(), "{}", String::from_utf8_lossy(&cc.stderr));
+    let run = Command::new(dir.path().join("main")).output().unwrap();
+    assert!(run.status.success());
+    let levels: Vec<u32> = String::from_utf8_lossy(&run.stdout).lines().map(|l| l.parse().unwrap()).collect();
+    // The same mask again as EXR: every level the nearest to v * 65535, in the
+    // documented order (((t * spp + s) * H + y) * W + x) * D + k.
+    let o = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--size",
+            "4x4x2",
+            "--spp",
+            "2",
+            "--iterations",
+            "5",
+            "--out",
+            "m.exr",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+    let mut i = 0;
+    for t in 0..2 {
+        for s in 0..2 {
+            for y in 0..4 {
+                for x in 0..4 {
+                    for &v in m.sample(x, y, t, s) {
+                        assert!(
+                            (levels[i] as f64 - v as f64 * 65535.0).abs() <= 0.5,
+                            "{} against {v}",
+                            levels[i]
+                        );
+                        i += 1;
+                    }
+                }
+            }
+        }
+    }
+}

@@ -20,6 +20,7 @@ use fsot::baselines::fast::{Combine, Filter};
 use fsot::error::{Error, Result};
 use fsot::gpu::VulkanOptions;
 use fsot::io::atomic::AtomicFile;
+use fsot::io::MaskFile;
 use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
@@ -345,9 +346,17 @@ struct OptimizeArgs {
     /// with plan.json; each mask stops when further iterations no longer pay.
     #[arg(long)]
     scene: Option<PathBuf>,
-    /// Output EXR file (with --scene: the output folder).
+    /// Output file, by its extension: .exr (every value exact), .ktx2 (a 2-D array
+    /// texture, one layer per frame) or .h (a C header); with --scene, the output
+    /// folder.
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
+    /// KTX2 format: r8_unorm, r8g8_unorm, r8g8b8a8_unorm, r16_unorm, r16g16_unorm,
+    /// r16g16b16a16_unorm, r32_sfloat, r32g32_sfloat, r32g32b32a32_sfloat or auto
+    /// [default: auto, 16-bit UNORM with channels for d]. With --scene: also write
+    /// NAME.ktx2 beside each NAME.exr.
+    #[arg(long)]
+    ktx2_format: Option<String>,
     /// Also write 16-bit PNG slices into this folder.
     #[arg(long)]
     png: Option<PathBuf>,

@@ -25,7 +25,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if iterations == 0 {
         return Err(Error::invalid("--iterations must be at least 1"));
     }
-    // Reserve the outputs before the long work: a bad path fails now.
+    // Check the output's kind and reserve it before the long work: a bad path or
+    // a format that cannot hold d fails now.
+    let file_kind = MaskFile::for_path(&args.out, dims, args.ktx2_format.as_deref())?;
     let out = AtomicFile::create(&args.out)?;
     if let Some(dir) = &args.png {
         if dir.exists() && !dir.is_dir() {
@@ -36,7 +38,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         if args.checkpoint.is_some() || args.resume {
             return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
         }
-        return make_baseline(&args, tile, spec, out);
+        return make_baseline(&args, tile, spec, file_kind, out);
     }
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = iterations;
@@ -104,7 +106,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let mask = run.finish()?;
     let after = score(&mask, spec, SCORE_SLICES);
-    fsot::io::exr::write(&mask, out)?;
+    file_kind.write(&mask, out)?;
     if let Some(dir) = &args.png {
         let files = fsot::io::png::write(&mask, dir)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
@@ -229,6 +231,7 @@ pub(crate) fn make_baseline(
     args: &OptimizeArgs,
     tile: Tile,
     spec: KernelSpec,
+    kind: MaskFile,
     out: AtomicFile,
 ) -> Result<()> {
     let swaps = args.method == Method::Fast || (args.method == Method::Stbn && tile.dims > 1);
@@ -269,7 +272,7 @@ pub(crate) fn make_baseline(
     let mask = made.mask;
     let seconds = start.elapsed().as_secs_f64();
     let s = score(&mask, spec, SCORE_SLICES);
-    fsot::io::exr::write(&mask, out)?;
+    kind.write(&mask, out)?;
     if let Some(dir) = &args.png {
         let files = fsot::io::png::write(&mask, dir)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());

@@ -100,6 +100,12 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     let cost = CostModel::calibrate(&options)?;
     let plan = Plan::new(&scene, &cost)?;
     eprint!("{}", describe(&plan));
+    // KTX2 beside each mask: every format checked before any work.
+    let ktx2: Vec<Option<fsot::io::ktx2::Format>> = plan
+        .masks
+        .iter()
+        .map(|m| args.ktx2_format.as_deref().map(|f| fsot::io::ktx2::format_for(m.dims, Some(f))).transpose())
+        .collect::<Result<_>>()?;
     let estimated: u64 = plan.masks.iter().map(|m| m.estimated_iterations as u64).sum();
     let bar = ProgressBar::new(estimated.max(1));
     bar.set_style(
@@ -137,6 +143,14 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         );
         return Err(Error::Interrupted);
     }
-    println!("wrote {} masks and plan.json into {}", plan.masks.len(), args.out.display());
+    for (m, format) in plan.masks.iter().zip(&ktx2) {
+        if let Some(format) = format {
+            let mask = fsot::io::exr::read(&args.out.join(&m.file))?;
+            let path = args.out.join(&m.file).with_extension("ktx2");
+            fsot::io::ktx2::write(&mask, *format, AtomicFile::create(&path)?)?;
+        }
+    }
+    let also = if args.ktx2_format.is_some() { " (each also as KTX2)" } else { "" };
+    println!("wrote {} masks{also} and plan.json into {}", plan.masks.len(), args.out.display());
     Ok(())
 }

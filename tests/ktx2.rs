@@ -1,0 +1,116 @@
+//! KTX2 output, read back by an independent reader (the `ktx2` crate): the
+//! header a renderer uploads from, the data format descriptor the format calls
+//! for, the provenance, and texels within half a quantisation level of the mask.
+
+use fsot::io::ktx2::{encode, format_for, Format};
+use fsot::io::MaskFile;
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+
+fn mask(dims: usize, spp: usize) -> Mask {
+    let mut m = Mask::white(Tile::new(5, 3, 4, spp, dims).unwrap(), 11);
+    // The ends of the range, and the middle.
+    m.samples[..3].copy_from_slice(&[0.0, 0.999_999_9, 0.5]);
+    m.set_meta("kernel", "taa (test)");
+    m
+}
+
+/// Decodes channel `c` of texel `i` of level 0 as a renderer's sampler reads it.
+fn read(data: &[u8], format: Format, i: usize, c: usize) -> f64 {
+    let bytes = format.bits() as usize / 8;
+    let at = (i * format.channels() + c) * bytes;
+    let raw = &data[at..at + bytes];
+    match format.bits() {
+        8 => raw[0] as f64 / 255.0,
+        16 => u16::from_le_bytes([raw[0], raw[1]]) as f64 / 65535.0,
+        _ => f32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]) as f64,
+    }
+}
+
+#[test]
+fn every_format_reads_back_within_half_a_level_in_an_independent_reader() {
+    for format in Format::ALL {
+        for dims in 1..=format.channels() {
+            for spp in [1, 2] {
+                let m = mask(dims, spp);
+                let bytes = encode(&m, format).unwrap();
+                let r = ktx2::Reader::new(&bytes[..]).unwrap();
+                let h = r.header();
+                assert_eq!(h.format.map(|f| f.value()), Some(format.vk_format()), "{format:?}");
+                assert_eq!(h.type_size, format.bits() / 8);
+                assert_eq!((h.pixel_width, h.pixel_height, h.pixel_depth), (5, 3, 0));
+                assert_eq!((h.layer_count, h.face_count, h.level_count), (4 * spp as u32, 1, 1));
+                assert!(h.supercompression_scheme.is_none());
+                // The descriptor the format calls for, as the reader's crate builds it.
+                let (want, type_size) = ktx2::dfd::Basic::from_format(h.format.unwrap()).unwrap();
+                assert_eq!(type_size, h.type_size);
+                assert_eq!(r.basic_dfd(), Some(&want), "{format:?}");
+                let levels: Vec<_> = r.levels().collect();
+                assert_eq!(levels.len(), 1);
+                let data = levels[0].data;
+                assert_eq!(data.len(), 5 * 3 * 4 * spp * format.texel_bytes());
+                let level = if format.is_float() { 0.0 } else { 1.0 / ((1u64 << format.bits()) - 1) as f64 };
+                for t in 0..4 {
+                    for s in 0..spp {
+                        for y in 0..3 {
+                            for x in 0..5 {
+                                let i = ((t * spp + s) * 3 + y) * 5 + x; // layer t * spp + s
+                                let want = m.sample(x, y, t, s);
+                                for c in 0..format.channels() {
+                                    let got = read(data, format, i, c);
+                                    let v = want.get(c).copied().unwrap_or(0.0) as f64;
+                                    assert!(
+                                        (got - v).abs() <= 0.5 * level + 1e-7,
+                                        "{format:?} d {dims}: {got} against {v}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+                let kv: Vec<(&str, &[u8])> = r.key_value_data().collect();
+                let get =
+                    |k: &str| kv.iter().find(|e| e.0 == k).map(|e| e.1.strip_suffix(&[0]).unwrap_or(e.1));
+                assert_eq!(get("fsot.kernel"), Some(&b"taa (test)"[..]));
+                assert_eq!(get("fsot.dims"), Some(dims.to_string().as_bytes()));
+                assert_eq!(get("fsot.spp"), Some(spp.to_string().as_bytes()));
+                assert!(get("KTXwriter").unwrap().starts_with(b"fsot "));
+                let keys: Vec<&str> = kv.iter().map(|e| e.0).collect();
+                let mut sorted = keys.clone();
+                sorted.sort();
+                assert_eq!(keys, sorted, "KTX2 asks for keys in byte order");
+                // Level data aligned to lcm(texel size, 4).
+                let offset = data.as_ptr() as usize - bytes.as_ptr() as usize;
+                assert_eq!(offset % format.texel_bytes().max(4), 0);
+            }
+        }
+    }
+}
+
+#[test]
+fn unorm_levels_are_the_nearest_of_two_to_the_b_minus_one() {
+    use fsot::io::ktx2::quantize;
+    assert_eq!(quantize(0.0, 8), 0);
+    assert_eq!(quantize(0.5, 8), 128); // 127.5 rounds up
+    assert_eq!(quantize(0.999_9, 8), 255);
+    assert_eq!(quantize(1.0 / 255.0 * 0.49, 8), 0);
+    assert_eq!(quantize(1.0 / 255.0 * 0.51, 8), 1);
+    assert_eq!(quantize(0.25, 16), 16384); // 16383.75
+}
+
+#[test]
+fn a_format_that_cannot_hold_the_mask_is_refused_before_any_work() {
+    let e = format_for(2, Some("r8_unorm")).unwrap_err().to_string();
+    assert!(e.contains("r8_unorm") && e.contains("d = 2"), "{e}");
+    assert!(format_for(3, Some("r16g16_unorm")).is_err());
+    assert!(format_for(5, None).unwrap_err().to_string().contains("at most 4"));
+    assert!(format_for(2, Some("rgb9e5")).unwrap_err().to_string().contains("r16g16_unorm"));
+    assert_eq!(format_for(2, None).unwrap(), Format::R16G16Unorm, "the default for d = 2");
+    assert_eq!(format_for(1, Some("auto")).unwrap(), Format::R16Unorm);
+    assert_eq!(format_for(3, None).unwrap(), Format::R16G16B16A16Unorm);
+    assert!(encode(&mask(2, 1), Format::R32Sfloat).is_err());
+    let p = std::path::Path::new;
+    assert!(MaskFile::for_path(p("m.exr"), 2, Some("r16_unorm")).is_err(), "a KTX2 format for an EXR");
+    assert_eq!(MaskFile::for_path(p("m.h"), 2, None).unwrap(), MaskFile::CHeader);
+    assert_eq!(MaskFile::for_path(p("m.KTX2"), 1, None).unwrap(), MaskFile::Ktx2(Format::R16Unorm));
+}
