@@ -17,6 +17,7 @@ pub mod plan;
 pub mod problem;
 pub mod rng;
 pub mod run;
+pub mod sampler;
 pub mod scene;
 pub mod score;
 pub mod settings;

@@ -1,0 +1,219 @@
+//! The public GLSL include (`glsl/include/fsot.glsl`): a renderer's shader fsot
+//! never saw compiles against it with glslangValidator, at the renderer's own set
+//! and binding and at the defaults, and its plan block's std140 layout (read from
+//! the SPIR-V with rspirv) is what `fsot::sampler` fills. The sampler's CPU
+//! formula is checked against the include's documented rule by hand.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::process::Command;
+
+use fsot::io::ktx2::Format;
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+use fsot::sampler::{PartBlock, PlanHead, SamplerPart, SamplerPlan, MAX_PARTS, R4};
+use rspirv::dr::{load_bytes, Operand};
+use rspirv::spirv::{Decoration, Op};
+
+const RENDERER: &str = r#"#version 450
+#extension GL_GOOGLE_include_directive : require
+// A renderer's own bindings around fsot's.
+layout(set = 0, binding = 0, rgba32f) uniform writeonly image2D frame_out;
+layout(set = 0, binding = 1) uniform Camera { mat4 view; uint frame; } camera;
+DEFINES
+#include "fsot.glsl"
+layout(local_size_x = 8, local_size_y = 8) in;
+void main() {
+    uvec2 pixel = gl_GlobalInvocationID.xy;
+    FsotSampler s = fsot_start(pixel, camera.frame, 0u);
+    float pick = fsot_get_1d(s);
+    vec2 lens = fsot_get_2d(s);
+    vec4 deep = fsot_get_4d(s);
+    imageStore(frame_out, ivec2(pixel), vec4(pick, lens, deep.x));
+}
+"#;
+
+/// Compiles the renderer's shader with `defines`; None when glslangValidator is
+/// missing (said on stderr).
+fn compile(defines: &str) -> Option<Vec<u8>> {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("renderer.comp");
+    std::fs::write(&src, RENDERER.replace("DEFINES", defines)).unwrap();
+    let include = Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include");
+    let out = dir.path().join("renderer.spv");
+    let run = Command::new("glslangValidator")
+        .args(["-V", "--target-env", "vulkan1.2"])
+        .arg(format!("-I{}", include.display()))
+        .arg(&src)
+        .arg("-o")
+        .arg(&out)
+        .output();
+    let Ok(run) = run else {
+        eprintln!("SKIPPED: glslangValidator is not installed (scripts/install-deps.sh installs it)");
+        return None;
+    };
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
+    Some(std::fs::read(out).unwrap())
+}
+
+/// (set, binding) of every named variable, the std140 offsets of every named
+/// struct's members, and array strides by element struct name.
+#[allow(clippy::type_complexity)]
+fn reflect(spv: &[u8]) -> (HashMap<String, (u32, u32)>, HashMap<String, Vec<u32>>, HashMap<String, u32>) {
+    let m = load_bytes(spv).unwrap();
+    let word = |o: &Operand| match o {
+        Operand::LiteralBit32(v) | Operand::IdRef(v) => *v,
+        other => panic!("{other:?}"),
+    };
+    let mut names = HashMap::new();
+    for i in &m.debug_names {
+        if let (Op::Name, [id, Operand::LiteralString(s)]) = (i.class.opcode, &i.operands[..]) {
+            names.insert(word(id), s.clone());
+        }
+    }
+    let (mut sets, mut bindings, mut offsets, mut strides) =
+        (HashMap::new(), HashMap::new(), HashMap::<u32, Vec<(u32, u32)>>::new(), HashMap::new());
+    for i in &m.annotations {
+        match (i.class.opcode, &i.operands[..]) {
+            (Op::Decorate, [t, Operand::Decoration(Decoration::DescriptorSet), v]) => {
+                sets.insert(word(t), word(v));
+            }
+            (Op::Decorate, [t, Operand::Decoration(Decoration::Binding), v]) => {
+                bindings.insert(word(t), word(v));
+            }
+            (Op::Decorate, [t, Operand::Decoration(Decoration::ArrayStride), v]) => {
+                strides.insert(word(t), word(v));
+            }
+            (Op::MemberDecorate, [t, member, Operand::Decoration(Decoration::Offset), v]) => {
+                offsets.entry(word(t)).or_default().push((word(member), word(v)));
+            }
+            _ => {}
+        }
+    }
+    let mut element_of = HashMap::new();
+    for i in &m.types_global_values {
+        if i.class.opcode == Op::TypeArray {
+            element_of.insert(i.result_id.unwrap(), word(&i.operands[0]));
+        }
+    }
+    let mut places = HashMap::new();
+    for (id, set) in &sets {
+        places.insert(names.get(id).cloned().unwrap_or_default(), (*set, bindings[id]));
+    }
+    let mut layouts = HashMap::new();
+    for (id, mut members) in offsets {
+        members.sort();
+        layouts
+            .insert(names.get(&id).cloned().unwrap_or_default(), members.into_iter().map(|m| m.1).collect());
+    }
+    let mut by_element = HashMap::new();
+    for (array, stride) in strides {
+        if let Some(e) = element_of.get(&array) {
+            by_element.insert(names.get(e).cloned().unwrap_or_default(), stride);
+        }
+    }
+    (places, layouts, by_element)
+}
+
+#[test]
+fn a_renderers_shader_compiles_with_its_own_set_and_binding_and_the_plan_block_is_the_rust_mirror() {
+    let Some(spv) = compile("#define FSOT_SET 3\n#define FSOT_BINDING 7") else { return };
+    let (places, layouts, strides) = reflect(&spv);
+    assert_eq!(places["fsot_masks"], (3, 7));
+    assert_eq!(places[""], (3, 8), "the plan block (an anonymous instance) at FSOT_BINDING + 1: {places:?}");
+    assert_eq!(places["frame_out"], (0, 0), "the renderer's own bindings untouched");
+    assert_eq!(layouts["FsotPlan"], [0, 16, 32]);
+    assert_eq!(std::mem::offset_of!(PlanHead, count), 16);
+    assert_eq!(std::mem::size_of::<PlanHead>(), 32);
+    assert_eq!(layouts["FsotPart"], [0, 16]);
+    assert_eq!(std::mem::offset_of!(PartBlock, shift), 16);
+    assert_eq!(strides["FsotPart"] as usize, std::mem::size_of::<PartBlock>());
+    // Defaults: set 0, bindings 0 and 1 (here the renderer's own use them too, so
+    // it would define its own; the include itself compiles).
+    let Some(spv) = compile("") else { return };
+    let (places, ..) = reflect(&spv);
+    assert_eq!(places["fsot_masks"], (0, 0));
+    // And with a larger block.
+    assert!(compile("#define FSOT_MAX_PARTS 64").is_some());
+}
+
+fn two_masks() -> SamplerPlan {
+    let tile = |d| Tile::new(4, 3, 2, 1, d).unwrap();
+    let masks = vec![Mask::white(tile(1), 1), Mask::white(tile(2), 2)];
+    let parts = vec![
+        SamplerPart { mask: 0, dims: 1, offset: [0; 3], shift: vec![0.0] },
+        SamplerPart { mask: 1, dims: 2, offset: [0; 3], shift: vec![0.0, 0.0] },
+        SamplerPart { mask: 1, dims: 2, offset: [3, 1, 1], shift: vec![0.25, 0.5] },
+    ];
+    SamplerPlan { masks, parts }
+}
+
+#[test]
+fn the_plan_block_holds_the_tile_the_parts_and_each_masks_base_layer() {
+    let plan = two_masks();
+    let bytes = plan.plan_block().unwrap();
+    assert_eq!(bytes.len(), 32 + 32 * MAX_PARTS);
+    let u = |i: usize| u32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+    let f = |i: usize| f32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+    assert_eq!([u(0), u(1), u(2), u(3), u(4)], [4, 3, 2, 1, 3]);
+    // Part 2 (words 24..32): offset 3, 1, 1; mask 1 starts at layer T * spp = 2.
+    assert_eq!([u(24), u(25), u(26), u(27)], [3, 1, 1, 2]);
+    assert_eq!([f(28), f(29), f(30), f(31)], [0.25, 0.5, 0.0, 0.0]);
+    assert!(bytes[32 * 4..].iter().all(|b| *b == 0), "unused parts zero");
+    assert!(plan.plan_block_for(2).is_err(), "three parts do not fit two");
+    // The stacked image: mask 0's two layers then mask 1's, in a format for d = 2.
+    let texels = plan.texels(Format::R16G16Unorm).unwrap();
+    assert_eq!(texels.len(), 2 * (4 * 3 * 2) * 4);
+}
+
+#[test]
+fn a_get_reads_the_offset_texel_adds_the_shift_and_a_new_r4_turn_per_loop_of_the_tile() {
+    let plan = two_masks();
+    let m = &plan.masks[1];
+    let fmt = Format::R32G32Sfloat;
+    // Part 2 at pixel (2, 2), frame 0: texel ((2 + 3) % 4, (2 + 1) % 3, (0 + 1) % 2).
+    let v = plan.value(2, 2, 2, 0, 0, fmt).unwrap();
+    let t = m.sample(1, 0, 1, 0);
+    for j in 0..2 {
+        let want = (t[j] as f64 + [0.25, 0.5][j]).fract();
+        assert!((v[j] as f64 - want).abs() < 1e-6, "{} against {want}", v[j]);
+    }
+    // Frame 3 + offset 1 = 4: the second loop of the 2-frame tile (turn 2).
+    let v = plan.value(2, 2, 2, 3, 0, fmt).unwrap();
+    let t = m.sample(1, 0, 0, 0);
+    for j in 0..2 {
+        let turn = (2.0 * R4[j] as f64 / 4_294_967_296.0).fract();
+        let want = (t[j] as f64 + [0.25, 0.5][j] + turn).fract();
+        assert!((v[j] as f64 - want).abs() < 1e-6, "{} against {want}", v[j]);
+    }
+    // R4 in fixed point is 1 / phi^k, phi^5 = phi + 1.
+    let phi = 1.0 / (R4[0] as f64 / 4_294_967_296.0);
+    assert!((phi.powi(5) - phi - 1.0).abs() < 1e-8);
+    // UNORM: the texel as q / 65535.
+    let v = plan.value(0, 0, 0, 0, 0, Format::R16Unorm).unwrap();
+    let q = (plan.masks[0].sample(0, 0, 0, 0)[0] as f64 * 65535.0).round() / 65535.0;
+    assert!((v[0] as f64 - q.fract()).abs() < 1e-6);
+    // Past the last part: the include's hash fallback, not a mask.
+    assert_eq!(plan.value(3, 0, 0, 0, 0, fmt), None);
+}
+
+#[test]
+fn a_plan_folder_reads_into_a_sampler_plan_and_a_bad_one_is_refused() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"4x4x2\"\n\
+                [[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n";
+    let scene = fsot::scene::Scene::parse(text, "s").unwrap();
+    let options = fsot::run::RunOptions {
+        backend: fsot::backend::BackendChoice::Cpu,
+        ..fsot::run::RunOptions::default()
+    };
+    let plan = fsot::plan::Plan::new(&scene, &fsot::plan::CostModel::unmeasured()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    plan.execute(dir.path(), &options, 100, false, &fsot::run::CancelFlag::new(), &mut |_| {}).unwrap();
+    let sp = SamplerPlan::read(dir.path()).unwrap();
+    assert_eq!(sp.masks.len(), 1, "bsdf shares light's mask");
+    assert_eq!(sp.parts.len(), 2);
+    assert_eq!(sp.parts[1].offset, fsot::plan::share_offset(1, [4, 4, 2]));
+    std::fs::write(dir.path().join("plan.json"), "{\"tile\": [4, 4, 2], \"groups\": 3}").unwrap();
+    assert!(SamplerPlan::read(dir.path()).unwrap_err().to_string().contains("not a plan file"));
+    assert!(SamplerPlan::read(&dir.path().join("missing")).is_err());
+}
