@@ -354,6 +354,17 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
     for f in ["pick.exr", "deep.exr", "plan.json"] {
         assert!(dir.path().join("masks").join(f).exists(), "{f}");
     }
+    // KTX2 beside each mask, in the format asked for.
+    let o = fsot(
+        &["optimize", "--scene", "s.toml", "--out", "k", "--backend", "cpu", "--ktx2-format", "r8g8_unorm"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.ktx2", "deep.ktx2"] {
+        let bytes = std::fs::read(dir.path().join("k").join(f)).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().format, Some(ktx2::Format::R8G8_UNORM), "{f}");
+    }
 
     std::fs::write(dir.path().join("bad.toml"), "[[group]]\nname = \"a\"\ndims = 2\nsppp = 1\n").unwrap();
     let cases: &[(&[&str], &str)] = &[
@@ -362,6 +373,7 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--ktx2-format", "r8_unorm"], "d = 2"),
         (&["plan", "bad.toml"], "line 4"),
     ];
     for (args, expect) in cases {
