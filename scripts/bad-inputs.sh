@@ -70,6 +70,10 @@ check "missing out folder" optimize --size 4x4x2 --iterations 3 --out no/such/m.
 check "unknown method"     "${o[@]}" --size 4x4x2 --method nope
 check "fast bad filter"    "${o[@]}" --size 4x4x2 --method fast --fast-spatial sinc:2
 check "passes 0"           "${o[@]}" --size 4x4x2 --method fast --passes 0
+check "ktx2 format for exr" "${o[@]}" --size 4x4x2 --ktx2-format r16_unorm
+check "ktx2 too few channels" optimize --size 4x4x2 --iterations 3 --out m.ktx2 --ktx2-format r8_unorm
+check "ktx2 unknown format" optimize --size 4x4x2 --iterations 3 --out m.ktx2 --ktx2-format bc7
+check "ktx2 d = 5"         optimize --size 4x4x2 --iterations 3 --dims 5 --out m.ktx2
 check "score garbage"      score garbage.exr
 check "eval bad scene"     eval --quick --scenes nope --out evalout
 check "eval bad sigma"     eval --quick --sigma -1 --out evalout
