@@ -15,6 +15,7 @@ pub mod mask;
 pub mod method;
 pub mod plan;
 pub mod problem;
+pub mod renderer;
 pub mod rng;
 pub mod run;
 pub mod sampler;

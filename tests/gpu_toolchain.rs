@@ -29,6 +29,8 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         push_bytes: std::mem::size_of::<HashPush>() as u32,
         spec: &[workgroup],
         sets: 1,
+        images: &[],
+        uniforms: &[],
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     pipeline.bind(0, &[(binding::HASH_VALUES, &out)]).unwrap();

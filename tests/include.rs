@@ -4,9 +4,9 @@
 //! the SPIR-V with rspirv) is what `fsot::sampler` fills. The sampler's CPU
 //! formula is checked against the include's documented rule by hand.
 
+mod common;
+
 use std::collections::HashMap;
-use std::path::Path;
-use std::process::Command;
 
 use fsot::io::ktx2::Format;
 use fsot::mask::Mask;
@@ -36,24 +36,7 @@ void main() {
 /// Compiles the renderer's shader with `defines`; None when glslangValidator is
 /// missing (said on stderr).
 fn compile(defines: &str) -> Option<Vec<u8>> {
-    let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("renderer.comp");
-    std::fs::write(&src, RENDERER.replace("DEFINES", defines)).unwrap();
-    let include = Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include");
-    let out = dir.path().join("renderer.spv");
-    let run = Command::new("glslangValidator")
-        .args(["-V", "--target-env", "vulkan1.2"])
-        .arg(format!("-I{}", include.display()))
-        .arg(&src)
-        .arg("-o")
-        .arg(&out)
-        .output();
-    let Ok(run) = run else {
-        eprintln!("SKIPPED: glslangValidator is not installed (scripts/install-deps.sh installs it)");
-        return None;
-    };
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
-    Some(std::fs::read(out).unwrap())
+    common::compile_glsl(&RENDERER.replace("DEFINES", defines))
 }
 
 /// (set, binding) of every named variable, the std140 offsets of every named

@@ -142,3 +142,23 @@ fn the_sort_runs_on_a_device_the_host_made() {
     let messages = messages.lock().unwrap();
     assert!(messages.is_empty(), "validation: {:?}", &messages[..messages.len().min(3)]);
 }
+
+#[test]
+fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_is_refused() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let usage =
+        vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
+    let desc =
+        fsot::vk::ImageDesc { format: vk::Format::R16G16_UNORM, width: 5, height: 3, layers: 4, usage };
+    let mut image = fsot::vk::Image::new(&ctx, desc, "round-trip").unwrap();
+    // Every texel distinct, so a swapped layer, row or channel would show.
+    let bytes: Vec<u8> = (0..5 * 3 * 4 * 4).map(|i| (i * 7 % 251) as u8).collect();
+    image.fill(&bytes, 4, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
+    assert_eq!(image.layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+    assert_eq!(image.read_back(4, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap(), bytes);
+    let err = image.fill(&bytes[4..], 4, vk::ImageLayout::GENERAL).unwrap_err();
+    assert!(err.to_string().contains("holds 240 bytes, the data is 236"), "{err}");
+    let _sampler = fsot::vk::Sampler::nearest(&ctx).unwrap();
+    drop(image);
+    common::assert_no_validation_messages(&ctx);
+}

@@ -127,6 +127,8 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
         push_bytes: std::mem::size_of::<ScatterPush>() as u32,
         spec: &[WORKGROUP],
         sets: 1,
+        images: &[],
+        uniforms: &[],
     };
     let pipeline = ComputePipeline::new(ctx, &desc)?;
     pipeline

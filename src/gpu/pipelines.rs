@@ -32,7 +32,15 @@ fn pipeline(
     spec: &[u32],
     sets: u32,
 ) -> Result<ComputePipeline> {
-    let desc = ComputeDesc { spirv, bindings: binding::BINDINGS, push_bytes: push_bytes as u32, spec, sets };
+    let desc = ComputeDesc {
+        spirv,
+        bindings: binding::BINDINGS,
+        push_bytes: push_bytes as u32,
+        spec,
+        sets,
+        images: &[],
+        uniforms: &[],
+    };
     ComputePipeline::new(ctx, &desc)
 }
 

@@ -32,8 +32,8 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    /// A storage buffer (also a copy source and destination, and indirect
-    /// arguments) of `size` bytes. Device-local buffers larger than one binding
+    /// A storage buffer (also a uniform buffer, a copy source and destination,
+    /// and indirect arguments) of `size` bytes. Device-local buffers larger than one binding
     /// (maxStorageBufferRange) are refused.
     pub fn new(ctx: &Context, size: u64, location: Location, name: &str) -> Result<Self> {
         if size == 0 {
@@ -52,7 +52,8 @@ impl Buffer {
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::INDIRECT_BUFFER;
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_BUFFER;
         let info =
             vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: a valid create info on a live device.
@@ -251,6 +252,63 @@ pub fn download_batch(
         .zip(&offsets)
         .map(|((_, bytes), &at)| all[at as usize..(at + bytes) as usize].to_vec())
         .collect())
+}
+
+/// A range of a buffer a host application owns, as its creator made it (Vulkan
+/// cannot be asked): what a fill checks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BufferTarget {
+    pub buffer: vk::Buffer,
+    /// The buffer's size as created.
+    pub size: u64,
+    /// The usage it was created with (a fill needs TRANSFER_DST).
+    pub usage: vk::BufferUsageFlags,
+    /// Where the data goes (a multiple of 4).
+    pub offset: u64,
+}
+
+/// Writes `bytes` into a host's buffer at `target.offset`, through a staging
+/// buffer, in one submission on the context's queue: ordered after every earlier
+/// command on the queue and before every later one (barriers of all stages and
+/// memory accesses around the copy); waits until done. No queue family
+/// ownership transfer (as for images: see `image`). Checked before any GPU
+/// work: the handle, the usage, the offset's alignment and the range.
+pub fn fill_buffer(ctx: &Context, target: &BufferTarget, bytes: &[u8]) -> Result<()> {
+    if target.buffer == vk::Buffer::null() {
+        return Err(Error::invalid("the buffer handle is null"));
+    }
+    if !target.usage.contains(vk::BufferUsageFlags::TRANSFER_DST) {
+        return Err(Error::invalid(format!(
+            "the buffer's usage {:?} lacks TRANSFER_DST, which this copy needs",
+            target.usage
+        )));
+    }
+    let end = target.offset.checked_add(bytes.len() as u64);
+    if target.offset % 4 != 0 || bytes.is_empty() || end.is_none_or(|e| e > target.size) {
+        return Err(Error::invalid(format!(
+            "{} bytes at offset {} do not fit a buffer of {} (the offset a multiple of 4)",
+            bytes.len(),
+            target.offset,
+            target.size
+        )));
+    }
+    let staging = Buffer::with_data(ctx, bytes, Location::Upload, "buffer-staging")?;
+    let (stages, access) = super::image::EVERY_COMMAND;
+    let memory = |src, dst| vk::MemoryBarrier::default().src_access_mask(src).dst_access_mask(dst);
+    let device = ctx.device();
+    ctx.submit(|cmd| {
+        let region = [vk::BufferCopy::default().dst_offset(target.offset).size(bytes.len() as u64)];
+        let write = vk::AccessFlags::TRANSFER_WRITE;
+        let flags = vk::DependencyFlags::empty();
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        // SAFETY: `cmd` is being recorded; the host's buffer is alive (its promise)
+        // with TRANSFER_DST usage, and the range was checked above.
+        unsafe {
+            device.cmd_pipeline_barrier(cmd, stages, transfer, flags, &[memory(access, write)], &[], &[]);
+            device.cmd_copy_buffer(cmd, staging.raw, target.buffer, &region);
+            device.cmd_pipeline_barrier(cmd, transfer, stages, flags, &[memory(write, access)], &[], &[]);
+        }
+    })
 }
 
 impl Drop for Buffer {

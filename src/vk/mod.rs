@@ -9,7 +9,10 @@
 //! - `commands`: submission through one persistent command pool and fence per
 //!   context, and the barrier and copy helpers;
 //! - `buffer`: buffers that own their memory, with one upload and one download
-//!   path through staging;
+//!   path through staging, and fills of a host's buffer;
+//! - `image`: 2-D array images (owned, or a host's described by `ImageTarget`)
+//!   filled and read back through staging with their layout transitions, and a
+//!   nearest sampler;
 //! - `pipeline`: compute pipelines with their descriptor sets;
 //! - `timer`: timestamp queries;
 //! - `sort`: a reusable radix sort of 32-bit keys with 32-bit payloads.
@@ -22,14 +25,16 @@ pub mod commands;
 pub mod context;
 pub mod device;
 pub(crate) mod fault;
+pub mod image;
 pub mod instance;
 pub mod pipeline;
 pub mod sort;
 pub mod timer;
 
-pub use buffer::{Buffer, Location};
+pub use buffer::{Buffer, BufferTarget, Location};
 pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
+pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 pub use pipeline::{ComputeDesc, ComputePipeline};
 pub use sort::{RadixSort, SortCount};
 pub use timer::Timer;

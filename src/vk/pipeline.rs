@@ -1,7 +1,8 @@
-//! Compute pipelines: one shader pass, a descriptor set layout of storage buffers
-//! at bindings 0..n in set 0 (a shader family shares one layout), a push-constant
-//! block, specialization constants 0..m (workgroup size first), and descriptor
-//! sets bound to buffers by binding index.
+//! Compute pipelines: one shader pass, a descriptor set layout at bindings 0..n
+//! in set 0 (storage buffers unless listed as uniform buffers or combined image
+//! samplers; a shader family shares one layout), a push-constant block,
+//! specialization constants 0..m (workgroup size first), and descriptor sets
+//! bound to buffers and images by binding index.
 
 use ash::vk;
 
@@ -15,8 +16,12 @@ use crate::error::{Error, Result};
 pub struct ComputeDesc<'a> {
     /// The compiled pass.
     pub spirv: &'a [u8],
-    /// Storage buffers in the layout: bindings 0..bindings.
+    /// Bindings 0..bindings in the layout: storage buffers, except those below.
     pub bindings: u32,
+    /// Bindings that are combined image samplers (`sampler2DArray` and the like).
+    pub images: &'a [u32],
+    /// Bindings that are uniform buffers.
+    pub uniforms: &'a [u32],
     /// Size of the push-constant block (0: none).
     pub push_bytes: u32,
     /// Values of specialization constants 0, 1, ...
@@ -34,7 +39,7 @@ pub struct ComputePipeline {
     pool: vk::DescriptorPool,
     sets: Vec<vk::DescriptorSet>,
     pub raw: vk::Pipeline,
-    bindings: u32,
+    kinds: Vec<vk::DescriptorType>,
     push_bytes: u32,
 }
 
@@ -55,15 +60,24 @@ impl ComputePipeline {
             pool: vk::DescriptorPool::null(),
             sets: Vec::new(),
             raw: vk::Pipeline::null(),
-            bindings: desc.bindings,
+            kinds: (0..desc.bindings)
+                .map(|b| match (desc.images.contains(&b), desc.uniforms.contains(&b)) {
+                    (true, _) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    (_, true) => vk::DescriptorType::UNIFORM_BUFFER,
+                    _ => vk::DescriptorType::STORAGE_BUFFER,
+                })
+                .collect(),
             push_bytes: desc.push_bytes,
         };
         // Every handle below is destroyed by Drop if a later step fails.
+        if let Some(b) = desc.images.iter().chain(desc.uniforms).find(|&&b| b >= desc.bindings) {
+            return Err(Error::invalid(format!("binding {b} is outside the pipeline's {}", desc.bindings)));
+        }
         let layout_bindings: Vec<_> = (0..desc.bindings)
             .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(b)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(me.kinds[b as usize])
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -99,9 +113,17 @@ impl ComputePipeline {
         // SAFETY: the module, layout and specialization data are alive during the call.
         me.raw = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) }
             .map_err(|(_, result)| Error::Vulkan { call: "vkCreateComputePipelines", result })?[0];
-        let sizes = [vk::DescriptorPoolSize::default()
-            .ty(vk::DescriptorType::STORAGE_BUFFER)
-            .descriptor_count(desc.bindings.max(1) * desc.sets.max(1))];
+        let sizes: Vec<_> = [
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::DescriptorType::UNIFORM_BUFFER,
+            vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        ]
+        .into_iter()
+        .map(|ty| {
+            let count = me.kinds.iter().filter(|&&k| k == ty).count() as u32;
+            vk::DescriptorPoolSize::default().ty(ty).descriptor_count(count.max(1) * desc.sets.max(1))
+        })
+        .collect();
         let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(desc.sets.max(1)).pool_sizes(&sizes);
         // SAFETY: a valid create info.
         me.pool =
@@ -113,22 +135,39 @@ impl ComputePipeline {
         Ok(me)
     }
 
-    /// Points the given bindings of descriptor set `set` at whole buffers. A
-    /// binding the pass does not use may stay unbound.
-    pub fn bind(&self, set: usize, buffers: &[(u32, &Buffer)]) -> Result<()> {
+    /// Descriptor set `set`, checked to exist, and each binding checked to be of `kind`.
+    fn set_for(&self, set: usize, bindings: &[u32], kind: &str) -> Result<vk::DescriptorSet> {
         let target = *self
             .sets
             .get(set)
             .ok_or_else(|| Error::invalid(format!("the pipeline has no descriptor set {set}")))?;
-        if let Some((b, _)) = buffers.iter().find(|(b, _)| *b >= self.bindings) {
-            return Err(Error::invalid(format!(
-                "binding {b} is outside the pipeline's {} bindings",
-                self.bindings
-            )));
+        for &b in bindings {
+            let found = self.kinds.get(b as usize).ok_or_else(|| {
+                Error::invalid(format!("binding {b} is outside the pipeline's {} bindings", self.kinds.len()))
+            })?;
+            let image = *found == vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+            if image != (kind == "image") {
+                return Err(Error::invalid(format!("binding {b} is a {found:?}, not a {kind}")));
+            }
         }
+        Ok(target)
+    }
+
+    /// Points the given bindings of descriptor set `set` at whole buffers. A
+    /// binding the pass does not use may stay unbound.
+    pub fn bind(&self, set: usize, buffers: &[(u32, &Buffer)]) -> Result<()> {
+        let raw: Vec<(u32, vk::Buffer)> = buffers.iter().map(|(b, buffer)| (*b, buffer.raw)).collect();
+        self.bind_raw(set, &raw)
+    }
+
+    /// As `bind`, for buffers fsot did not make (a host's): the caller keeps
+    /// them alive while the set is used.
+    pub fn bind_raw(&self, set: usize, buffers: &[(u32, vk::Buffer)]) -> Result<()> {
+        let bindings: Vec<u32> = buffers.iter().map(|(b, _)| *b).collect();
+        let target = self.set_for(set, &bindings, "buffer")?;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
-            .map(|(_, b)| [vk::DescriptorBufferInfo::default().buffer(b.raw).offset(0).range(vk::WHOLE_SIZE)])
+            .map(|(_, b)| [vk::DescriptorBufferInfo::default().buffer(*b).offset(0).range(vk::WHOLE_SIZE)])
             .collect();
         let writes: Vec<_> = infos
             .iter()
@@ -137,12 +176,36 @@ impl ComputePipeline {
                 vk::WriteDescriptorSet::default()
                     .dst_set(target)
                     .dst_binding(*binding)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(self.kinds[*binding as usize])
                     .buffer_info(info)
             })
             .collect();
         // SAFETY: the set is not in use by a pending submission (every submission is waited for).
         unsafe { self.ctx.device().update_descriptor_sets(&writes, &[]) };
+        Ok(())
+    }
+
+    /// Points a combined image-sampler binding of set `set` at an image view
+    /// (in `layout` when the pass runs) and a sampler.
+    pub fn bind_image(
+        &self,
+        set: usize,
+        binding: u32,
+        view: vk::ImageView,
+        sampler: vk::Sampler,
+        layout: vk::ImageLayout,
+    ) -> Result<()> {
+        let target = self.set_for(set, &[binding], "image")?;
+        let info =
+            [vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)];
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(target)
+            .dst_binding(binding)
+            .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+            .image_info(&info);
+        // SAFETY: the set is not in use by a pending submission; the view and
+        // sampler are alive (the caller keeps them while the set is used).
+        unsafe { self.ctx.device().update_descriptor_sets(&[write], &[]) };
         Ok(())
     }
 

@@ -186,6 +186,8 @@ impl RadixSort {
                     push_bytes: std::mem::size_of::<RadixPush>() as u32,
                     spec: &spec,
                     sets: 2,
+                    images: &[],
+                    uniforms: &[],
                 },
             )
         };
@@ -210,6 +212,8 @@ impl RadixSort {
                     push_bytes: 0,
                     spec: &block,
                     sets: 1,
+                    images: &[],
+                    uniforms: &[],
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
                 pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])?;

@@ -26,3 +26,27 @@ pub fn assert_no_validation_messages(ctx: &Context) {
         messages.iter().take(3).cloned().collect::<Vec<_>>().join("\n")
     );
 }
+
+/// Compiles a compute shader against `glsl/include` (the public include) with
+/// glslangValidator for Vulkan 1.2; None when glslangValidator is missing (said
+/// on stderr as SKIPPED).
+pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("shader.comp");
+    std::fs::write(&src, source).unwrap();
+    let include = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include");
+    let out = dir.path().join("shader.spv");
+    let run = std::process::Command::new("glslangValidator")
+        .args(["-V", "--target-env", "vulkan1.2"])
+        .arg(format!("-I{}", include.display()))
+        .arg(&src)
+        .arg("-o")
+        .arg(&out)
+        .output();
+    let Ok(run) = run else {
+        eprintln!("SKIPPED: glslangValidator is not installed (scripts/install-deps.sh installs it)");
+        return None;
+    };
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
+    Some(std::fs::read(out).unwrap())
+}

@@ -1,0 +1,563 @@
+//! Masks straight into a renderer's memory (`fsot::renderer`): the test plays
+//! the renderer. It makes its own Vulkan instance (validation layer on, its own
+//! messenger), device, queue, image and buffers with `ash`, hands them to fsot
+//! through `Context::wrap` with its queue lock, and reads the image back with
+//! its own commands on its own queue. What it finds must be the mask the CPU
+//! path makes for the same settings, quantised; the include, run on the GPU
+//! over the image fsot wrote, must give what `SamplerPlan::value` says; images
+//! that cannot hold the mask are refused before any GPU work; validation stays
+//! silent throughout.
+
+mod common;
+
+use std::ffi::c_void;
+use std::sync::{Arc, Mutex};
+
+use ash::vk;
+use fsot::io::ktx2::{quantize, texels, Format};
+use fsot::mask::Mask;
+use fsot::problem::Tile;
+use fsot::renderer::{
+    layers_for, make_into_image, vk_format, write_mask_to_buffer, write_plan, write_plan_block,
+};
+use fsot::run::{optimize, CancelFlag};
+use fsot::sampler::{SamplerPart, SamplerPlan};
+use fsot::settings::Settings;
+use fsot::vk::{BufferTarget, ComputeDesc, ComputePipeline, Context, ExternalDevice, ImageTarget};
+
+/// What the validation layer said to the renderer's messenger.
+static MESSAGES: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+unsafe extern "system" fn on_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    _user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes a valid callback data pointer whose message is a C string.
+    let text = unsafe { data.as_ref() }
+        .and_then(|d| unsafe { d.message_as_c_str() })
+        .map(|m| m.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+    ) {
+        MESSAGES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).push(text);
+    }
+    vk::FALSE
+}
+
+/// The renderer: its instance, device, queue and the lock around its queue.
+struct Renderer {
+    entry: ash::Entry,
+    instance: ash::Instance,
+    debug: ash::ext::debug_utils::Instance,
+    messenger: vk::DebugUtilsMessengerEXT,
+    physical: vk::PhysicalDevice,
+    device: ash::Device,
+    family: u32,
+    queue: vk::Queue,
+    lock: Arc<Mutex<()>>,
+}
+
+impl Renderer {
+    /// None only where GPU tests are skipped (FSOT_SKIP_GPU_TESTS=1).
+    fn new() -> Option<Self> {
+        common::gpu_context()?; // the same rule for skipping as every GPU test
+                                // SAFETY: loading the system's Vulkan loader.
+        let entry = unsafe { ash::Entry::load() }.expect("a Vulkan loader");
+        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
+        let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
+        let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layers)
+            .enabled_extension_names(&extensions);
+        // SAFETY: the create info and its arrays live through the call.
+        let instance = unsafe { entry.create_instance(&info, None) }.expect("an instance with validation");
+        let debug = ash::ext::debug_utils::Instance::new(&entry, &instance);
+        let messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+            .message_severity(
+                vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+            )
+            .message_type(
+                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+            )
+            .pfn_user_callback(Some(on_message));
+        // SAFETY: the callback is a plain function valid for the program's life.
+        let messenger = unsafe { debug.create_debug_utils_messenger(&messenger_info, None) }.unwrap();
+        // SAFETY: plain queries on a live instance.
+        let physical = unsafe { instance.enumerate_physical_devices() }.unwrap()[0];
+        // SAFETY: as above.
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let family =
+            families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)).unwrap() as u32;
+        let priorities = [1.0f32];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
+        // The Vulkan optimizer needs 64-bit buffer atomics; the renderer enables them.
+        let features = vk::PhysicalDeviceFeatures::default().shader_int64(true);
+        let mut features12 = vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(true);
+        let create = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_features(&features)
+            .push_next(&mut features12);
+        // SAFETY: the create info and what it points to live through the call.
+        let device = unsafe { instance.create_device(physical, &create, None) }.unwrap();
+        // SAFETY: the queue was created with the device.
+        let queue = unsafe { device.get_device_queue(family, 0) };
+        let lock = Arc::new(Mutex::new(()));
+        Some(Self { entry, instance, debug, messenger, physical, device, family, queue, lock })
+    }
+
+    /// fsot's context on the renderer's device, sharing its queue lock.
+    fn fsot(&self) -> Context {
+        Context::wrap(ExternalDevice {
+            entry: self.entry.clone(),
+            instance: self.instance.clone(),
+            physical_device: self.physical,
+            device: self.device.clone(),
+            queue_family: self.family,
+            queue_index: 0,
+            int64_atomics: true,
+            float_atomic_add: false,
+            queue_lock: Some(self.lock.clone()),
+        })
+        .unwrap()
+    }
+
+    fn memory_type(&self, bits: u32, flags: vk::MemoryPropertyFlags) -> u32 {
+        // SAFETY: a plain query.
+        let props = unsafe { self.instance.get_physical_device_memory_properties(self.physical) };
+        (0..props.memory_type_count)
+            .find(|&i| bits & (1 << i) != 0 && props.memory_types[i as usize].property_flags.contains(flags))
+            .expect("a memory type")
+    }
+
+    fn bind_memory(
+        &self,
+        requirements: vk::MemoryRequirements,
+        flags: vk::MemoryPropertyFlags,
+    ) -> vk::DeviceMemory {
+        let info = vk::MemoryAllocateInfo::default()
+            .allocation_size(requirements.size)
+            .memory_type_index(self.memory_type(requirements.memory_type_bits, flags));
+        // SAFETY: a valid allocate info.
+        unsafe { self.device.allocate_memory(&info, None) }.unwrap()
+    }
+
+    /// The renderer's own 2-D array image with its memory.
+    fn image(
+        &self,
+        format: vk::Format,
+        w: u32,
+        h: u32,
+        layers: u32,
+        usage: vk::ImageUsageFlags,
+    ) -> HostImage {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: w, height: h, depth: 1 })
+            .mip_levels(1)
+            .array_layers(layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: a valid create info on a live device.
+        let image = unsafe { self.device.create_image(&info, None) }.unwrap();
+        // SAFETY: the image was just made.
+        let memory = self.bind_memory(
+            unsafe { self.device.get_image_memory_requirements(image) },
+            vk::MemoryPropertyFlags::DEVICE_LOCAL,
+        );
+        // SAFETY: fresh memory of the image's requirements.
+        unsafe { self.device.bind_image_memory(image, memory, 0) }.unwrap();
+        let target = ImageTarget {
+            image,
+            format,
+            width: w,
+            height: h,
+            layers,
+            usage,
+            layout_before: vk::ImageLayout::UNDEFINED,
+            layout_after: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        };
+        HostImage { target, memory }
+    }
+
+    /// A host-visible buffer of the renderer's.
+    fn buffer(&self, size: u64, usage: vk::BufferUsageFlags) -> (vk::Buffer, vk::DeviceMemory) {
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage);
+        // SAFETY: a valid create info.
+        let buffer = unsafe { self.device.create_buffer(&info, None) }.unwrap();
+        // SAFETY: the buffer was just made.
+        let memory = self.bind_memory(
+            unsafe { self.device.get_buffer_memory_requirements(buffer) },
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        );
+        // SAFETY: fresh memory of the buffer's requirements.
+        unsafe { self.device.bind_buffer_memory(buffer, memory, 0) }.unwrap();
+        (buffer, memory)
+    }
+
+    fn read_memory(&self, memory: vk::DeviceMemory, bytes: usize) -> Vec<u8> {
+        // SAFETY: host-visible, coherent memory no submission is writing now.
+        unsafe {
+            let at = self.device.map_memory(memory, 0, bytes as u64, vk::MemoryMapFlags::empty()).unwrap();
+            let out = std::slice::from_raw_parts(at as *const u8, bytes).to_vec();
+            self.device.unmap_memory(memory);
+            out
+        }
+    }
+
+    /// Records `record` and submits it on the renderer's queue under its lock; waits.
+    fn run(&self, record: impl FnOnce(vk::CommandBuffer)) {
+        let d = &self.device;
+        // SAFETY: objects made and destroyed here; the queue is used under the lock.
+        unsafe {
+            let pool = d
+                .create_command_pool(
+                    &vk::CommandPoolCreateInfo::default().queue_family_index(self.family),
+                    None,
+                )
+                .unwrap();
+            let alloc = vk::CommandBufferAllocateInfo::default().command_pool(pool).command_buffer_count(1);
+            let cmd = d.allocate_command_buffers(&alloc).unwrap()[0];
+            d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default()).unwrap();
+            record(cmd);
+            d.end_command_buffer(cmd).unwrap();
+            let fence = d.create_fence(&vk::FenceCreateInfo::default(), None).unwrap();
+            let cmds = [cmd];
+            {
+                let _queue = self.lock.lock().unwrap();
+                d.queue_submit(self.queue, &[vk::SubmitInfo::default().command_buffers(&cmds)], fence)
+                    .unwrap();
+            }
+            d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+            d.destroy_fence(fence, None);
+            d.destroy_command_pool(pool, None);
+        }
+    }
+
+    /// The image's bytes, read back with the renderer's own copy from
+    /// SHADER_READ_ONLY_OPTIMAL (where fsot left it).
+    fn read_image(&self, image: &HostImage, texel_bytes: usize) -> Vec<u8> {
+        let t = &image.target;
+        let bytes = t.width as usize * t.height as usize * t.layers as usize * texel_bytes;
+        let (buffer, memory) = self.buffer(bytes as u64, vk::BufferUsageFlags::TRANSFER_DST);
+        let range = vk::ImageSubresourceRange::default()
+            .aspect_mask(vk::ImageAspectFlags::COLOR)
+            .level_count(1)
+            .layer_count(t.layers);
+        self.run(|cmd| {
+            let to_src = vk::ImageMemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::SHADER_READ)
+                .dst_access_mask(vk::AccessFlags::TRANSFER_READ)
+                .old_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)
+                .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(t.image)
+                .subresource_range(range);
+            let region = vk::BufferImageCopy::default()
+                .image_subresource(
+                    vk::ImageSubresourceLayers::default()
+                        .aspect_mask(vk::ImageAspectFlags::COLOR)
+                        .layer_count(t.layers),
+                )
+                .image_extent(vk::Extent3D { width: t.width, height: t.height, depth: 1 });
+            let to_host = vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
+                .dst_access_mask(vk::AccessFlags::HOST_READ);
+            // SAFETY: `cmd` is being recorded; the image and buffer are alive.
+            unsafe {
+                self.device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::COMPUTE_SHADER,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::DependencyFlags::empty(),
+                    &[],
+                    &[],
+                    &[to_src],
+                );
+                self.device.cmd_copy_image_to_buffer(
+                    cmd,
+                    t.image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    buffer,
+                    &[region],
+                );
+                self.device.cmd_pipeline_barrier(
+                    cmd,
+                    vk::PipelineStageFlags::TRANSFER,
+                    vk::PipelineStageFlags::HOST,
+                    vk::DependencyFlags::empty(),
+                    &[to_host],
+                    &[],
+                    &[],
+                );
+            }
+        });
+        let out = self.read_memory(memory, bytes);
+        self.free_buffer(buffer, memory);
+        out
+    }
+
+    fn free_buffer(&self, buffer: vk::Buffer, memory: vk::DeviceMemory) {
+        // SAFETY: no submission uses them (every one was waited for).
+        unsafe {
+            self.device.destroy_buffer(buffer, None);
+            self.device.free_memory(memory, None);
+        }
+    }
+
+    fn free_image(&self, image: HostImage) {
+        // SAFETY: as above.
+        unsafe {
+            self.device.destroy_image(image.target.image, None);
+            self.device.free_memory(image.memory, None);
+        }
+    }
+
+    fn assert_silent(&self) {
+        let messages = MESSAGES.lock().unwrap_or_else(|poisoned| poisoned.into_inner()).clone();
+        assert!(messages.is_empty(), "validation: {}", messages.join("\n"));
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        // SAFETY: fsot's contexts are gone and nothing is pending; the renderer
+        // destroys what it made (fsot never does).
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_device(None);
+            self.debug.destroy_debug_utils_messenger(self.messenger, None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+struct HostImage {
+    target: ImageTarget,
+    memory: vk::DeviceMemory,
+}
+
+fn u16s(bytes: &[u8]) -> Vec<u16> {
+    bytes.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect()
+}
+
+const SAMPLED: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::SAMPLED.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_DST.as_raw()
+        | vk::ImageUsageFlags::TRANSFER_SRC.as_raw(),
+);
+
+#[test]
+fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_it() {
+    let Some(host) = Renderer::new() else { return };
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    let mut settings =
+        Settings::new(fsot::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 7);
+    settings.iterations = 3;
+    let image = host.image(vk::Format::R16G16_UNORM, 16, 16, layers_for(&tile, 1), SAMPLED);
+    let made = {
+        let ctx = host.fsot();
+        let mask = make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {})
+            .unwrap()
+            .expect("not cancelled");
+        assert!(ctx.validation_messages().is_empty()); // fsot's own sink is empty on a wrapped device
+        mask
+    }; // fsot's context is gone: the renderer's device, queue and image live on
+    let got = u16s(&host.read_image(&image, 4));
+    // Exactly the returned mask, quantised to round(v 65535), frame by frame, row by row.
+    let want = u16s(&texels(&made, Format::R16G16Unorm).unwrap());
+    assert_eq!(got, want);
+    // And the mask the CPU path makes for the same settings, quantised: the two
+    // backends agree to float rounding (1e-5), so a level apart at most.
+    let cpu = optimize(tile, settings, None).unwrap();
+    let mut equal = 0;
+    for (i, &g) in got.iter().enumerate() {
+        let (x, y, f, k) = ((i / 2) % 16, (i / 32) % 16, i / 512, i % 2);
+        let level = quantize(cpu.sample(x, y, f, 0)[k], 16) as i64;
+        assert!((g as i64 - level).abs() <= 1, "texel {i}: image {g}, CPU path {level}");
+        equal += (g as i64 == level) as usize;
+    }
+    assert!(equal * 100 >= got.len() * 95, "{equal} of {} levels equal", got.len());
+    host.free_image(image);
+    host.assert_silent();
+}
+
+/// The renderer's shader: for every pixel, frame (three loops of the tile) and
+/// part (one past the last), the include's value.
+const PROBE: &str = r#"#version 450
+#extension GL_GOOGLE_include_directive : require
+#define FSOT_SET 0
+#define FSOT_BINDING 1
+#include "fsot.glsl"
+layout(set = 0, binding = 0, std430) buffer Out { vec4 values[]; };
+layout(local_size_x = 64) in;
+void main() {
+    uint w = fsot_tile.x, h = fsot_tile.y, frames = 3u * fsot_tile.z, reads = fsot_count.x + 1u;
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= w * h * frames) return;
+    FsotSampler s = fsot_start(uvec2(i % w, (i / w) % h), i / (w * h), 0u);
+    for (uint k = 0u; k < reads; ++k) values[i * reads + k] = fsot_get(s);
+}
+"#;
+
+#[test]
+fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_says() {
+    let Some(host) = Renderer::new() else { return };
+    let Some(spirv) = common::compile_glsl(PROBE) else { return };
+    let tile = |d| Tile::new(8, 4, 3, 1, d).unwrap();
+    let plan = SamplerPlan {
+        masks: vec![Mask::white(tile(2), 1), Mask::white(tile(1), 2)],
+        parts: vec![
+            SamplerPart { mask: 0, dims: 2, offset: [0; 3], shift: vec![0.0, 0.0] },
+            SamplerPart { mask: 1, dims: 1, offset: [5, 3, 2], shift: vec![0.75] },
+            SamplerPart { mask: 0, dims: 2, offset: [3, 1, 1], shift: vec![0.25, 0.5] },
+        ],
+    };
+    let format = Format::R16G16Unorm;
+    let image = host.image(vk_format(format), 8, 4, layers_for(&tile(2), 2), SAMPLED);
+    let block_bytes = plan.plan_block().unwrap().len() as u64;
+    let (block, block_memory) =
+        host.buffer(block_bytes, vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST);
+    let ctx = host.fsot();
+    write_plan(&ctx, &plan, &image.target).unwrap();
+    let block_target = BufferTarget {
+        buffer: block,
+        size: block_bytes,
+        usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        offset: 0,
+    };
+    write_plan_block(&ctx, &plan, &block_target).unwrap();
+    assert_eq!(host.read_memory(block_memory, block_bytes as usize), plan.plan_block().unwrap());
+
+    // Run the probe through fsot's pipeline helper on the renderer's device, with
+    // the renderer's own view and sampler.
+    let d = &host.device;
+    let view_info = vk::ImageViewCreateInfo::default()
+        .image(image.target.image)
+        .view_type(vk::ImageViewType::TYPE_2D_ARRAY)
+        .format(image.target.format)
+        .subresource_range(
+            vk::ImageSubresourceRange::default()
+                .aspect_mask(vk::ImageAspectFlags::COLOR)
+                .level_count(1)
+                .layer_count(image.target.layers),
+        );
+    // SAFETY: the image is alive and bound.
+    let view = unsafe { d.create_image_view(&view_info, None) }.unwrap();
+    // SAFETY: a default sampler.
+    let sampler = unsafe { d.create_sampler(&vk::SamplerCreateInfo::default(), None) }.unwrap();
+    let reads = plan.parts.len() + 1;
+    let count = 8 * 4 * 9;
+    let out = fsot::vk::Buffer::new(&ctx, (count * reads * 16) as u64, fsot::vk::Location::Device, "probe")
+        .unwrap();
+    let desc = ComputeDesc {
+        spirv: &spirv,
+        bindings: 3,
+        push_bytes: 0,
+        spec: &[],
+        sets: 1,
+        images: &[1],
+        uniforms: &[2],
+    };
+    let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
+    pipeline.bind_image(0, 1, view, sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
+    pipeline.bind(0, &[(0, &out)]).unwrap();
+    pipeline.bind_raw(0, &[(2, block)]).unwrap(); // the renderer's own uniform buffer
+    ctx.submit(|cmd| {
+        pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &[]);
+        fsot::vk::commands::barrier(&ctx, cmd);
+    })
+    .unwrap();
+    let got: Vec<[f32; 4]> = out.download(count * reads).unwrap();
+    let mut fallback = Vec::new();
+    for i in 0..count {
+        let (x, y, f) = ((i % 8) as u32, ((i / 8) % 4) as u32, (i / 32) as u32);
+        for k in 0..reads {
+            let v = got[i * reads + k];
+            match plan.value(k, x, y, f, 0, format) {
+                Some(want) => {
+                    for j in 0..plan.parts[k].dims {
+                        assert!(
+                            (v[j] - want[j]).abs() < 1e-6,
+                            "pixel ({x}, {y}) frame {f} part {k}: {v:?} vs {want:?}"
+                        );
+                    }
+                }
+                None => fallback.push(v[0]),
+            }
+        }
+    }
+    // Past the last part: defined white noise in [0, 1), not the masks.
+    assert_eq!(fallback.len(), count);
+    assert!(fallback.iter().all(|v| (0.0..1.0).contains(v)));
+    let mean = fallback.iter().sum::<f32>() / count as f32;
+    assert!((mean - 0.5).abs() < 0.1, "fallback mean {mean}");
+    drop((pipeline, out, ctx));
+    // SAFETY: nothing pending uses them.
+    unsafe {
+        d.destroy_sampler(sampler, None);
+        d.destroy_image_view(view, None);
+    }
+    host.free_buffer(block, block_memory);
+    host.free_image(image);
+    host.assert_silent();
+}
+
+#[test]
+fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work() {
+    let Some(host) = Renderer::new() else { return };
+    let ctx = host.fsot();
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let mask = Mask::white(tile, 3);
+    let layers = layers_for(&tile, 1);
+    let cases: [(vk::Format, u32, u32, vk::ImageUsageFlags, &str); 5] = [
+        (vk::Format::R16G16_UNORM, 8, 4, SAMPLED, "the image is 8x4, the mask's tile 8x8"),
+        (vk::Format::R16G16_UNORM, 8, 8, SAMPLED, "layers"),
+        (vk::Format::B8G8R8A8_UNORM, 8, 8, SAMPLED, "fsot cannot write B8G8R8A8_UNORM"),
+        (vk::Format::R8_UNORM, 8, 8, SAMPLED, "r8_unorm has 1 channel, the mask has d = 2"),
+        (vk::Format::R16G16_UNORM, 8, 8, vk::ImageUsageFlags::SAMPLED, "lacks TRANSFER_DST"),
+    ];
+    for (k, (format, w, h, usage, says)) in cases.into_iter().enumerate() {
+        let image = host.image(format, w, h, if k == 1 { layers * 2 } else { layers }, usage);
+        let err = write_plan(&ctx, &SamplerPlan::single(mask.clone()).unwrap(), &image.target).unwrap_err();
+        assert!(err.to_string().contains(says), "case {k}: {err}");
+        // Refused before the optimizer starts: no iteration is run.
+        let mut events = 0;
+        let settings =
+            Settings::new(fsot::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
+        let err =
+            make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| events += 1)
+                .unwrap_err();
+        assert!(err.to_string().contains(says), "case {k}: {err}");
+        assert_eq!(events, 0);
+        host.free_image(image);
+    }
+    // A buffer: too small, or without TRANSFER_DST.
+    let bytes = (8 * 8 * 4 * 4) as u64;
+    let (buffer, memory) =
+        host.buffer(bytes, vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::STORAGE_BUFFER);
+    let target = BufferTarget { buffer, size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, offset: 4 };
+    let err = write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap_err();
+    assert!(err.to_string().contains("do not fit"), "{err}");
+    let target = BufferTarget { offset: 0, usage: vk::BufferUsageFlags::STORAGE_BUFFER, ..target };
+    let err = write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap_err();
+    assert!(err.to_string().contains("lacks TRANSFER_DST"), "{err}");
+    // And one that fits: the texels land as the KTX2 file lays them out.
+    let target = BufferTarget { usage: vk::BufferUsageFlags::TRANSFER_DST, ..target };
+    write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap();
+    assert_eq!(host.read_memory(memory, bytes as usize), texels(&mask, Format::R16G16Unorm).unwrap());
+    drop(ctx);
+    host.free_buffer(buffer, memory);
+    host.assert_silent();
+}
