@@ -77,6 +77,9 @@ check "ktx2 d = 5"         optimize --size 4x4x2 --iterations 3 --dims 5 --out m
 check "score garbage"      score garbage.exr
 check "eval bad scene"     eval --quick --scenes nope --out evalout
 check "eval bad sigma"     eval --quick --sigma -1 --out evalout
+check "eval mask no name"  eval --quick --mask small.exr --out evalout
+check "eval mask taken"    eval --quick --mask stbn=small.exr --out evalout
+check "eval mask garbage"  eval --quick --mask mine=garbage.exr --out evalout
 # Interrupted after a few seconds of work: Ctrl-C (SIGINT), SIGTERM, SIGKILL.
 for sig in INT TERM KILL; do
     "$fsot" optimize --backend cpu --size 64x64x16 --iterations 100000 --out existing.exr >/dev/null 2>err.txt &

@@ -35,27 +35,32 @@ impl Eye {
     /// Frame `f` of `frames` (n x n images) as the eye sees it, on the interior
     /// (margin pixels cut from each side), row by row. Needs f >= history().
     pub fn filter(&self, frames: &[Vec<f64>], f: usize, n: usize) -> Vec<f64> {
-        let mut temporal = vec![0.0f64; n * n];
-        for (k, w) in self.temporal.iter().enumerate() {
+        self.filter_rect(frames, f, n, n)
+    }
+
+    /// As `filter`, for w x h images: the interior is (w - 2 margin) x (h - 2 margin).
+    pub fn filter_rect(&self, frames: &[Vec<f64>], f: usize, w: usize, h: usize) -> Vec<f64> {
+        let mut temporal = vec![0.0f64; w * h];
+        for (k, weight) in self.temporal.iter().enumerate() {
             for (t, e) in temporal.iter_mut().zip(&frames[f - k]) {
-                *t += w * e;
+                *t += weight * e;
             }
         }
         let m = self.margin;
-        let inner = n.saturating_sub(2 * m);
+        let (inner_w, inner_h) = (w.saturating_sub(2 * m), h.saturating_sub(2 * m));
         // Along x (every row, interior columns), then along y (interior rows).
-        let rows: Vec<f64> = (0..n * inner)
+        let rows: Vec<f64> = (0..h * inner_w)
             .into_par_iter()
             .map(|i| {
-                let (x, y) = (i % inner, i / inner);
-                self.spatial.iter().enumerate().map(|(k, w)| w * temporal[y * n + x + k]).sum()
+                let (x, y) = (i % inner_w, i / inner_w);
+                self.spatial.iter().enumerate().map(|(k, wk)| wk * temporal[y * w + x + k]).sum()
             })
             .collect();
-        (0..inner * inner)
+        (0..inner_w * inner_h)
             .into_par_iter()
             .map(|i| {
-                let (x, y) = (i % inner, i / inner);
-                self.spatial.iter().enumerate().map(|(k, w)| w * rows[(y + k) * inner + x]).sum()
+                let (x, y) = (i % inner_w, i / inner_w);
+                self.spatial.iter().enumerate().map(|(k, wk)| wk * rows[(y + k) * inner_w + x]).sum()
             })
             .collect()
     }
@@ -85,5 +90,38 @@ mod tests {
         let (a, b) = (eye.spatial[eye.margin + 2] * eye.spatial[eye.margin + 1], spatial_centre);
         assert!((a / b - (-5.0f64 / (2.1 * 2.1)).exp()).abs() < 1e-12);
         assert!((out.iter().sum::<f64>() - eye.temporal[0]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_rectangular_image_is_filtered_as_the_brute_force_gaussian_of_its_interior() {
+        let eye = Eye::new(1.3, 60.0);
+        let (w, h) = (17, 11);
+        let history = eye.history();
+        let mut stream = crate::rng::Stream::new(5);
+        let frames: Vec<Vec<f64>> =
+            (0..=history).map(|_| (0..w * h).map(|_| stream.next_f64()).collect()).collect();
+        let got = eye.filter_rect(&frames, history, w, h);
+        let m = eye.margin as i64;
+        let (inner_w, inner_h) = (w - 2 * eye.margin, h - 2 * eye.margin);
+        assert_eq!(got.len(), inner_w * inner_h);
+        // The 2-D Gaussian exp(-r^2 / sigma^2) over the (2m + 1)^2 window,
+        // normalised as a whole, and the temporal taps as the eye holds them.
+        let weight = |dx: i64, dy: i64| (-((dx * dx + dy * dy) as f64) / (1.3 * 1.3)).exp();
+        let total: f64 = (-m..=m).flat_map(|dy| (-m..=m).map(move |dx| weight(dx, dy))).sum();
+        for y in 0..inner_h as i64 {
+            for x in 0..inner_w as i64 {
+                let mut want = 0.0;
+                for (k, wt) in eye.temporal.iter().enumerate() {
+                    for dy in -m..=m {
+                        for dx in -m..=m {
+                            let at = ((y + m + dy) * w as i64 + x + m + dx) as usize;
+                            want += wt * weight(dx, dy) / total * frames[history - k][at];
+                        }
+                    }
+                }
+                let v = got[y as usize * inner_w + x as usize];
+                assert!((v - want).abs() < 1e-12, "({x}, {y}): {v} against {want}");
+            }
+        }
     }
 }

@@ -6,7 +6,7 @@ use crate::eval::suite::EPSILON;
 
 /// (pRelMSE, RelMSE) of one render against the reference, over the frames from
 /// `start` (`seen_reference[f - start]`: what the eye sees of reference frame f)
-/// and the image interior the eye's margin leaves.
+/// and the image interior the eye's margin leaves; n x n images.
 pub fn relative_errors(
     render: &[Vec<f64>],
     reference: &[Vec<f64>],
@@ -15,17 +15,29 @@ pub fn relative_errors(
     start: usize,
     n: usize,
 ) -> (f64, f64) {
+    relative_errors_rect(render, reference, seen_reference, eye, start, [n, n])
+}
+
+/// As `relative_errors`, for w x h images (`Eye::filter_rect`).
+pub fn relative_errors_rect(
+    render: &[Vec<f64>],
+    reference: &[Vec<f64>],
+    seen_reference: &[Vec<f64>],
+    eye: &Eye,
+    start: usize,
+    [w, h]: [usize; 2],
+) -> (f64, f64) {
     let m = eye.margin;
-    let inner = n - 2 * m;
+    let inner = w - 2 * m;
     let error: Vec<Vec<f64>> =
         render.iter().zip(reference).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
     let (mut p_sum, mut r_sum, mut count) = (0.0, 0.0, 0usize);
     for f in start..render.len() {
-        let seen = eye.filter(&error, f, n);
+        let seen = eye.filter_rect(&error, f, w, h);
         for (i, (&e, &r)) in seen.iter().zip(&seen_reference[f - start]).enumerate() {
             p_sum += e * e / (r * r + EPSILON);
             let (x, y) = (i % inner + m, i / inner + m);
-            let (e, r) = (error[f][y * n + x], reference[f][y * n + x]);
+            let (e, r) = (error[f][y * w + x], reference[f][y * w + x]);
             r_sum += e * e / (r * r + EPSILON);
             count += 1;
         }

@@ -23,6 +23,19 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             })
             .collect::<Result<_>>()?
     };
+    // Masks to measure besides the methods, read before anything is written.
+    let mut own = Vec::new();
+    for spec in &args.masks {
+        let (name, file) = spec
+            .split_once('=')
+            .filter(|(n, f)| !n.is_empty() && !f.is_empty())
+            .ok_or_else(|| Error::invalid(format!("--mask {spec:?}: expected NAME=FILE")))?;
+        let taken = fsot::eval::suite::METHODS.contains(&name) || name.starts_with("published-");
+        if taken || name.starts_with("fsot-planned") || own.iter().any(|(n, _)| n == name) {
+            return Err(Error::invalid(format!("--mask {spec:?}: the name {name} is taken")));
+        }
+        own.push((name.to_string(), fsot::io::exr::read(std::path::Path::new(file))?));
+    }
     fsot::io::atomic::make_folder(&args.out)?;
     // Reserve the outputs before the long work: a bad path fails now.
     let md = AtomicFile::create(&args.out.join("results.md"))?;
@@ -51,6 +64,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             published.push((name.to_string(), fsot::io::stacked_png::read(&dir.join(file))?));
         }
     }
+    published.extend(own);
     let pictures = args.out.join("pictures");
     let cache = cache_dir(&args.out);
     let records = run_eval(&size, &args.sigma, &scenes, &cache, Some(&pictures), &published, |line| {

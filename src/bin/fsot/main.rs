@@ -99,6 +99,9 @@ struct EvalArgs {
     /// as `published-stbn` and `published-fast`.
     #[arg(long)]
     peers: Option<PathBuf>,
+    /// Also measure this mask file (.exr), as method NAME; repeatable.
+    #[arg(long = "mask", value_name = "NAME=FILE")]
+    masks: Vec<String>,
     /// Iterations of fsot's masks [default: 500 with --quick, else 1000].
     #[arg(long, allow_negative_numbers = true)]
     iterations: Option<u32>,
