@@ -10,7 +10,7 @@
 //! sigma 2.1 at 60 fps, the frames after a 48-frame warm-up).
 //!
 //! cargo run --release --example taa_renderer -- [--frames N] [--size WxH]
-//!     [--mask FILE|DIR] [--iterations N] [--out DIR] [--json FILE] [--no-validation]
+//!     [--mask FILE|DIR] [--iterations N] [--seed N] [--out DIR] [--json FILE] [--no-validation]
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -61,6 +61,9 @@ struct Args {
     /// Iterations of the mask made on the device (32x32x16, d = 2, perceptual-taa).
     #[arg(long, default_value_t = 500)]
     iterations: u32,
+    /// Seed of the mask made on the device.
+    #[arg(long, default_value_t = 7)]
+    seed: u64,
     /// Write PNG frames (reference | white | fsot, after TAA) and an animated
     /// preview (APNG) here.
     #[arg(long)]
@@ -167,7 +170,8 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
         return Ok((bind_plan(ctx, plan, "fsot-masks")?, what));
     }
     let tile = Tile::new(32, 32, 16, 1, 2)?;
-    let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", SIGMA, None, 0.1, FPS)?, 7);
+    let mut settings =
+        Settings::new(KernelSpec::from_name("perceptual-taa", SIGMA, None, 0.1, FPS)?, args.seed);
     settings.iterations = args.iterations;
     let mut image = mask_image(ctx, &tile, 1, "fsot-mask")?;
     let target = image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
@@ -184,7 +188,8 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     eprintln!();
     image.layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let what = format!(
-        "32x32x16 perceptual-taa, {} iterations made on the device in {:.1} s",
+        "32x32x16 perceptual-taa, seed {}, {} iterations made on the device in {:.1} s",
+        args.seed,
         args.iterations,
         start.elapsed().as_secs_f64()
     );

@@ -33,6 +33,7 @@ use ash::vk;
 
 use crate::backend::BackendChoice;
 use crate::error::{Error, Result};
+use crate::gpu::VulkanOptions;
 use crate::io::ktx2::Format;
 use crate::mask::Mask;
 use crate::problem::Tile;
@@ -114,10 +115,11 @@ pub fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: 
     fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?)
 }
 
-/// Makes a mask on the context's device (the Vulkan optimizer, `settings` as
-/// for `fsot optimize`) and writes it into the renderer's image. The image is
-/// checked before the optimization starts. Returns the mask (None when
-/// `cancel` stopped the run: nothing is written then).
+/// Makes a mask on the context's device (the Vulkan optimizer in its
+/// deterministic mode, so the same settings give the same mask bit for bit,
+/// run to run; `settings` as for `fsot optimize`) and writes it into the
+/// renderer's image. The image is checked before the optimization starts.
+/// Returns the mask (None when `cancel` stopped the run: nothing is written then).
 pub fn make_into_image(
     ctx: &Context,
     tile: Tile,
@@ -127,8 +129,12 @@ pub fn make_into_image(
     on: &mut dyn FnMut(Event),
 ) -> Result<Option<Mask>> {
     check_image(ctx, image, &tile, 1, tile.dims)?;
-    let options =
-        RunOptions { backend: BackendChoice::Vulkan, context: Some(ctx.clone()), ..RunOptions::default() };
+    let options = RunOptions {
+        backend: BackendChoice::Vulkan,
+        context: Some(ctx.clone()),
+        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        ..RunOptions::default()
+    };
     let mut run = Run::start(tile, settings, None, options)?;
     if let Outcome::Cancelled { .. } = run.run(cancel, on)? {
         return Ok(None);
