@@ -3,9 +3,10 @@
 //! renderer's queue lock), fsot writes a mask, or a plan's masks stacked, into
 //! the renderer's 2-D array image (`write_mask`, `write_plan`), the include's
 //! plan block into its uniform buffer (`write_plan_block`), or a mask's texels
-//! into a buffer (`write_mask_to_buffer`); `make_into_image` first makes the
-//! mask on that device (the Vulkan optimizer), `upload` takes a mask file or a
-//! plan folder made earlier (no optimization).
+//! into a buffer (`write_mask_to_buffer`); `make_into_image` and
+//! `make_plan_into_image` first make the mask, or a scene plan's masks, on that
+//! device (the Vulkan optimizer), `upload` takes a mask file or a plan folder
+//! made earlier (no optimization).
 //!
 //! The image: a 2-D array of the tile's width and height, one layer per frame
 //! and sample of each mask (`layers_for`: masks x T x spp, mask m from layer
@@ -36,6 +37,7 @@ use crate::error::{Error, Result};
 use crate::gpu::VulkanOptions;
 use crate::io::ktx2::Format;
 use crate::mask::Mask;
+use crate::plan::{Plan, PlanEvent};
 use crate::problem::Tile;
 use crate::run::{CancelFlag, Event, Outcome, Run, RunOptions};
 use crate::sampler::SamplerPlan;
@@ -129,19 +131,66 @@ pub fn make_into_image(
     on: &mut dyn FnMut(Event),
 ) -> Result<Option<Mask>> {
     check_image(ctx, image, &tile, 1, tile.dims)?;
-    let options = RunOptions {
-        backend: BackendChoice::Vulkan,
-        context: Some(ctx.clone()),
-        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
-        ..RunOptions::default()
-    };
-    let mut run = Run::start(tile, settings, None, options)?;
+    let mut run = Run::start(tile, settings, None, device_options(ctx))?;
     if let Outcome::Cancelled { .. } = run.run(cancel, on)? {
         return Ok(None);
     }
     let mask = run.finish()?;
     write_mask(ctx, &mask, image)?;
     Ok(Some(mask))
+}
+
+/// Makes every mask of a scene plan on the context's device (as
+/// `fsot optimize --scene` would, the plateau rule stopping each; white noise
+/// for what is not visible; the deterministic mode) and writes them, stacked,
+/// into the renderer's image. The image is checked before the first run.
+/// Returns the plan as the include reads it, for its block (None when `cancel`
+/// stopped a run: nothing is written then).
+pub fn make_plan_into_image(
+    ctx: &Context,
+    plan: &Plan,
+    image: &ImageTarget,
+    cancel: &CancelFlag,
+    on: &mut dyn FnMut(PlanEvent),
+) -> Result<Option<SamplerPlan>> {
+    let first = plan.masks.first().ok_or_else(|| Error::invalid("the plan has no masks"))?;
+    if plan.masks.iter().any(|m| m.spp != first.spp) {
+        return Err(Error::invalid("the masks of one image share their spp (one image per spp)"));
+    }
+    let dims = plan.masks.iter().map(|m| m.dims).max().unwrap_or(1);
+    check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
+    let mut masks = Vec::with_capacity(plan.masks.len());
+    for (index, m) in plan.masks.iter().enumerate() {
+        let tile = plan.tile(m)?;
+        if m.white {
+            masks.push(Mask::white(tile, m.seed));
+            continue;
+        }
+        let mut run = Run::start(tile, plan.settings(m), None, device_options(ctx))?;
+        on(PlanEvent::Start { index, file: &m.file, iteration: 0 });
+        let start = std::time::Instant::now();
+        if let Outcome::Cancelled { .. } =
+            run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))?
+        {
+            return Ok(None);
+        }
+        let (iterations, seconds) = (run.iteration(), start.elapsed().as_secs_f64());
+        masks.push(run.finish()?);
+        on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
+    }
+    let sampler = SamplerPlan::from_plan(plan, masks)?;
+    write_plan(ctx, &sampler, image)?;
+    Ok(Some(sampler))
+}
+
+/// A Vulkan run on the context's device in the deterministic mode.
+fn device_options(ctx: &Context) -> RunOptions {
+    RunOptions {
+        backend: BackendChoice::Vulkan,
+        context: Some(ctx.clone()),
+        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        ..RunOptions::default()
+    }
 }
 
 /// Writes a mask file (`.exr`) or a plan folder (`fsot optimize --scene`'s,

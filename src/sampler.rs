@@ -94,50 +94,81 @@ impl SamplerPlan {
         let text = std::fs::read_to_string(&path).map_err(|e| Error::io(path.display().to_string(), e))?;
         let file: PlanFile = serde_json::from_str(&text)
             .map_err(|e| Error::invalid(format!("{}: not a plan file: {e}", path.display())))?;
-        let mut names: Vec<String> = Vec::new();
+        let parts = file
+            .groups
+            .iter()
+            .flat_map(|g| &g.parts)
+            .map(|p| (p.mask.as_str(), p.dims, p.offset, &p.shift[..]));
+        Self::assemble(&format!("{}: ", path.display()), parts, |name| {
+            if name.contains(['/', '\\']) || name.starts_with('.') {
+                return Err(Error::invalid(format!("{}: bad mask name {name:?}", path.display())));
+            }
+            let mask = crate::io::exr::read(&dir.join(name))?;
+            let t = mask.tile;
+            if [t.width, t.height, t.frames] != file.tile {
+                return Err(Error::invalid(format!(
+                    "{}: {name} is {}x{}x{}, the plan's tile {:?}",
+                    path.display(),
+                    t.width,
+                    t.height,
+                    t.frames,
+                    file.tile
+                )));
+            }
+            Ok(mask)
+        })
+        .map_err(|e| match e {
+            Error::Invalid(m) if m.starts_with("a part of") => {
+                Error::invalid(format!("{}: {m}", path.display()))
+            }
+            e => e,
+        })
+    }
+
+    /// A plan made in memory (`renderer::make_plan_into_image`): `masks[i]` is
+    /// the mask of `plan.masks[i]`; laid out as `read` lays out the folder
+    /// `Plan::execute` writes.
+    pub fn from_plan(plan: &crate::plan::Plan, masks: Vec<Mask>) -> Result<Self> {
+        if masks.len() != plan.masks.len() {
+            return Err(Error::invalid(format!("{} masks for a plan of {}", masks.len(), plan.masks.len())));
+        }
+        let mut masks: Vec<Option<Mask>> = masks.into_iter().map(Some).collect();
+        let parts = plan
+            .groups
+            .iter()
+            .flat_map(|g| &g.parts)
+            .map(|p| (p.mask.as_str(), p.dims, p.offset, &p.shift[..]));
+        Self::assemble("", parts, |name| {
+            plan.masks
+                .iter()
+                .position(|m| m.file == name)
+                .and_then(|i| masks[i].take())
+                .ok_or_else(|| Error::invalid(format!("the plan has no mask {name}")))
+        })
+    }
+
+    /// The masks in the order the parts first read them, each loaded once;
+    /// errors start with `context`.
+    fn assemble<'a>(
+        context: &str,
+        parts: impl Iterator<Item = (&'a str, usize, [u32; 3], &'a [f32])>,
+        mut load: impl FnMut(&str) -> Result<Mask>,
+    ) -> Result<Self> {
+        let mut names: Vec<&str> = Vec::new();
         let mut plan = Self { masks: Vec::new(), parts: Vec::new() };
-        for part in file.groups.iter().flat_map(|g| &g.parts) {
-            let index = match names.iter().position(|n| *n == part.mask) {
+        for (name, dims, offset, shift) in parts {
+            let index = match names.iter().position(|n| *n == name) {
                 Some(i) => i,
                 None => {
-                    if part.mask.contains(['/', '\\']) || part.mask.starts_with('.') {
-                        return Err(Error::invalid(format!(
-                            "{}: bad mask name {:?}",
-                            path.display(),
-                            part.mask
-                        )));
-                    }
-                    let mask = crate::io::exr::read(&dir.join(&part.mask))?;
-                    let t = mask.tile;
-                    if [t.width, t.height, t.frames] != file.tile {
-                        return Err(Error::invalid(format!(
-                            "{}: {} is {}x{}x{}, the plan's tile {:?}",
-                            path.display(),
-                            part.mask,
-                            t.width,
-                            t.height,
-                            t.frames,
-                            file.tile
-                        )));
-                    }
-                    names.push(part.mask.clone());
-                    plan.masks.push(mask);
+                    plan.masks.push(load(name)?);
+                    names.push(name);
                     names.len() - 1
                 }
             };
-            if part.dims > plan.masks[index].tile.dims || part.shift.len() != part.dims {
-                return Err(Error::invalid(format!(
-                    "{}: a part of {} does not fit it",
-                    path.display(),
-                    part.mask
-                )));
+            if dims > plan.masks[index].tile.dims || shift.len() != dims {
+                return Err(Error::invalid(format!("{context}a part of {name} does not fit it")));
             }
-            plan.parts.push(SamplerPart {
-                mask: index,
-                dims: part.dims,
-                offset: part.offset,
-                shift: part.shift.clone(),
-            });
+            plan.parts.push(SamplerPart { mask: index, dims, offset, shift: shift.to_vec() });
         }
         plan.check()?;
         Ok(plan)

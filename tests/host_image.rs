@@ -561,3 +561,61 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
     host.free_buffer(buffer, memory);
     host.assert_silent();
 }
+
+#[test]
+fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image() {
+    let Some(host) = Renderer::new() else { return };
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
+                [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    let scene = fsot::scene::Scene::parse(text, "small").unwrap();
+    let plan = fsot::plan::Plan::new(&scene, &fsot::plan::CostModel::unmeasured()).unwrap();
+    assert_eq!(plan.masks.len(), 3);
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    // One layer short: refused before the first run.
+    let short = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3) - 1, SAMPLED);
+    let ctx = host.fsot();
+    let mut events = 0;
+    let err =
+        fsot::renderer::make_plan_into_image(&ctx, &plan, &short.target, &CancelFlag::new(), &mut |_| {
+            events += 1
+        })
+        .unwrap_err();
+    assert!(err.to_string().contains("need 12"), "{err}");
+    assert_eq!(events, 0);
+    host.free_image(short);
+
+    let image = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3), SAMPLED);
+    let mut done = Vec::new();
+    let sampler =
+        fsot::renderer::make_plan_into_image(&ctx, &plan, &image.target, &CancelFlag::new(), &mut |e| {
+            if let fsot::plan::PlanEvent::Done { file, iterations, .. } = e {
+                done.push((file.to_string(), iterations))
+            }
+        })
+        .unwrap()
+        .expect("not cancelled");
+    drop(ctx);
+    // The optimized masks ran until the plateau rule stopped them; the invisible
+    // group reads white noise, made from its seed.
+    assert_eq!(done.iter().map(|d| d.0.as_str()).collect::<Vec<_>>(), ["pick.exr", "lens.exr"]);
+    assert!(done.iter().all(|d| d.1 > 0 && d.1 < 10_000), "{done:?}");
+    assert_eq!(sampler.masks[2].samples, Mask::white(tile, plan.masks[2].seed).samples);
+    let kernel = fsot::plan::kernel_for(&scene.display).unwrap().0;
+    for k in 0..2 {
+        let ratio = fsot::score::score(&sampler.masks[k], kernel, 4096).ratio();
+        assert!(ratio < 0.8, "mask {k}: {ratio} x white");
+    }
+    // Parts as the plan says, in the order the groups consume them.
+    let parts: Vec<_> = plan.groups.iter().flat_map(|g| &g.parts).collect();
+    assert_eq!(sampler.parts.len(), parts.len());
+    for (s, p) in sampler.parts.iter().zip(&parts) {
+        assert_eq!((s.dims, s.offset, &s.shift), (p.dims, p.offset, &p.shift));
+        assert_eq!(plan.masks[s.mask].file, p.mask);
+    }
+    // The image holds the three masks, stacked, as the include reads them.
+    let got = host.read_image(&image, 4);
+    assert_eq!(got, sampler.texels(Format::R16G16Unorm).unwrap());
+    host.free_image(image);
+    host.assert_silent();
+}
