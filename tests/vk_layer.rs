@@ -4,12 +4,9 @@
 
 mod common;
 
-use std::ffi::c_void;
-use std::sync::{Arc, Mutex};
-
 use ash::vk;
 use fsot::rng::{derive, Stream};
-use fsot::vk::{Context, ExternalDevice, RadixSort, SortCount};
+use fsot::vk::{RadixSort, SortCount};
 
 fn random_pairs(seed: u32, n: usize) -> (Vec<u32>, Vec<u32>) {
     let mut rng = Stream::new(derive(77, seed));
@@ -46,101 +43,24 @@ fn two_threads_sort_on_one_context_at_once() {
     common::assert_no_validation_messages(&ctx);
 }
 
-unsafe extern "system" fn collect(
-    _severity: vk::DebugUtilsMessageSeverityFlagsEXT,
-    _types: vk::DebugUtilsMessageTypeFlagsEXT,
-    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    user: *mut c_void,
-) -> vk::Bool32 {
-    // SAFETY: the layer passes valid data; `user` is the test's Mutex, alive
-    // until the messenger is destroyed.
-    unsafe {
-        let text = (*data).message_as_c_str().map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
-        if let Ok(mut list) = (*(user as *const Mutex<Vec<String>>)).lock() {
-            list.push(text);
-        }
-    }
-    vk::FALSE
-}
-
 #[test]
 fn the_sort_runs_on_a_device_the_host_made() {
-    if common::gpu_context().is_none() {
-        return;
-    }
-    // The host: its own instance (validation on), device and queue, made with ash.
-    let messages: Box<Mutex<Vec<String>>> = Box::default();
-    // SAFETY: plain Vulkan set-up by the host; every handle is destroyed below,
-    // after fsot's context is gone.
-    unsafe {
-        let entry = ash::Entry::load().expect("a Vulkan loader");
-        let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
-        let extensions = [ash::ext::debug_utils::NAME.as_ptr()];
-        let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
-        let info = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layers)
-            .enabled_extension_names(&extensions);
-        let instance = entry.create_instance(&info, None).expect("an instance");
-        let debug = ash::ext::debug_utils::Instance::new(&entry, &instance);
-        let messenger = debug
-            .create_debug_utils_messenger(
-                &vk::DebugUtilsMessengerCreateInfoEXT::default()
-                    .message_severity(
-                        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                    )
-                    .message_type(
-                        vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                            | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION,
-                    )
-                    .pfn_user_callback(Some(collect))
-                    .user_data(&*messages as *const Mutex<Vec<String>> as *mut c_void),
-                None,
-            )
-            .expect("a messenger");
-        let physical = instance.enumerate_physical_devices().unwrap()[0];
-        let family = instance
-            .get_physical_device_queue_family_properties(physical)
-            .iter()
-            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .expect("a compute queue") as u32;
-        let priorities = [1.0f32];
-        let queues =
-            [vk::DeviceQueueCreateInfo::default().queue_family_index(family).queue_priorities(&priorities)];
-        let device = instance
-            .create_device(physical, &vk::DeviceCreateInfo::default().queue_create_infos(&queues), None)
-            .expect("a device");
+    // The host: its own instance (validation on, its own messenger), device and
+    // queue, made with ash, without the 64-bit atomics the optimizer needs.
+    let Some(host) = common::host::Host::new(false) else { return };
+    {
+        let ctx = host.fsot(); // fsot on the host's device, sharing the host's queue lock
+        let mut sort = RadixSort::new(&ctx, 70_000, SortCount::Host).unwrap();
+        for n in [1usize, 2047, 65_537] {
+            let (keys, vals) = random_pairs(n as u32, n);
+            assert_eq!(sort.sort_pairs(&keys, &vals).unwrap(), cpu_sort(&keys, &vals), "n = {n}");
+        }
+    } // fsot's sort and context dropped: the host's device must still be usable.
+    let _host_submits = host.lock.lock().unwrap();
+    // SAFETY: the host's own device, idle-waited under its queue lock.
+    unsafe { host.device.device_wait_idle() }.expect("the host's device is alive");
 
-        // fsot on the host's device, sharing the host's queue lock.
-        let lock = Arc::new(Mutex::new(()));
-        {
-            let ctx = Context::wrap(ExternalDevice {
-                entry: entry.clone(),
-                instance: instance.clone(),
-                physical_device: physical,
-                device: device.clone(),
-                queue_family: family,
-                queue_index: 0,
-                int64_atomics: false,
-                float_atomic_add: false,
-                queue_lock: Some(lock.clone()),
-            })
-            .expect("fsot wraps the host's device");
-            let mut sort = RadixSort::new(&ctx, 70_000, SortCount::Host).unwrap();
-            for n in [1usize, 2047, 65_537] {
-                let (keys, vals) = random_pairs(n as u32, n);
-                assert_eq!(sort.sort_pairs(&keys, &vals).unwrap(), cpu_sort(&keys, &vals), "n = {n}");
-            }
-        } // fsot's sort and context dropped: the host's device must still be usable.
-        let _host_submits = lock.lock().unwrap();
-        device.device_wait_idle().expect("the host's device is alive");
-        device.destroy_device(None);
-        debug.destroy_debug_utils_messenger(messenger, None);
-        instance.destroy_instance(None);
-    }
-    let messages = messages.lock().unwrap();
-    assert!(messages.is_empty(), "validation: {:?}", &messages[..messages.len().min(3)]);
+    host.assert_silent();
 }
 
 #[test]

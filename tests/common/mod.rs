@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod host;
+
 use fsot::vk::{Context, ContextOptions};
 
 /// A Vulkan context with the validation layer on. GPU tests are mandatory (CI
