@@ -111,6 +111,33 @@ impl KernelSpec {
         }
     }
 
+    /// The spec `describe` wrote (a mask's `kernel` attribute), e.g.
+    /// "perceptual-taa (sigma = 2.1, fps = 60, alpha = 0.1)"; None for any
+    /// other text (a peer's description).
+    pub fn from_description(text: &str) -> Option<Self> {
+        let (name, rest) = text.trim().split_once(" (")?;
+        let params = rest.strip_suffix(')')?;
+        let mut values = std::collections::HashMap::new();
+        for pair in params.split(", ") {
+            let (key, value) = pair.split_once(" = ")?;
+            values.insert(key, value.parse::<f64>().ok()?);
+        }
+        let expected: &[&str] = match name {
+            "spatial" => &["sigma"],
+            "gaussian" => &["sigma", "sigma_t"],
+            "taa" => &["sigma", "alpha"],
+            "perceptual" => &["sigma", "fps"],
+            "perceptual-taa" => &["sigma", "fps", "alpha"],
+            _ => return None,
+        };
+        if values.len() != expected.len() || expected.iter().any(|k| !values.contains_key(k)) {
+            return None;
+        }
+        let get = |k: &str, default: f64| values.get(k).copied().unwrap_or(default);
+        let sigma_t = values.get("sigma_t").copied();
+        Self::from_name(name, get("sigma", 0.0), sigma_t, get("alpha", DEFAULT_ALPHA), get("fps", DEFAULT_FPS)).ok()
+    }
+
     /// A one-line description with every parameter, for files and logs.
     pub fn describe(&self) -> String {
         let t = match self.temporal {
@@ -405,5 +432,25 @@ mod tests {
         assert!(KernelSpec::from_name("spatial", -1.0, None, 0.1, 60.0).is_err());
         assert!(KernelSpec::from_name("spatial", f64::NAN, None, 0.1, 60.0).is_err());
         assert!(KernelSpec::from_name("perceptual", 2.1, None, 0.1, 0.0).is_err());
+    }
+
+    #[test]
+    fn a_description_reads_back_as_the_same_kernel_and_other_text_is_none() {
+        for name in KERNEL_NAMES {
+            for (sigma, alpha, fps, sigma_t) in [(2.1, 0.1, 60.0, None), (1.3435, 0.05, 30.0, Some(0.7))] {
+                let spec = KernelSpec::from_name(name, sigma, sigma_t, alpha, fps).unwrap();
+                assert_eq!(KernelSpec::from_description(&spec.describe()), Some(spec), "{}", spec.describe());
+            }
+        }
+        for text in [
+            "stbn vector (sigma = 1.9, sigma_t = 1.9)",
+            "taa (sigma = 2.1)",
+            "taa (sigma = 2.1, alpha = x)",
+            "taa (sigma = 2.1, alpha = 0.1, fps = 60)",
+            "taa (sigma = 2.1, alpha = 7)",
+            "",
+        ] {
+            assert_eq!(KernelSpec::from_description(text), None, "{text}");
+        }
     }
 }

@@ -42,7 +42,14 @@ fn optimize_writes_exr_and_png_and_score_reads_it() {
     assert_eq!(std::fs::read_dir(dir.path().join("slices")).unwrap().count(), 4);
     let s = fsot(&["score", "m.exr", "--kernel", "taa"], dir.path());
     assert!(s.status.success(), "{}", stderr(&s));
-    assert!(String::from_utf8_lossy(&s.stdout).contains("ratio"));
+    let asked = String::from_utf8_lossy(&s.stdout).into_owned();
+    assert!(asked.contains("ratio") && asked.contains("(as asked)"), "{asked}");
+    // Without a kernel flag: the kernel recorded in the mask, the same figures here.
+    let s = fsot(&["score", "m.exr"], dir.path());
+    assert!(s.status.success(), "{}", stderr(&s));
+    let recorded = String::from_utf8_lossy(&s.stdout).into_owned();
+    assert!(recorded.contains("kernel taa (sigma = 2.1, alpha = 0.1) (recorded in the mask)"), "{recorded}");
+    assert_eq!(recorded.split(": objective").nth(1), asked.split(": objective").nth(1));
     // --init continues from the file, taking its shape.
     let c = fsot(
         &[

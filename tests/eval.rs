@@ -14,9 +14,11 @@ fn tiny() -> EvalSize {
         passes: 2,
         shot: Shot { image: 40, frames: 24 },
         warmup: 16,
+        seeds: 2,
         renders: 1,
         reference_samples: 16,
         planned: false,
+        display: fsot::eval::jod::DISPLAY,
     }
 }
 
@@ -32,6 +34,10 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
         assert!(r.relmse.is_finite() && r.relmse > 0.0, "{r:?}");
         // The eye averages noise away: what it sees is less than the raw error.
         assert!(r.prelmse < r.relmse, "{r:?}");
+        // Two seeds each: finite intervals; ColorVideoVDP sees a difference.
+        assert_eq!(r.seeds, 2, "{r:?}");
+        assert!(r.prelmse_ci95.is_finite() && r.relmse_ci95.is_finite() && r.jod_ci95.is_finite(), "{r:?}");
+        assert!(r.jod < 10.0 && r.jod > -5.0, "{r:?}");
     }
     // TAA averages 1-spp noise over frames: far less error than without.
     for scene in ["light-pick", "defocus-motion"] {
@@ -41,7 +47,17 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     }
     let json = to_json(&records).unwrap();
     assert_eq!(json.matches("\"scene\"").count(), records.len());
-    for key in ["\"method\"", "\"taa\"", "\"sigma\"", "\"prelmse\"", "\"relmse\""] {
+    for key in [
+        "\"method\"",
+        "\"taa\"",
+        "\"sigma\"",
+        "\"prelmse\"",
+        "\"relmse\"",
+        "\"jod\"",
+        "\"jod_ci95\"",
+        "\"prelmse_ci95\"",
+        "\"seeds\"",
+    ] {
         assert_eq!(json.matches(key).count(), records.len(), "{key}");
     }
     // Four picture strips per scene, each a PNG as wide as the reference (if
@@ -57,6 +73,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     }
     let md = to_markdown(&records);
     assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
+    assert!(md.contains("### JOD, sigma 2.1, with TAA") && md.contains(" +- "));
     // A second run reads the masks and references from the cache: same figures.
     let again = run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], |_| {}).unwrap();
     assert_eq!(records, again);
@@ -100,13 +117,14 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
     }
     // defocus-motion: a 2-D lens mask and a 1-D time mask; light-pick: one 1-D mask.
     let planned =
-        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, true, &size, dir.path()).unwrap();
+        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, true, &size, dir.path(), 1)
+            .unwrap();
     let shape: Vec<(usize, usize)> =
         planned.reads.iter().map(|r| (planned.masks[r.0].tile.dims, r.1)).collect();
     assert_eq!(shape, [(2, 0), (1, 2)]);
     assert!(!planned.shares, "no two decisions of the same dimension");
     let planned =
-        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, true, &size, dir.path()).unwrap();
+        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, true, &size, dir.path(), 1).unwrap();
     assert_eq!(planned.masks.iter().map(|m| m.tile.dims).collect::<Vec<_>>(), [1]);
     assert_eq!(planned.seconds, 0.0, "read from the cache");
     assert!(
@@ -121,7 +139,7 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     let size = EvalSize { planned: true, ..tiny() };
     // veach-mis: a 2-D light sample and a 2-D BSDF sample read one mask.
     let shared =
-        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, true, &size, dir.path()).unwrap();
+        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, true, &size, dir.path(), 1).unwrap();
     assert!(shared.shares);
     assert_eq!(shared.masks.len(), 1);
     let [(a, 0, [0, 0, 0], _), (b, 2, offset, shift)] = &shared.reads[..] else {
@@ -130,7 +148,8 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     assert_eq!((a, b), (&0, &0), "both read the light's mask");
     assert_ne!(*offset, [0, 0, 0]);
     assert!(shift.iter().all(|s| *s > 0.0 && *s < 1.0));
-    let own = fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, false, &size, dir.path()).unwrap();
+    let own =
+        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, false, &size, dir.path(), 1).unwrap();
     assert!(!own.shares);
     assert_eq!(own.masks.len(), 2);
     assert_eq!(own.masks[0].samples, shared.masks[0].samples, "the light's own mask is the one it lends");
@@ -141,4 +160,49 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     let count = |scene: &str, m: &str| records.iter().filter(|r| r.scene == scene && r.method == m).count();
     assert_eq!((count("veach-mis", "fsot-planned"), count("veach-mis", "fsot-planned-unshared")), (2, 2));
     assert_eq!((count("light-pick", "fsot-planned"), count("light-pick", "fsot-planned-unshared")), (2, 0));
+}
+
+fn record(
+    method: &str,
+    prelmse: f64,
+    prelmse_ci95: f64,
+    jod: f64,
+    jod_ci95: f64,
+) -> fsot::eval::suite::Record {
+    fsot::eval::suite::Record {
+        scene: "soft-shadow".into(),
+        method: method.into(),
+        taa: true,
+        sigma: 2.1,
+        prelmse,
+        prelmse_ci95,
+        relmse: 2.0 * prelmse,
+        relmse_ci95: 0.0,
+        jod,
+        jod_ci95,
+        seeds: 5,
+    }
+}
+
+#[test]
+fn a_winner_is_bold_only_where_its_interval_clears_the_runner_ups() {
+    // pRelMSE: a (0.2 +- 0.01) clears b (0.3 +- 0.01); JOD: a (8.0 +- 0.5) and
+    // b (7.8 +- 0.5) overlap, so no JOD winner.
+    let records = [
+        record("white", 1.0, 0.05, 6.0, 0.1),
+        record("a", 0.2, 0.01, 8.0, 0.5),
+        record("b", 0.3, 0.01, 7.8, 0.5),
+    ];
+    let md = to_markdown(&records);
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| soft-shadow |")).collect();
+    assert_eq!(rows.len(), 2, "{md}");
+    assert_eq!(rows[0], "| soft-shadow | 1.000e0 +- 5.0e-2 | **0.200 +- 0.010** | 0.300 +- 0.010 |");
+    assert_eq!(rows[1], "| soft-shadow | 6.000 +- 0.100 | 8.000 +- 0.500 | 7.800 +- 0.500 |");
+    // Narrower JOD intervals: now a wins.
+    let records = [
+        record("white", 1.0, 0.05, 6.0, 0.1),
+        record("a", 0.2, 0.01, 8.0, 0.05),
+        record("b", 0.3, 0.01, 7.8, 0.05),
+    ];
+    assert!(to_markdown(&records).contains("| **8.000 +- 0.050** |"));
 }

@@ -18,11 +18,22 @@ pub struct Eye {
 
 impl Eye {
     pub fn new(sigma: f64, fps: f64) -> Self {
+        Self::with_temporal(sigma, &perceptual_taps(fps))
+    }
+
+    /// The spatial Gaussian alone (one temporal tap): a judge blind to how the
+    /// error moves over frames.
+    pub fn spatial_only(sigma: f64) -> Self {
+        Self::with_temporal(sigma, &[1.0])
+    }
+
+    /// The spatial Gaussian of `sigma` and temporal taps `taps` (lag 0 first),
+    /// each normalised to sum 1.
+    pub fn with_temporal(sigma: f64, taps: &[f64]) -> Self {
         let r = (sigma * 3.0).ceil() as i64;
         let mut spatial: Vec<f64> = (-r..=r).map(|d| (-((d * d) as f64) / (sigma * sigma)).exp()).collect();
         let total: f64 = spatial.iter().sum();
         spatial.iter_mut().for_each(|w| *w /= total);
-        let taps = perceptual_taps(fps);
         let sum: f64 = taps.iter().sum();
         Self { spatial, temporal: taps.iter().map(|t| t / sum).collect(), margin: r as usize }
     }

@@ -2,10 +2,13 @@
 //! as a display (TAA) and an eye would, and measure what is left.
 pub mod eye;
 pub mod integrands;
+pub mod jod;
 pub mod metric;
 pub mod perceived;
 pub mod pictures;
 pub mod render;
+pub mod robustness;
 pub mod scenes;
 pub mod spectrum;
+pub mod stats;
 pub mod suite;

@@ -1,8 +1,15 @@
 //! `fsot eval`: every method's mask rendered into every scene, with and without
-//! TAA, measured by pRelMSE and RelMSE (the seed's Tables 1 and 2, for fsot).
+//! TAA, measured by pRelMSE and RelMSE (the seed's Tables 1 and 2, for fsot) and
+//! by an independent judge, ColorVideoVDP's JOD (`jod.rs`).
+//!
+//! Every method is measured over `seeds` masks made from different seeds (white
+//! noise too), each with its own renders at their own placements; a figure is
+//! the mean over seeds with its 95% interval (Student's t, `stats.rs`). A mask
+//! given from outside (the published peers, `--mask`) is one mask: its interval
+//! is over placements only.
 //!
 //! Definitions (per pixel p of the image interior and per frame f after the
-//! warm-up; the mean over both is reported, then averaged over renders):
+//! warm-up; the mean over both is reported, then averaged over a seed's renders):
 //! - e = I - R: the 1-spp render I minus the reference R, both after the
 //!   display's TAA (moving average, alpha 0.1) in the TAA case;
 //! - RelMSE = mean e^2 / (R^2 + eps);
@@ -15,10 +22,12 @@ use std::path::{Path, PathBuf};
 use crate::baselines::fast::{FastSpec, Filter};
 use crate::error::{Error, Result};
 use crate::eval::eye::Eye;
+use crate::eval::jod::{Judge, DISPLAY};
 use crate::eval::metric::relative_errors;
 use crate::eval::pictures::scene_pictures;
 use crate::eval::render::{references, render, taa, MaskSampler, Read, Shot};
 use crate::eval::scenes::Scene;
+use crate::eval::stats::Interval;
 use crate::io::atomic::AtomicFile;
 use crate::kernel::KernelSpec;
 use crate::mask::Mask;
@@ -50,12 +59,17 @@ pub struct EvalSize {
     pub passes: u32,
     pub shot: Shot,
     pub warmup: usize,
+    /// Masks per method, each from its own seed (its own renders too).
+    pub seeds: u32,
+    /// Renders per mask, each at its own placement.
     pub renders: u32,
     pub reference_samples: usize,
     /// Also measure `fsot-planned`: each scene's plan (`scenes/*.toml`), every
     /// decision reading its own mask, made until iterations no longer pay (at most
     /// ten times `iterations`).
     pub planned: bool,
+    /// The ColorVideoVDP display model (`jod::DISPLAY` by default).
+    pub display: &'static str,
 }
 
 impl EvalSize {
@@ -67,9 +81,11 @@ impl EvalSize {
             passes: 8,
             shot: Shot { image: 64, frames: 80 },
             warmup: 48,
-            renders: 3,
+            seeds: 3,
+            renders: 1,
             reference_samples: 256,
             planned: true,
+            display: DISPLAY,
         }
     }
 
@@ -80,14 +96,17 @@ impl EvalSize {
             passes: 32,
             shot: Shot { image: 96, frames: 96 },
             warmup: 48,
-            renders: 3,
+            seeds: 5,
+            renders: 1,
             reference_samples: 1024,
             planned: true,
+            display: DISPLAY,
         }
     }
 }
 
-/// One table cell.
+/// One table cell: means over the seeds and the half-widths of their 95%
+/// intervals.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Record {
     pub scene: String,
@@ -95,15 +114,48 @@ pub struct Record {
     pub taa: bool,
     pub sigma: f64,
     pub prelmse: f64,
+    pub prelmse_ci95: f64,
     pub relmse: f64,
+    pub relmse_ci95: f64,
+    /// ColorVideoVDP's JOD of the judged frames (10: no visible difference).
+    pub jod: f64,
+    pub jod_ci95: f64,
+    /// Independent masks measured (1 for a mask given from outside).
+    pub seeds: u32,
 }
 
-/// The mask of `method` for eye sigma `sigma`, from `cache` when made before
-/// with the same parameters.
-pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> Result<Mask> {
+/// What one seed's renders measured, per TAA setting (without, with): the
+/// means of (pRelMSE, RelMSE, JOD) over its renders.
+type SeedValues = [[f64; 3]; 2];
+
+/// The two records (without and with TAA) of a method's seeds.
+fn records_of(scene: Scene, method: &str, sigma: f64, seeds: u32, values: &[SeedValues]) -> [Record; 2] {
+    [false, true].map(|taa| {
+        let k = taa as usize;
+        let of = |j: usize| Interval::of(&values.iter().map(|v| v[k][j]).collect::<Vec<_>>());
+        let (p, r, j) = (of(0), of(1), of(2));
+        Record {
+            scene: scene.name().to_string(),
+            method: method.to_string(),
+            taa,
+            sigma,
+            prelmse: p.mean,
+            prelmse_ci95: p.ci95,
+            relmse: r.mean,
+            relmse_ci95: r.ci95,
+            jod: j.mean,
+            jod_ci95: j.ci95,
+            seeds,
+        }
+    })
+}
+
+/// The mask of `method` for eye sigma `sigma` made from `seed`, from `cache`
+/// when made before with the same parameters.
+pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed: u64) -> Result<Mask> {
     let t = size.tile;
     let name = format!(
-        "mask-{method}-s{sigma}-{}x{}x{}-d{}-i{}-p{}.exr",
+        "mask-{method}-s{sigma}-{}x{}x{}-d{}-i{}-p{}-seed{seed}.exr",
         t.width, t.height, t.frames, t.dims, size.iterations, size.passes
     );
     let path = cache.join(name);
@@ -112,7 +164,6 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path) -> R
             return Ok(mask);
         }
     }
-    let seed = 1;
     let fsot = |kernel: &str| -> Result<Method> {
         let mut s = Settings::new(KernelSpec::from_name(kernel, sigma, None, TAA_ALPHA, 60.0)?, seed);
         s.iterations = size.iterations;
@@ -183,7 +234,8 @@ impl PlannedMasks {
 
 /// The `fsot-planned` masks of a scene for eye sigma `sigma`, with TAA or not:
 /// the scene file's plan on the evaluation's tile (with `share` false, no
-/// decision reads another's mask); cached like the other methods' masks.
+/// decision reads another's mask); `seed` 1 is the plan's own seeds, others
+/// derive new ones from them; cached like the other methods' masks.
 pub fn planned_masks(
     scene: Scene,
     sigma: f64,
@@ -191,6 +243,7 @@ pub fn planned_masks(
     share: bool,
     size: &EvalSize,
     cache: &Path,
+    seed: u64,
 ) -> Result<PlannedMasks> {
     let text = SCENE_FILES
         .iter()
@@ -210,8 +263,13 @@ pub fn planned_masks(
     let mut out = PlannedMasks { masks: Vec::new(), reads: Vec::new(), shares: false, seconds: 0.0 };
     for planned in &plan.masks {
         let tile = plan.tile(planned)?;
+        let mut planned = planned.clone();
+        if seed != 1 {
+            planned.seed = crate::rng::derive(crate::rng::seed_key(planned.seed), seed as u32) as u64;
+        }
+        let planned = &planned;
         let name = format!(
-            "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-{}",
+            "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-seed{seed}-{}",
             scene.name(),
             if taa { "taa" } else { "no-taa" },
             t.width,
@@ -261,6 +319,62 @@ struct SceneReference {
     seen: [Vec<Vec<f64>>; 2],
 }
 
+/// How a scene is judged: the references, the eye, the first judged frame and
+/// ColorVideoVDP.
+struct Judging<'a> {
+    scene: Scene,
+    size: &'a EvalSize,
+    reference: SceneReference,
+    eye: Eye,
+    start: usize,
+    judge: &'a Judge,
+}
+
+impl Judging<'_> {
+    /// One render's (pRelMSE, RelMSE, JOD) without and with TAA; the frames too.
+    fn measure(&self, image: Vec<Vec<f64>>) -> Result<(SeedValues, (Vec<Vec<f64>>, Vec<Vec<f64>>))> {
+        let n = self.size.shot.image;
+        let with_taa = taa(&image, TAA_ALPHA);
+        let mut out = [[0.0; 3]; 2];
+        for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
+            let r = &self.reference;
+            let (p, rel) = relative_errors(frames, &r.frames[k], &r.seen[k], &self.eye, self.start, n);
+            let jod = self.judge.jod(frames, &r.frames[k], self.start, n)?;
+            out[k] = [p, rel, jod];
+        }
+        Ok((out, (image, with_taa)))
+    }
+
+    /// Every seed's values: `sampler(seed index, placement seed)` gives the
+    /// numbers of a render; the first render of the first seed is kept in `kept`.
+    fn seeds(
+        &self,
+        seeds: u32,
+        mut render_with: impl FnMut(u32, u64) -> Result<Vec<Vec<f64>>>,
+        mut kept: Option<&mut Vec<crate::eval::pictures::Frames>>,
+    ) -> Result<Vec<SeedValues>> {
+        let renders = self.size.renders.max(1);
+        let mut values = Vec::with_capacity(seeds as usize);
+        for k in 0..seeds {
+            let mut mean = [[0.0; 3]; 2];
+            for r in 0..renders {
+                let image = render_with(k, 100 + 1000 * k as u64 + r as u64)?;
+                let (v, frames) = self.measure(image)?;
+                for (m, v) in mean.iter_mut().zip(v) {
+                    for (a, b) in m.iter_mut().zip(v) {
+                        *a += b / renders as f64;
+                    }
+                }
+                if let (Some(keep), 0, 0) = (kept.as_deref_mut(), k, r) {
+                    keep.push(frames);
+                }
+            }
+            values.push(mean);
+        }
+        Ok(values)
+    }
+}
+
 /// Runs the evaluation; `log` gets a line per step.
 pub fn run_eval(
     size: &EvalSize,
@@ -272,70 +386,77 @@ pub fn run_eval(
     mut log: impl FnMut(&str),
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
+    let judge = Judge::new(size.display, 60.0)?;
+    if size.seeds == 0 {
+        return Err(Error::invalid("the evaluation needs at least one seed"));
+    }
     let mut records = Vec::new();
     for &scene in scenes {
         let refs = references(scene, size.shot, size.reference_samples, Some(cache))?;
         log(&format!("reference of {} ready", scene.name()));
         for (sigma_index, &sigma) in sigmas.iter().enumerate() {
             let eye = Eye::new(sigma, 60.0);
-            // One render per method for the pictures (first sigma only).
-            let mut kept = Vec::new();
             if n <= 2 * eye.margin {
                 return Err(Error::invalid(format!("image {n} too small for the eye's sigma {sigma}")));
             }
             let start = size.warmup.max(eye.history());
+            if start >= size.shot.frames {
+                return Err(Error::invalid(format!(
+                    "{} frames leave none to judge after {start}",
+                    size.shot.frames
+                )));
+            }
             let taa_frames = taa(&refs, TAA_ALPHA);
             let seen =
                 |frames: &Vec<Vec<f64>>| (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect();
             let reference =
                 SceneReference { seen: [seen(&refs), seen(&taa_frames)], frames: [refs.clone(), taa_frames] };
+            let judging = Judging { scene, size, reference, eye, start, judge: &judge };
+            // The first seed's first render of each method, for the pictures (first sigma only).
+            let mut kept = Vec::new();
+            let keep = pictures.is_some() && sigma_index == 0;
             let names: Vec<&str> =
                 METHODS.iter().copied().chain(extra.iter().map(|e| e.0.as_str())).collect();
             for method in names {
-                let mask = match extra.iter().find(|e| e.0 == method) {
-                    Some((_, m)) => m.clone(),
-                    None => method_mask(method, sigma, size, cache)?,
+                let given = extra.iter().find(|e| e.0 == method).map(|e| &e.1);
+                let masks: Vec<Mask> = match given {
+                    Some(m) => vec![m.clone()],
+                    None => (1..=size.seeds as u64)
+                        .map(|seed| method_mask(method, sigma, size, cache, seed))
+                        .collect::<Result<_>>()?,
                 };
-                let mut sums = [(0.0, 0.0); 2];
-                for r in 0..size.renders {
-                    let sampler = MaskSampler::new(&mask, scene.dims(), 100 + r as u64);
-                    let image = render(scene, size.shot, &sampler);
-                    let with_taa = taa(&image, TAA_ALPHA);
-                    for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
-                        let (p, rel) =
-                            relative_errors(frames, &reference.frames[k], &reference.seen[k], &eye, start, n);
-                        sums[k].0 += p / size.renders as f64;
-                        sums[k].1 += rel / size.renders as f64;
-                    }
-                    if pictures.is_some() && sigma_index == 0 && r == 0 {
-                        kept.push((image, with_taa));
-                    }
-                }
-                for (k, &(prelmse, relmse)) in sums.iter().enumerate() {
-                    records.push(Record {
-                        scene: scene.name().to_string(),
-                        method: method.to_string(),
-                        taa: k == 1,
-                        sigma,
-                        prelmse,
-                        relmse,
-                    });
-                }
+                let seeds = if given.is_some() { size.seeds } else { masks.len() as u32 };
+                let values = judging.seeds(
+                    seeds,
+                    |k, placement| {
+                        let mask = &masks[(k as usize).min(masks.len() - 1)];
+                        Ok(render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement)))
+                    },
+                    keep.then_some(&mut kept),
+                )?;
+                let pair = records_of(scene, method, sigma, masks.len() as u32, &values);
                 log(&format!(
-                    "{} sigma {sigma} {method}: pRelMSE {:.4e} (TAA {:.4e})",
+                    "{} sigma {sigma} {method}: pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3} (TAA: {:.4e} +- {:.1e}, JOD {:.3} +- {:.3})",
                     scene.name(),
-                    sums[0].0,
-                    sums[1].0
+                    pair[0].prelmse,
+                    pair[0].prelmse_ci95,
+                    pair[0].jod,
+                    pair[0].jod_ci95,
+                    pair[1].prelmse,
+                    pair[1].prelmse_ci95,
+                    pair[1].jod,
+                    pair[1].jod_ci95
                 ));
+                records.extend(pair);
             }
             if size.planned {
-                records
-                    .extend(planned_records(scene, sigma, size, cache, &reference, &eye, start, &mut log)?);
+                records.extend(planned_records(&judging, sigma, cache, &mut log)?);
             }
             if let (Some(dir), false) = (pictures, kept.is_empty()) {
                 crate::io::atomic::make_folder(dir)?;
-                let refs = (&reference.frames[0][..], &reference.frames[1][..]);
-                scene_pictures(dir, scene.name(), n, &eye, refs, &kept)?;
+                let r = &judging.reference;
+                let refs = (&r.frames[0][..], &r.frames[1][..]);
+                scene_pictures(dir, scene.name(), n, &judging.eye, refs, &kept)?;
             }
         }
     }
@@ -346,63 +467,55 @@ pub fn run_eval(
 /// for one scene and sigma; where the plan shares a mask between decisions, also
 /// `fsot-planned-unshared`, the same plan with masks of their own, to show what
 /// sharing costs.
-#[allow(clippy::too_many_arguments)]
 fn planned_records(
-    scene: Scene,
+    judging: &Judging,
     sigma: f64,
-    size: &EvalSize,
     cache: &Path,
-    reference: &SceneReference,
-    eye: &Eye,
-    start: usize,
     log: &mut impl FnMut(&str),
 ) -> Result<Vec<Record>> {
-    let n = size.shot.image;
+    let (scene, size) = (judging.scene, judging.size);
     let mut records = Vec::new();
     let mut any_shares = false;
     for share in [true, false] {
+        if !share && !any_shares {
+            continue;
+        }
+        // Each TAA setting has its own plan (kernel); of each, the record of that setting.
         for (k, with_taa) in [false, true].into_iter().enumerate() {
-            if !share && !any_shares {
-                continue;
-            }
-            let planned = planned_masks(scene, sigma, with_taa, share, size, cache)?;
-            any_shares |= planned.shares;
-            let reads = planned.reads();
-            let (mut prelmse, mut relmse) = (0.0, 0.0);
-            for r in 0..size.renders {
-                let image = render(scene, size.shot, &MaskSampler::planned(&reads, 100 + r as u64));
-                let frames = if with_taa { taa(&image, TAA_ALPHA) } else { image };
-                let (p, rel) =
-                    relative_errors(&frames, &reference.frames[k], &reference.seen[k], eye, start, n);
-                prelmse += p / size.renders as f64;
-                relmse += rel / size.renders as f64;
-            }
-            let iterations: Vec<String> =
-                planned.masks.iter().map(|m| m.meta("iterations").unwrap_or("white").to_string()).collect();
+            let planned: Vec<PlannedMasks> = (1..=size.seeds as u64)
+                .map(|seed| planned_masks(scene, sigma, with_taa, share, size, cache, seed))
+                .collect::<Result<_>>()?;
+            any_shares |= planned[0].shares;
+            let reads: Vec<Vec<Read>> = planned.iter().map(|p| p.reads()).collect();
+            let values = judging.seeds(
+                size.seeds,
+                |k, placement| {
+                    Ok(render(scene, size.shot, &MaskSampler::planned(&reads[k as usize], placement)))
+                },
+                None,
+            )?;
             let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
+            let record = records_of(scene, method, sigma, size.seeds, &values)[k].clone();
+            let seconds: f64 = planned.iter().map(|p| p.seconds).sum();
             log(&format!(
-                "{} sigma {sigma} {method} ({}): pRelMSE {prelmse:.4e}; masks of {} iterations, made in {:.1} s{}",
+                "{} sigma {sigma} {method} ({}): pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}; masks made in {seconds:.1} s{}",
                 scene.name(),
                 if with_taa { "TAA plan" } else { "no-TAA plan" },
-                iterations.join(" + "),
-                planned.seconds,
-                if planned.seconds == 0.0 { " (cached)" } else { "" }
+                record.prelmse,
+                record.prelmse_ci95,
+                record.jod,
+                record.jod_ci95,
+                if seconds == 0.0 { " (cached)" } else { "" }
             ));
-            records.push(Record {
-                scene: scene.name().to_string(),
-                method: method.to_string(),
-                taa: with_taa,
-                sigma,
-                prelmse,
-                relmse,
-            });
+            records.push(record);
         }
     }
     Ok(records)
 }
 
 /// The records as JSON: a list of {"scene", "method", "taa", "sigma",
-/// "prelmse", "relmse"}.
+/// "prelmse", "prelmse_ci95", "relmse", "relmse_ci95", "jod", "jod_ci95",
+/// "seeds"}.
 pub fn to_json(records: &[Record]) -> Result<String> {
     let mut text = serde_json::to_string_pretty(records)
         .map_err(|e| Error::invalid(format!("cannot write the records as JSON: {e}")))?;
@@ -410,9 +523,11 @@ pub fn to_json(records: &[Record]) -> Result<String> {
     Ok(text)
 }
 
-/// Markdown tables laid out like the seed's Table 2: scenes x methods, one
-/// table per sigma and TAA setting, pRelMSE as a ratio to white noise (white's
-/// absolute value in its column), the best of each row in bold.
+/// Markdown tables laid out like the seed's Table 2: scenes x methods, per sigma
+/// and TAA setting, pRelMSE as a ratio to white noise (white's absolute value
+/// in its column) and ColorVideoVDP's JOD, each with the half-width of its 95%
+/// interval; the best of a row is bold only where its interval does not overlap
+/// the next best's.
 pub fn to_markdown(records: &[Record]) -> String {
     let mut out = String::new();
     let mut sigmas: Vec<f64> = records.iter().map(|r| r.sigma).collect();
@@ -430,36 +545,87 @@ pub fn to_markdown(records: &[Record]) -> String {
     }
     for &sigma in &sigmas {
         for taa in [true, false] {
+            let setting = if taa { "with TAA" } else { "without TAA" };
+            let find = |scene: &str, m: &str| {
+                records.iter().find(|r| r.scene == scene && r.method == m && r.taa == taa && r.sigma == sigma)
+            };
             out += &format!(
-                "\n### pRelMSE, sigma {sigma}, {} (white: absolute; others: ratio to white)\n\n",
-                if taa { "with TAA" } else { "without TAA" }
+                "\n### pRelMSE, sigma {sigma}, {setting} (white: absolute; others: ratio to white; +- the 95% interval)\n\n"
             );
-            out += &format!("| scene | {} |\n", methods.join(" | "));
-            out += &format!("| --- |{}\n", " ---: |".repeat(methods.len()));
-            for scene in &scenes {
-                let get = |m: &str| {
-                    records
-                        .iter()
-                        .find(|r| r.scene == *scene && r.method == m && r.taa == taa && r.sigma == sigma)
-                };
-                let Some(white) = get("white") else { continue };
-                let best = methods
-                    .iter()
-                    .filter(|m| **m != "white")
-                    .filter_map(|m| get(m).map(|r| r.prelmse))
-                    .fold(f64::INFINITY, f64::min);
-                let cells: Vec<String> = methods
-                    .iter()
-                    .map(|m| match get(m) {
-                        Some(r) if *m == "white" => format!("{:.3e}", r.prelmse),
-                        Some(r) if r.prelmse == best => format!("**{:.3}**", r.prelmse / white.prelmse),
-                        Some(r) => format!("{:.3}", r.prelmse / white.prelmse),
-                        None => "-".to_string(),
-                    })
-                    .collect();
-                out += &format!("| {scene} | {} |\n", cells.join(" | "));
-            }
+            out += &table(
+                &scenes,
+                &methods,
+                |scene, m| {
+                    let white = find(scene, "white")?.prelmse;
+                    find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
+                },
+                false,
+            );
+            out += &format!("\n### JOD, sigma {sigma}, {setting} (ColorVideoVDP; 10: no visible difference; +- the 95% interval)\n\n");
+            out += &table(
+                &scenes,
+                &methods,
+                |scene, m| find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, 0.0)),
+                true,
+            );
         }
+    }
+    out
+}
+
+/// One table: a row per scene, a column per method; `cell` gives a method's
+/// interval and, for ratios, white noise's mean (0: absolute values). The
+/// best (highest when `higher_better`) is bold where its interval does not
+/// overlap the runner-up's.
+fn table(
+    scenes: &[&str],
+    methods: &[&str],
+    cell: impl Fn(&str, &str) -> Option<(Interval, f64)>,
+    higher_better: bool,
+) -> String {
+    let mut out =
+        format!("| scene | {} |\n| --- |{}\n", methods.join(" | "), " ---: |".repeat(methods.len()));
+    for scene in scenes {
+        let mut ranked: Vec<(&str, Interval)> = methods
+            .iter()
+            .filter(|m| **m != "white" || higher_better)
+            .filter_map(|m| cell(scene, m).map(|c| (*m, c.0)))
+            .collect();
+        ranked.sort_by(|a, b| {
+            if higher_better {
+                b.1.mean.total_cmp(&a.1.mean)
+            } else {
+                a.1.mean.total_cmp(&b.1.mean)
+            }
+        });
+        let winner = match ranked.as_slice() {
+            [best, next, ..] if !best.1.overlaps(&next.1) => Some(best.0),
+            [best] => Some(best.0),
+            _ => None,
+        };
+        let cells: Vec<String> = methods
+            .iter()
+            .map(|m| match cell(scene, m) {
+                None => "-".to_string(),
+                Some((i, white)) if white > 0.0 && *m == "white" => {
+                    format!("{:.3e} +- {:.1e}", i.mean, i.ci95)
+                }
+                Some((i, white)) => {
+                    let (v, c) =
+                        if white > 0.0 { (i.mean / white, i.ci95 / white) } else { (i.mean, i.ci95) };
+                    let text = format!("{v:.3} +- {c:.3}");
+                    if winner == Some(*m) {
+                        format!("**{text}**")
+                    } else {
+                        text
+                    }
+                }
+            })
+            .collect();
+        if cells.iter().all(|c| c == "-") {
+            continue;
+        }
+        out += &format!("| {scene} | {} |\n", cells.join(" | "));
     }
     out
 }

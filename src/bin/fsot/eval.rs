@@ -3,9 +3,16 @@
 use super::*;
 
 pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
+    use fsot::eval::robustness;
     use fsot::eval::scenes::SCENES;
     use fsot::eval::suite::{cache_dir, run_eval, to_json, to_markdown, EvalSize};
-    for &s in &args.sigma {
+    // The seed's two columns in the full run; the first alone in --quick.
+    let sigmas = match (&args.sigma[..], args.quick) {
+        ([], true) => vec![2.1],
+        ([], false) => vec![2.1, 1.9],
+        (given, _) => given.to_vec(),
+    };
+    for &s in &sigmas {
         if !(s.is_finite() && s > 0.0 && s <= 8.0) {
             return Err(Error::invalid(format!("--sigma must be in (0, 8], got {s}")));
         }
@@ -40,6 +47,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     // Reserve the outputs before the long work: a bad path fails now.
     let md = AtomicFile::create(&args.out.join("results.md"))?;
     let js = AtomicFile::create(&args.out.join("results.json"))?;
+    let rb = AtomicFile::create(&args.out.join("robustness.json"))?;
     let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     if let Some(i) = args.iterations {
@@ -47,6 +55,22 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
         }
         size.iterations = i;
+    }
+    if let Some(k) = args.seeds {
+        if !(2..=100).contains(&k) {
+            return Err(Error::invalid(format!(
+                "--seeds must be in 2..=100 (an interval needs two), got {k}"
+            )));
+        }
+        size.seeds = k;
+    }
+    if let Some(d) = &args.display {
+        let names = colorvideovdp::DisplayModel::names()
+            .map_err(|e| Error::invalid(format!("ColorVideoVDP: {e}")))?;
+        size.display =
+            names.iter().copied().find(|n| n == d).ok_or_else(|| {
+                Error::invalid(format!("unknown display {d:?}; one of {}", names.join(", ")))
+            })?;
     }
     if let Some(p) = args.passes {
         if !(1..=100_000).contains(&p) {
@@ -67,14 +91,24 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     published.extend(own);
     let pictures = args.out.join("pictures");
     let cache = cache_dir(&args.out);
-    let records = run_eval(&size, &args.sigma, &scenes, &cache, Some(&pictures), &published, |line| {
-        eprintln!("{line}")
-    })?;
+    let records =
+        run_eval(&size, &sigmas, &scenes, &cache, Some(&pictures), &published, |line| eprintln!("{line}"))?;
+    // Judges that differ from the optimizer, on the sigma 2.1 column's masks.
+    let robust = match sigmas.contains(&robustness::MADE_FOR_SIGMA) {
+        true => {
+            let r = robustness::run_robustness(&size, &scenes, &cache, |line| eprintln!("{line}"))?;
+            rb.commit(format!("{}\n", serde_json::to_string_pretty(&r).unwrap_or_default()).as_bytes())?;
+            robustness::to_markdown(&r)
+        }
+        false => String::new(),
+    };
     let json = to_json(&records)?;
     let t = size.tile;
     let table = format!(
         "# fsot eval{}\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
-         {} warm-up, {} renders per cell, references {} samples per pixel; TAA alpha 0.1; eps 0.01. Run time {:.0} s.\n{}",
+         {} warm-up, {} mask seeds per method with {} render{} each, references {} samples per pixel; TAA alpha 0.1; eps 0.01; \
+         JOD: ColorVideoVDP (colorvideovdp {}) on the {} display at 60 fps, frames after the warm-up, tone-mapped by the \
+         reference's brightest pixel and sRGB-encoded. Run time {:.0} s.\n{}",
         if args.quick { " --quick" } else { "" },
         t.width,
         t.height,
@@ -86,10 +120,14 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         size.shot.image,
         size.shot.frames,
         size.warmup,
+        size.seeds,
         size.renders,
+        if size.renders == 1 { "" } else { "s" },
         size.reference_samples,
+        fsot::eval::jod::CRATE_VERSION,
+        size.display,
         start.elapsed().as_secs_f64(),
-        to_markdown(&records)
+        to_markdown(&records) + &robust
     );
     md.commit(table.as_bytes())?;
     js.commit(json.as_bytes())?;

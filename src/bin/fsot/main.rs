@@ -88,9 +88,15 @@ struct EvalArgs {
     /// and references.
     #[arg(long, default_value = "eval-out")]
     out: PathBuf,
-    /// Eye sigmas to evaluate (the seed's tables: 2.1 and 1.9).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![2.1, 1.9], allow_negative_numbers = true)]
+    /// Eye sigmas to evaluate [default: 2.1 and 1.9, the seed's tables; 2.1 with --quick].
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     sigma: Vec<f64>,
+    /// Mask seeds per method (each with its own renders) [default: 3 with --quick, else 5].
+    #[arg(long, allow_negative_numbers = true)]
+    seeds: Option<u32>,
+    /// ColorVideoVDP's display model for the JOD [default: standard_4k, the metric's own default].
+    #[arg(long)]
+    display: Option<String>,
     /// Only these scenes (comma-separated names) [default: all].
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
@@ -386,8 +392,23 @@ struct StressArgs {
 struct ScoreArgs {
     /// The mask to score (EXR).
     mask: PathBuf,
-    #[command(flatten)]
-    kernel: KernelArgs,
+    /// The kernel to score with [default: the one recorded in the mask's
+    /// attributes; perceptual-taa when a kernel flag below is given alone].
+    #[arg(long, value_enum)]
+    kernel: Option<KernelName>,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels [default: 2.1 when
+    /// choosing the kernel here].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma: Option<f64>,
+    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
+    #[arg(long, allow_negative_numbers = true)]
+    sigma_t: Option<f64>,
+    /// TAA blend weight of the current frame [default: 0.1 when choosing the kernel here].
+    #[arg(long, allow_negative_numbers = true)]
+    alpha: Option<f64>,
+    /// Frame rate for the perceptual filter [default: 60 when choosing the kernel here].
+    #[arg(long, allow_negative_numbers = true)]
+    fps: Option<f64>,
     /// Slices in the fixed scoring set.
     #[arg(long, default_value_t = SCORE_SLICES)]
     slices: u32,

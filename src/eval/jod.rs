@@ -1,0 +1,104 @@
+//! The independent judge: ColorVideoVDP (Mantiuk et al., SIGGRAPH 2024, the
+//! successor of the FovVideoVDP model the paper used), through the
+//! `colorvideovdp` crate (a pure-Rust port of cvvdp 0.5.7, validated by its
+//! authors against the PyTorch reference). It shares nothing with fsot's
+//! kernels: its own contrast sensitivity, masking and temporal channels, on a
+//! named display model.
+//!
+//! Tone mapping, radiance to display: each frame divided by the reference's
+//! brightest pixel over the judged frames (the same scale for every method of a
+//! scene), clamped to [0, 1] as a fraction of the display's peak luminance, and
+//! encoded with the sRGB transfer function; the display model's EOTF, black
+//! level and ambient light turn it into luminance. Frames before `start` (the
+//! warm-up) are not shown to the judge.
+
+use colorvideovdp::{Color, Cvvdp, DisplayModel, Execution, Image, Options};
+
+use crate::error::{Error, Result};
+
+/// The display the evaluation judges on: ColorVideoVDP's own default, a 30-inch
+/// 3840 x 2160 monitor of 200 cd/m^2 seen from 0.75 m (about 75 pixels per
+/// degree); `bench/results/issue15-jod-probe.txt` shows the masks separated
+/// on it and on three other displays.
+pub const DISPLAY: &str = "standard_4k";
+
+/// The version of the colorvideovdp crate (Cargo.lock pins it).
+pub const CRATE_VERSION: &str = "0.1.1";
+
+/// ColorVideoVDP on a display model at a frame rate.
+pub struct Judge {
+    metric: Cvvdp,
+    fps: f32,
+    pub display: String,
+}
+
+fn vdp_error(e: colorvideovdp::Error) -> Error {
+    Error::invalid(format!("ColorVideoVDP: {e}"))
+}
+
+/// The sRGB encoding of a linear value in [0, 1].
+fn srgb_encode(v: f64) -> f32 {
+    let v = v.clamp(0.0, 1.0);
+    let e = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    e as f32
+}
+
+impl Judge {
+    pub fn new(display: &str, fps: f64) -> Result<Self> {
+        let model = DisplayModel::from_name(display).map_err(vdp_error)?;
+        // Rows split over the rayon pool (results identical to one thread).
+        let metric =
+            Cvvdp::new(model, Options::default().with_execution(Execution::Parallel)).map_err(vdp_error)?;
+        Ok(Self { metric, fps: fps as f32, display: display.to_string() })
+    }
+
+    /// The JOD (10: no visible difference) of `render` against `reference`
+    /// (n x n frames), over the frames from `start`.
+    pub fn jod(&self, render: &[Vec<f64>], reference: &[Vec<f64>], start: usize, n: usize) -> Result<f64> {
+        if render.len() != reference.len() || start >= render.len() {
+            return Err(Error::invalid(format!(
+                "a judge of {} frames against {}, from frame {start}",
+                render.len(),
+                reference.len()
+            )));
+        }
+        let peak = reference[start..].iter().flatten().fold(1e-12f64, |a, &b| a.max(b));
+        let frames = |seq: &[Vec<f64>]| -> Result<Vec<Image>> {
+            seq[start..]
+                .iter()
+                .map(|f| {
+                    Image::new(n, n, 1, f.iter().map(|&v| srgb_encode(v / peak)).collect()).map_err(vdp_error)
+                })
+                .collect()
+        };
+        let prediction = self
+            .metric
+            .predict_video(&frames(render)?, &frames(reference)?, self.fps, Color::Srgb)
+            .map_err(vdp_error)?;
+        Ok(prediction.jod as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identical_sequences_score_ten_and_more_noise_scores_lower() {
+        let judge = Judge::new(DISPLAY, 60.0).unwrap();
+        let n = 32;
+        let mut stream = crate::rng::Stream::new(3);
+        let reference: Vec<Vec<f64>> = (0..12).map(|_| vec![0.5; n * n]).collect();
+        let noisy = |amplitude: f64, stream: &mut crate::rng::Stream| -> Vec<Vec<f64>> {
+            reference
+                .iter()
+                .map(|f| f.iter().map(|v| v + amplitude * (stream.next_f64() - 0.5)).collect())
+                .collect()
+        };
+        let same = judge.jod(&reference, &reference, 4, n).unwrap();
+        assert!((same - 10.0).abs() < 1e-3, "{same}");
+        let weak = judge.jod(&noisy(0.05, &mut stream), &reference, 4, n).unwrap();
+        let strong = judge.jod(&noisy(0.4, &mut stream), &reference, 4, n).unwrap();
+        assert!(strong < weak && weak < 10.0, "weak {weak}, strong {strong}");
+    }
+}
