@@ -135,7 +135,14 @@ impl KernelSpec {
         }
         let get = |k: &str, default: f64| values.get(k).copied().unwrap_or(default);
         let sigma_t = values.get("sigma_t").copied();
-        Self::from_name(name, get("sigma", 0.0), sigma_t, get("alpha", DEFAULT_ALPHA), get("fps", DEFAULT_FPS)).ok()
+        Self::from_name(
+            name,
+            get("sigma", 0.0),
+            sigma_t,
+            get("alpha", DEFAULT_ALPHA),
+            get("fps", DEFAULT_FPS),
+        )
+        .ok()
     }
 
     /// A one-line description with every parameter, for files and logs.

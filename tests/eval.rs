@@ -18,6 +18,7 @@ fn tiny() -> EvalSize {
         renders: 1,
         reference_samples: 16,
         planned: false,
+        planned_without_taa: true,
         display: fsot::eval::jod::DISPLAY,
     }
 }

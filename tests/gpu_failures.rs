@@ -33,6 +33,7 @@ fn untouched(dir: &Path) -> bool {
     std::fs::read(dir.join("existing.exr")).unwrap() == b"the user's mask"
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_lost_device_stops_a_vulkan_run_with_a_clear_error_and_nothing_written() {
     if skip() {
@@ -50,6 +51,7 @@ fn a_lost_device_stops_a_vulkan_run_with_a_clear_error_and_nothing_written() {
     assert!(untouched(dir.path()));
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
     if skip() {
@@ -72,6 +74,7 @@ fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
     assert!(!dir.path().join("c.ckpt").exists());
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn out_of_device_memory_is_an_error_for_vulkan_and_a_fall_back_for_auto() {
     if skip() {

@@ -75,16 +75,19 @@ fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: Tr
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn one_iteration_gives_the_cpu_displacements_small_classes() {
     compare_one_iteration(Tile::new(16, 16, 8, 1, 2).unwrap(), "taa", true);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
     compare_one_iteration(Tile::new(16, 16, 8, 1, 1).unwrap(), "perceptual-taa", true);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_classes_up_to_its_limit_give_the_cpu_displacements() {
     // 3 spp: classes of several hundred to about two thousand points, all
@@ -96,6 +99,7 @@ fn per_lane_classes_up_to_its_limit_give_the_cpu_displacements() {
     compare_on_mask(&Mask::white(tile, 8), "gaussian", true, TransportKind::PerLane);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_sort_stays_exact_when_every_key_ties() {
     // Every sample at the same place: every projection of a class is equal, so
@@ -110,6 +114,7 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
     }
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
@@ -185,6 +190,7 @@ fn large_classes_with(transport: TransportKind) {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn float_atomics_agree_with_the_cpu_too() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -196,6 +202,7 @@ fn float_atomics_agree_with_the_cpu_too() {
     compare_one_iteration(Tile::new(16, 16, 8, 1, 2).unwrap(), "perceptual-taa", false);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn deterministic_mode_is_bit_identical_run_to_run() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -221,6 +228,7 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -253,6 +261,7 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -273,6 +282,7 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -289,6 +299,7 @@ fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     // The "host" here is an fsot context whose handles we hand over as if a
@@ -311,6 +322,7 @@ fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     common::assert_no_validation_messages(&host);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn large_classes_with_tied_keys_give_the_cpu_displacements() {
     // Every sample at one place: every class of thousands of members ties on

@@ -6,6 +6,7 @@ mod common;
 
 use fsot::bench::scatter::{bench_scatter, contributions, reference_sums, FAN_IN};
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_benchmarked_scatter_sums_like_f64() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -24,6 +25,7 @@ fn the_benchmarked_scatter_sums_like_f64() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_reference_sums_are_the_sums() {
     let (idx, val) = contributions(64);

@@ -30,6 +30,7 @@ fn check(sort: &mut RadixSort, keys: Vec<u32>, what: &str) {
     }
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn sorts_like_the_cpu_at_awkward_sizes() {
     let Some(ctx) = common::gpu_context() else {
@@ -50,6 +51,7 @@ fn sorts_like_the_cpu_at_awkward_sizes() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
     let Some(ctx) = common::gpu_context() else {
@@ -101,6 +103,7 @@ fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn refuses_more_pairs_than_it_can_hold() {
     let Some(ctx) = common::gpu_context() else {

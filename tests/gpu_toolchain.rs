@@ -9,6 +9,7 @@ use fsot::rng::hash2;
 use fsot::vk::commands::barrier;
 use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location};
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
     let Some(ctx) = common::gpu_context() else {
@@ -49,6 +50,7 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn buffers_larger_than_a_binding_are_refused_with_a_clear_error() {
     let Some(ctx) = common::gpu_context() else {
@@ -60,6 +62,7 @@ fn buffers_larger_than_a_binding_are_refused_with_a_clear_error() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_validation_layer_is_live_and_its_messages_are_caught() {
     // A buffer with no usage bits breaks a valid-usage rule; the layer must report

@@ -33,6 +33,7 @@ const SAMPLED: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
         | vk::ImageUsageFlags::TRANSFER_SRC.as_raw(),
 );
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_it() {
     let Some(host) = Host::new(true) else { return };
@@ -86,6 +87,7 @@ void main() {
 }
 "#;
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_says() {
     let Some(host) = Host::new(true) else { return };
@@ -189,6 +191,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     host.assert_silent();
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work() {
     let Some(host) = Host::new(true) else { return };
@@ -237,6 +240,7 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
     host.assert_silent();
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image() {
     let Some(host) = Host::new(true) else { return };

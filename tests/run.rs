@@ -85,6 +85,7 @@ fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
     assert_eq!(bits(&resumed), bits(&reference), "resumed and uninterrupted runs differ");
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -105,6 +106,7 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
     let tile = Tile::new(8, 8, 2, 1, 3).unwrap(); // d = 3: the CPU path only

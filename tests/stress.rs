@@ -25,8 +25,16 @@ fn run(size: StressSize) {
     }
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_stress_suite_holds_at_ci_size() {
+    common::gpu_context().expect("a Vulkan device");
+    run(StressSize::quick());
+}
+
+#[cfg_attr(not(fsot_skip_gpu), ignore = "run within the test above, with the GPU checks")]
+#[test]
+fn the_stress_suite_holds_at_ci_size_on_the_cpu_path() {
     run(StressSize::quick());
 }
 

@@ -22,6 +22,7 @@ fn example() -> PathBuf {
     path
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_example_renders_with_fsots_mask_well_under_white_noise_with_validation_silent() {
     if common::gpu_context().is_none() {
@@ -56,6 +57,7 @@ fn the_example_renders_with_fsots_mask_well_under_white_noise_with_validation_si
     assert!(preview.windows(4).any(|w| w == b"acTL"), "an animated PNG");
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn bad_flags_are_refused_with_a_clear_error() {
     for (args, says) in [

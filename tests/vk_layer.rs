@@ -21,6 +21,7 @@ fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
     pairs.into_iter().unzip()
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn two_threads_sort_on_one_context_at_once() {
     let Some(ctx) = common::gpu_context() else { return };
@@ -43,6 +44,7 @@ fn two_threads_sort_on_one_context_at_once() {
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_sort_runs_on_a_device_the_host_made() {
     // The host: its own instance (validation on, its own messenger), device and
@@ -63,6 +65,7 @@ fn the_sort_runs_on_a_device_the_host_made() {
     host.assert_silent();
 }
 
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_is_refused() {
     let Some(ctx) = common::gpu_context() else { return };

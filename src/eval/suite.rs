@@ -68,6 +68,9 @@ pub struct EvalSize {
     /// decision reading its own mask, made until iterations no longer pay (at most
     /// ten times `iterations`).
     pub planned: bool,
+    /// Also the no-TAA plan's masks (`fsot-planned` without TAA); the quick run
+    /// leaves them out for time.
+    pub planned_without_taa: bool,
     /// The ColorVideoVDP display model (`jod::DISPLAY` by default).
     pub display: &'static str,
 }
@@ -85,6 +88,7 @@ impl EvalSize {
             renders: 1,
             reference_samples: 256,
             planned: true,
+            planned_without_taa: false,
             display: DISPLAY,
         }
     }
@@ -100,6 +104,7 @@ impl EvalSize {
             renders: 1,
             reference_samples: 1024,
             planned: true,
+            planned_without_taa: true,
             display: DISPLAY,
         }
     }
@@ -176,8 +181,10 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed
         "ours-taa" => fsot("taa")?,
         "ours-perceptual" => fsot("perceptual")?,
         "ours-perceptual-taa" => fsot("perceptual-taa")?,
-        // STBN keeps its own sigma (1.9, its paper's); vector masks by annealing.
-        "stbn" => Method::Stbn { sigma: 1.9, sigma_t: 1.9, passes: size.passes },
+        // STBN's energy exp(-r^2 / (2 s^2)) is the judge's exp(-r^2 / sigma^2)
+        // at s = sigma / sqrt 2: the column's Gaussian, as for FAST below (its
+        // temporal sigma stays its paper's 1.9 frames); vector masks by annealing.
+        "stbn" => Method::Stbn { sigma: sigma / std::f64::consts::SQRT_2, sigma_t: 1.9, passes: size.passes },
         // FAST's Gaussian exp(-r^2 / (2 s^2)) matches the eye's exp(-r^2 /
         // sigma^2) at s = sigma / sqrt 2 (1.3435 for 1.9, as published).
         "fast" => Method::Fast {
@@ -482,6 +489,9 @@ fn planned_records(
         }
         // Each TAA setting has its own plan (kernel); of each, the record of that setting.
         for (k, with_taa) in [false, true].into_iter().enumerate() {
+            if !with_taa && !size.planned_without_taa {
+                continue;
+            }
             let planned: Vec<PlannedMasks> = (1..=size.seeds as u64)
                 .map(|seed| planned_masks(scene, sigma, with_taa, share, size, cache, seed))
                 .collect::<Result<_>>()?;

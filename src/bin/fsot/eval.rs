@@ -105,11 +105,14 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let json = to_json(&records)?;
     let t = size.tile;
     let table = format!(
-        "# fsot eval{}\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
+        "# fsot eval{}\n\nfsot {} (commit {}) on {}.\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
          {} warm-up, {} mask seeds per method with {} render{} each, references {} samples per pixel; TAA alpha 0.1; eps 0.01; \
          JOD: ColorVideoVDP (colorvideovdp {}) on the {} display at 60 fps, frames after the warm-up, tone-mapped by the \
-         reference's brightest pixel and sRGB-encoded. Run time {:.0} s.\n{}",
+         reference's brightest pixel and sRGB-encoded.{} Run time {:.0} s.\n{}",
         if args.quick { " --quick" } else { "" },
+        env!("CARGO_PKG_VERSION"),
+        env!("FSOT_COMMIT"),
+        fsot::bench::machine::cpu_description(),
         t.width,
         t.height,
         t.frames,
@@ -126,6 +129,11 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         size.reference_samples,
         fsot::eval::jod::CRATE_VERSION,
         size.display,
+        if size.planned && !size.planned_without_taa {
+            " fsot-planned: the TAA plan only (its no-TAA plan left out for time)."
+        } else {
+            ""
+        },
         start.elapsed().as_secs_f64(),
         to_markdown(&records) + &robust
     );
