@@ -115,6 +115,7 @@ pub fn run_robustness(
         // absolute[method][judge][seed]
         let mut absolute = vec![vec![vec![0.0f64; seeds]; JUDGES.len()]; methods.len()];
         for (m, method) in methods.iter().enumerate() {
+            #[allow(clippy::needless_range_loop)] // seed indexes two levels down
             for seed in 0..seeds {
                 let renders = size.renders.max(1);
                 for r in 0..renders {

@@ -338,8 +338,9 @@ struct Judging<'a> {
 }
 
 impl Judging<'_> {
-    /// One render's (pRelMSE, RelMSE, JOD) without and with TAA; the frames too.
-    fn measure(&self, image: Vec<Vec<f64>>) -> Result<(SeedValues, (Vec<Vec<f64>>, Vec<Vec<f64>>))> {
+    /// One render's (pRelMSE, RelMSE, JOD) without and with TAA; the frames
+    /// (without and with TAA) too.
+    fn measure(&self, image: Vec<Vec<f64>>) -> Result<(SeedValues, crate::eval::pictures::Frames)> {
         let n = self.size.shot.image;
         let with_taa = taa(&image, TAA_ALPHA);
         let mut out = [[0.0; 3]; 2];
