@@ -54,7 +54,8 @@ fn a_stbn_mask_has_far_less_perceived_error_than_white_noise_under_taa() {
     let stbn = perceived_error(&stbn_mask(tile, 1.9, 1.9, 3).unwrap(), &setup, 1);
     let white = (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0;
     eprintln!("STBN / white under TAA: {:.3}", stbn / white);
-    assert!(stbn < 0.4 * white, "stbn {stbn} white {white}");
+    // Measured 0.068; 15% margin.
+    assert!(stbn < 0.08 * white, "stbn {stbn} white {white}");
 }
 
 #[test]
@@ -85,10 +86,10 @@ fn fast_and_vector_stbn_masks_beat_white_noise_under_taa() {
     let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, |_, _| {}).unwrap();
     let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
     eprintln!("FAST / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.4, "{ratio}");
+    assert!(ratio < 0.10, "{ratio}"); // measured 0.085; 15% margin
     let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
     let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, |_, _| {}).unwrap();
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);
     eprintln!("vector STBN / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.8, "{ratio}");
+    assert!(ratio < 0.51, "{ratio}"); // measured 0.444; 15% margin
 }

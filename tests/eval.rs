@@ -89,11 +89,15 @@ fn a_blue_noise_mask_beats_white_noise_in_every_scene_under_taa() {
     size.iterations = 100;
     let records =
         run_eval(&size, &[2.1], &fsot::eval::scenes::SCENES, dir.path(), None, &[], |_| {}).unwrap();
-    for scene in fsot::eval::scenes::SCENES {
+    // Measured ratios 0.173, 0.222, 0.375, 0.436, 0.650, 0.449 (scene order);
+    // each bound 15% above.
+    let bounds = [0.20, 0.26, 0.43, 0.50, 0.75, 0.52];
+    for (scene, bound) in fsot::eval::scenes::SCENES.into_iter().zip(bounds) {
         let get = |m: &str| {
             records.iter().find(|r| r.scene == scene.name() && r.method == m && r.taa).unwrap().prelmse
         };
-        assert!(get("ours-taa") < get("white"), "{}: {} vs {}", scene.name(), get("ours-taa"), get("white"));
+        let ratio = get("ours-taa") / get("white");
+        assert!(ratio < bound, "{}: {} vs {}", scene.name(), get("ours-taa"), get("white"));
     }
 }
 

@@ -39,7 +39,8 @@ fn an_optimized_mask_has_a_lower_objective_than_white_noise() {
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let mask = optimize(tile, settings("perceptual-taa", 150, 1), None).unwrap();
     let s = score(&mask, spec("perceptual-taa"), 4096);
-    assert!(s.ratio() < 0.7, "objective {} vs white {}", s.objective, s.white);
+    // Measured 0.427 (seeded, the same on every thread count); 15% margin.
+    assert!(s.ratio() < 0.49, "objective {} vs white {}", s.objective, s.white);
     assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
 }
 
@@ -52,9 +53,10 @@ fn under_taa_a_taa_mask_beats_a_spatial_mask_and_both_beat_white_noise() {
     let spatial =
         perceived_error(&optimize(tile, settings("spatial", 200, 7), None).unwrap(), &setup, 1) / white;
     eprintln!("perceived error under TAA, ratio to white noise: taa {taa:.3}, spatial {spatial:.3}");
-    assert!(taa <= 0.55, "taa mask {taa}");
-    assert!(spatial < 1.0, "spatial mask {spatial}");
-    assert!(taa < 0.8 * spatial, "taa {taa} is not clearly better than spatial {spatial}");
+    // Measured taa 0.096, spatial 0.175, their ratio 0.55; 15% margins.
+    assert!(taa <= 0.11, "taa mask {taa}");
+    assert!(spatial < 0.20, "spatial mask {spatial}");
+    assert!(taa < 0.63 * spatial, "taa {taa} is not clearly better than spatial {spatial}");
 }
 
 #[test]
@@ -76,18 +78,19 @@ fn the_same_seed_gives_a_bit_identical_mask_whatever_the_thread_count() {
 
 #[test]
 fn every_kernel_dimension_and_sample_count_optimizes_below_white_noise() {
-    for (kernel, spp, dims) in [
-        ("spatial", 1, 1),
-        ("gaussian", 1, 4),
-        ("perceptual", 4, 2),
-        ("taa", 16, 1),
-        ("perceptual-taa", 1, 8),
+    // Measured ratios 0.341, 0.648, 0.473, 0.205, 0.761; each bound 15% above.
+    for (kernel, spp, dims, bound) in [
+        ("spatial", 1, 1, 0.40),
+        ("gaussian", 1, 4, 0.75),
+        ("perceptual", 4, 2, 0.55),
+        ("taa", 16, 1, 0.24),
+        ("perceptual-taa", 1, 8, 0.88),
     ] {
         let tile = Tile::new(8, 8, 4, spp, dims).unwrap();
         let mask = optimize(tile, settings(kernel, 40, 3), None).unwrap();
         assert!(mask.samples.iter().all(|v| v.is_finite() && (0.0..1.0).contains(v)));
         let s = score(&mask, spec(kernel), 2048);
-        assert!(s.ratio() < 0.95, "{kernel} spp {spp} d {dims}: ratio {}", s.ratio());
+        assert!(s.ratio() < bound, "{kernel} spp {spp} d {dims}: ratio {}", s.ratio());
     }
 }
 

@@ -166,7 +166,9 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
             assert_eq!(done.iter().find(|d| d.0 == format!("{name}.exr")).unwrap().1 as u64, iterations);
             assert!(iterations > 0 && iterations < 10_000, "stopped by the rule: {iterations}");
             let s = score(&mask, fsot::plan::kernel_for(&scene.display).unwrap().0, 4096);
-            assert!(s.ratio() < 0.8, "{name}: {} x white", s.ratio());
+            // Measured 0.157 (pick) and 0.321 (lens); 15% margins.
+            let bound = if name == "pick" { 0.18 } else { 0.37 };
+            assert!(s.ratio() < bound, "{name}: {} x white", s.ratio());
         }
     }
     assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e
