@@ -30,12 +30,25 @@ impl Eye {
     /// The spatial Gaussian of `sigma` and temporal taps `taps` (lag 0 first),
     /// each normalised to sum 1.
     pub fn with_temporal(sigma: f64, taps: &[f64]) -> Self {
+        let sum: f64 = taps.iter().sum();
+        Self::with_raw_temporal(sigma, &taps.iter().map(|t| t / sum).collect::<Vec<_>>())
+    }
+
+    /// The spatial Gaussian of `sigma` (normalised) and temporal taps as given
+    /// (a transient channel sums to about 0 and is not normalised).
+    pub fn with_raw_temporal(sigma: f64, taps: &[f64]) -> Self {
         let r = (sigma * 3.0).ceil() as i64;
         let mut spatial: Vec<f64> = (-r..=r).map(|d| (-((d * d) as f64) / (sigma * sigma)).exp()).collect();
         let total: f64 = spatial.iter().sum();
         spatial.iter_mut().for_each(|w| *w /= total);
-        let sum: f64 = taps.iter().sum();
-        Self { spatial, temporal: taps.iter().map(|t| t / sum).collect(), margin: r as usize }
+        Self { spatial, temporal: taps.to_vec(), margin: r as usize }
+    }
+
+    /// FovVideoVDP's two temporal channels at `fps` as two eyes (sustained,
+    /// transient), scaled so that their filters add up to `Eye::new`'s.
+    pub fn channels(sigma: f64, fps: f64) -> (Self, Self) {
+        let (sustained, transient) = crate::kernel::perceptual_channels(fps);
+        (Self::with_raw_temporal(sigma, &sustained), Self::with_raw_temporal(sigma, &transient))
     }
 
     /// Frames the temporal filter needs before the first one it can filter.
@@ -134,5 +147,28 @@ mod tests {
                 assert!((v - want).abs() < 1e-12, "({x}, {y}): {v} against {want}");
             }
         }
+    }
+
+    #[test]
+    fn the_two_channels_filter_to_the_evaluation_eye_when_added() {
+        let (w, h) = (20, 20);
+        let eye = Eye::new(2.1, 60.0);
+        let (sustained, transient) = Eye::channels(2.1, 60.0);
+        let mut stream = crate::rng::Stream::new(11);
+        let frames: Vec<Vec<f64>> =
+            (0..=eye.history()).map(|_| (0..w * h).map(|_| stream.next_f64()).collect()).collect();
+        let f = eye.history();
+        let (s, t, both) =
+            (sustained.filter(&frames, f, w), transient.filter(&frames, f, w), eye.filter(&frames, f, w));
+        for ((a, b), c) in s.iter().zip(&t).zip(&both) {
+            assert!((a + b - c).abs() < 1e-12, "{a} + {b} against {c}");
+        }
+        // The transient channel answers change, not level: a constant sequence
+        // passes the sustained channel only (its taps' sum, almost all of it).
+        let flat: Vec<Vec<f64>> = (0..=f).map(|_| vec![0.5; w * h]).collect();
+        let still = transient.filter(&flat, f, w);
+        let total: f64 = transient.temporal.iter().sum();
+        assert!(still.iter().all(|v| (v - 0.5 * total).abs() < 1e-12));
+        assert!(total.abs() < 0.2 * sustained.temporal.iter().sum::<f64>(), "transient sum {total}");
     }
 }

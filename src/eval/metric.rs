@@ -44,3 +44,29 @@ pub fn relative_errors_rect(
     }
     (p_sum / count as f64, r_sum / count as f64)
 }
+
+/// pRelMSE with FovVideoVDP's sustained and transient channels kept apart:
+/// mean ((S e)^2 + (T e)^2) / ((S R)^2 + (T R)^2 + eps), S and T the two eyes
+/// of `Eye::channels` (their sum is the evaluation's eye), over the same
+/// frames and interior as `relative_errors`; n x n images. Where the combined
+/// filter lets the channels' responses to an error cancel, this does not.
+pub fn channels_apart(
+    render: &[Vec<f64>],
+    reference: &[Vec<f64>],
+    eyes: &(Eye, Eye),
+    start: usize,
+    n: usize,
+) -> f64 {
+    let error: Vec<Vec<f64>> =
+        render.iter().zip(reference).map(|(a, b)| a.iter().zip(b).map(|(x, y)| x - y).collect()).collect();
+    let (mut sum, mut count) = (0.0, 0usize);
+    for f in start..render.len() {
+        let (se, te) = (eyes.0.filter(&error, f, n), eyes.1.filter(&error, f, n));
+        let (sr, tr) = (eyes.0.filter(reference, f, n), eyes.1.filter(reference, f, n));
+        for i in 0..se.len() {
+            sum += (se[i] * se[i] + te[i] * te[i]) / (sr[i] * sr[i] + tr[i] * tr[i] + EPSILON);
+            count += 1;
+        }
+    }
+    sum / count as f64
+}

@@ -4,8 +4,9 @@
 //! tables) are judged, under TAA, by eyes and displays they were not made for:
 //! sigma 1.5 and 2.8, TAA alpha 0.05 and 0.2 (the render and the reference both
 //! resolved with it), 30 and 120 fps (the eye's temporal response at that rate),
-//! the spatial Gaussian alone (no temporal response), and the plain RelMSE (no
-//! filter at all).
+//! the spatial Gaussian alone (no temporal response), FovVideoVDP's sustained
+//! and transient channels kept apart instead of added into one filter, and the
+//! plain RelMSE (no filter at all).
 //!
 //! A cell is the mean over the scenes of a method's pRelMSE (or RelMSE) as a
 //! ratio to white noise's in the same scene and judge, per seed, then the mean
@@ -17,7 +18,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::eval::eye::Eye;
-use crate::eval::metric::relative_errors;
+use crate::eval::metric::{channels_apart, relative_errors};
 use crate::eval::render::{references, render, taa, MaskSampler};
 use crate::eval::scenes::Scene;
 use crate::eval::stats::Interval;
@@ -35,6 +36,9 @@ pub enum Filter {
     Spatial,
     /// No filter: RelMSE.
     Plain,
+    /// FovVideoVDP's sustained and transient channels kept apart
+    /// (`metric::channels_apart`).
+    Channels,
 }
 
 /// One judge: its eye sigma, TAA alpha, frame rate and filter.
@@ -52,7 +56,7 @@ const fn judge(name: &'static str, sigma: f64, alpha: f64, fps: f64, filter: Fil
 }
 
 /// The optimizer's own judge first, then the others.
-pub const JUDGES: [Judge; 9] = [
+pub const JUDGES: [Judge; 10] = [
     judge("made for (2.1, 0.1, 60 fps)", 2.1, 0.1, 60.0, Filter::Perceptual),
     judge("sigma 1.5", 1.5, 0.1, 60.0, Filter::Perceptual),
     judge("sigma 2.8", 2.8, 0.1, 60.0, Filter::Perceptual),
@@ -61,6 +65,7 @@ pub const JUDGES: [Judge; 9] = [
     judge("30 fps", 2.1, 0.1, 30.0, Filter::Perceptual),
     judge("120 fps", 2.1, 0.1, 120.0, Filter::Perceptual),
     judge("spatial only", 2.1, 0.1, 60.0, Filter::Spatial),
+    judge("channels apart", 2.1, 0.1, 60.0, Filter::Channels),
     judge("RelMSE", 2.1, 0.1, 60.0, Filter::Plain),
 ];
 
@@ -94,6 +99,7 @@ pub fn run_robustness(
 ) -> Result<Vec<RobustRecord>> {
     let n = size.shot.image;
     let eyes: Vec<Eye> = JUDGES.iter().map(Judge::eye).collect();
+    let channels = Eye::channels(MADE_FOR_SIGMA, 60.0);
     // One first judged frame for every judge: the longest history.
     let start = eyes.iter().map(Eye::history).fold(size.warmup, usize::max);
     let mut methods: Vec<&str> = METHODS.to_vec();
@@ -130,8 +136,13 @@ pub fn run_robustness(
                     };
                     for (k, j) in JUDGES.iter().enumerate() {
                         let frames = taa(&image, j.alpha);
-                        let (p, rel) = relative_errors(&frames, &resolved[k], &seen[k], &eyes[k], start, n);
-                        let value = if j.filter == Filter::Plain { rel } else { p };
+                        let value = match j.filter {
+                            Filter::Channels => channels_apart(&frames, &resolved[k], &channels, start, n),
+                            Filter::Plain => {
+                                relative_errors(&frames, &resolved[k], &seen[k], &eyes[k], start, n).1
+                            }
+                            _ => relative_errors(&frames, &resolved[k], &seen[k], &eyes[k], start, n).0,
+                        };
                         absolute[m][k][seed] += value / renders as f64;
                     }
                 }
