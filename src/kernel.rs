@@ -161,13 +161,19 @@ impl KernelSpec {
 /// FovVideoVDP's temporal response (sustained + transient channels) sampled at
 /// `fps`: ceil(0.25 fps) taps, tap 0 for the current frame, summing to 1.
 pub fn perceptual_taps(fps: f64) -> Vec<f64> {
-    let (sustained, transient) = perceptual_channels(fps);
-    sustained.iter().zip(&transient).map(|(s, t)| s + t).collect()
+    let (sustained, transient, sum) = channel_taps(fps);
+    sustained.iter().zip(&transient).map(|(s, t)| (s + t) / sum).collect()
 }
 
 /// The two channels `perceptual_taps` adds, each scaled as in that sum (so
-/// their tap-wise sum is `perceptual_taps`): (sustained, transient).
+/// their tap-wise sum is `perceptual_taps`, to rounding): (sustained, transient).
 pub fn perceptual_channels(fps: f64) -> (Vec<f64>, Vec<f64>) {
+    let (sustained, transient, sum) = channel_taps(fps);
+    (sustained.iter().map(|s| s / sum).collect(), transient.iter().map(|t| t / sum).collect())
+}
+
+/// The sustained taps (summing to 1), the transient taps, and the sum of both.
+fn channel_taps(fps: f64) -> (Vec<f64>, Vec<f64>, f64) {
     let n = (0.25 * fps).ceil() as usize;
     let n = n.max(2);
     let dt = (n as f64 / fps) / (n as f64 - 1.0);
@@ -184,7 +190,7 @@ pub fn perceptual_channels(fps: f64) -> (Vec<f64>, Vec<f64>) {
         .map(|k| if k + 1 < n { 0.062170507756932 * (sustained[k + 1] - sustained[k]) / dt } else { 0.0 })
         .collect();
     let sum: f64 = sustained.iter().zip(&transient).map(|(s, t)| s + t).sum();
-    (sustained.iter().map(|s| s / sum).collect(), transient.iter().map(|t| t / sum).collect())
+    (sustained, transient, sum)
 }
 
 /// A temporal response as weights over lags `first_lag, first_lag + 1, ...`, and
