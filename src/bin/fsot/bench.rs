@@ -143,13 +143,16 @@ fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
         }
     }
     let mut table = format!(
-        "# fsot bench{}\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
+        "# fsot bench{}\n\nfsot {} (commit {}) on {}.\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
          planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
          eye sigma 2.1, / white noise. Seconds: optimisation only, host wall time; GPU s: the GPU's own \
          time from timestamp queries (Vulkan).\n\n\
          | backend | machine | iteration | seconds | GPU s | objective | pRelMSE | perceived |\n\
          | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         if args.quick { " --quick" } else { "" },
+        env!("CARGO_PKG_VERSION"),
+        env!("FSOT_COMMIT"),
+        fsot::bench::machine::cpu_description(),
         tile.describe(),
         spec.describe()
     );
