@@ -40,7 +40,7 @@ records = json.load(open(sys.argv[1]))
 r = json.load(open(sys.argv[2]))
 cell = lambda m: next(x["prelmse"] for x in records if x["method"] == m and x["taa"] and x["sigma"] == 2.1)
 white, mine, ours = cell("white"), cell("example"), cell("ours-perceptual-taa")
-print(f"fsot eval --quick, soft-shadow, TAA, sigma 2.1 (3 renders, random placements, f64 CPU renderer):")
+print(f"fsot eval --quick, soft-shadow, TAA, sigma 2.1 (the mask at 3 random placements, white over 3 seeds, f64 CPU renderer):")
 print(f"  white {white:.4e}; this mask {mine:.4e} = {mine / white:.3f} x white; ours-perceptual-taa {ours / white:.3f} x white")
 ratio = r["prelmse_mask"] / r["prelmse_white"]
 print(f"example renderer (1 render at offset 0, f32 GPU renderer, its own white mask and reference):")
