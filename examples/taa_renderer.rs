@@ -152,10 +152,7 @@ fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
 /// fsot's mask: loaded, or made on the device straight into the renderer's image.
 fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     if let Some(path) = &args.mask {
-        let plan = match path.is_dir() {
-            true => SamplerPlan::read(path)?,
-            false => SamplerPlan::single(fsot::io::exr::read(path)?)?,
-        };
+        let plan = SamplerPlan::load(path)?;
         if plan.parts[0].dims < 2 {
             return Err(Error::invalid(format!(
                 "{}: the scene's light sample is 2-D, the first part of the mask has d = {}",

@@ -197,10 +197,7 @@ fn device_options(ctx: &Context) -> RunOptions {
 /// with `plan.json`) made earlier into the renderer's image; the plan, for its
 /// block.
 pub fn upload(ctx: &Context, path: &Path, image: &ImageTarget) -> Result<SamplerPlan> {
-    let plan = match path.is_dir() {
-        true => SamplerPlan::read(path)?,
-        false => SamplerPlan::single(crate::io::exr::read(path)?)?,
-    };
+    let plan = SamplerPlan::load(path)?;
     write_plan(ctx, &plan, image)?;
     Ok(plan)
 }

@@ -88,6 +88,14 @@ impl SamplerPlan {
         })
     }
 
+    /// A plan folder (`read`) or a mask file (`.exr`, a one-part plan).
+    pub fn load(path: &Path) -> Result<Self> {
+        match path.is_dir() {
+            true => Self::read(path),
+            false => Self::single(crate::io::exr::read(path)?),
+        }
+    }
+
     /// The plan `fsot optimize --scene` wrote into `dir` (`plan.json` and its masks).
     pub fn read(dir: &Path) -> Result<Self> {
         let path = dir.join("plan.json");

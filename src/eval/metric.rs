@@ -45,14 +45,28 @@ pub fn relative_errors_rect(
     (p_sum / count as f64, r_sum / count as f64)
 }
 
+/// What the two channels of `Eye::channels` see of the reference, per frame
+/// from `start`: (S R)^2 + (T R)^2 on the interior (the denominator of
+/// `channels_apart`, computed once per reference).
+pub fn channels_seen(reference: &[Vec<f64>], eyes: &(Eye, Eye), start: usize, n: usize) -> Vec<Vec<f64>> {
+    (start..reference.len())
+        .map(|f| {
+            let (sr, tr) = (eyes.0.filter(reference, f, n), eyes.1.filter(reference, f, n));
+            sr.iter().zip(&tr).map(|(s, t)| s * s + t * t).collect()
+        })
+        .collect()
+}
+
 /// pRelMSE with FovVideoVDP's sustained and transient channels kept apart:
 /// mean ((S e)^2 + (T e)^2) / ((S R)^2 + (T R)^2 + eps), S and T the two eyes
 /// of `Eye::channels` (their sum is the evaluation's eye), over the same
-/// frames and interior as `relative_errors`; n x n images. Where the combined
-/// filter lets the channels' responses to an error cancel, this does not.
+/// frames and interior as `relative_errors` (`seen_reference` from
+/// `channels_seen`); n x n images. Where the combined filter lets the channels'
+/// responses to an error cancel, this does not.
 pub fn channels_apart(
     render: &[Vec<f64>],
     reference: &[Vec<f64>],
+    seen_reference: &[Vec<f64>],
     eyes: &(Eye, Eye),
     start: usize,
     n: usize,
@@ -62,9 +76,8 @@ pub fn channels_apart(
     let (mut sum, mut count) = (0.0, 0usize);
     for f in start..render.len() {
         let (se, te) = (eyes.0.filter(&error, f, n), eyes.1.filter(&error, f, n));
-        let (sr, tr) = (eyes.0.filter(reference, f, n), eyes.1.filter(reference, f, n));
-        for i in 0..se.len() {
-            sum += (se[i] * se[i] + te[i] * te[i]) / (sr[i] * sr[i] + tr[i] * tr[i] + EPSILON);
+        for ((s, t), r) in se.iter().zip(&te).zip(&seen_reference[f - start]) {
+            sum += (s * s + t * t) / (r + EPSILON);
             count += 1;
         }
     }

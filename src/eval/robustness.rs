@@ -18,11 +18,12 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::eval::eye::Eye;
-use crate::eval::metric::{channels_apart, relative_errors};
+use crate::eval::metric::{channels_apart, channels_seen, relative_errors};
 use crate::eval::render::{references, render, taa, MaskSampler};
 use crate::eval::scenes::Scene;
 use crate::eval::stats::Interval;
 use crate::eval::suite::{method_mask, planned_masks, EvalSize, METHODS};
+use crate::mask::Mask;
 
 /// The column the masks are made for.
 pub const MADE_FOR_SIGMA: f64 = 2.1;
@@ -107,6 +108,16 @@ pub fn run_robustness(
         methods.push("fsot-planned");
     }
     let seeds = size.seeds as usize;
+    // Each method's masks, read once (none for fsot-planned: its masks are per scene).
+    let masks: Vec<Vec<Mask>> = methods
+        .iter()
+        .map(|&method| match method {
+            "fsot-planned" => Ok(Vec::new()),
+            _ => (1..=seeds as u64)
+                .map(|seed| method_mask(method, MADE_FOR_SIGMA, size, cache, seed))
+                .collect(),
+        })
+        .collect::<Result<_>>()?;
     // values[method][judge][seed]: per scene, summed as ratios to white below.
     let mut sums = vec![vec![vec![0.0f64; seeds]; JUDGES.len()]; methods.len()];
     for &scene in scenes {
@@ -116,32 +127,52 @@ pub fn run_robustness(
             .iter()
             .zip(&eyes)
             .zip(&resolved)
-            .map(|((_, eye), r)| (start..r.len()).map(|f| eye.filter(r, f, n)).collect())
+            .map(|((j, eye), r)| match j.filter {
+                Filter::Channels => channels_seen(r, &channels, start, n),
+                _ => (start..r.len()).map(|f| eye.filter(r, f, n)).collect(),
+            })
             .collect();
         // absolute[method][judge][seed]
         let mut absolute = vec![vec![vec![0.0f64; seeds]; JUDGES.len()]; methods.len()];
-        for (m, method) in methods.iter().enumerate() {
+        for (m, method_masks) in masks.iter().enumerate() {
             #[allow(clippy::needless_range_loop)] // seed indexes two levels down
             for seed in 0..seeds {
                 let renders = size.renders.max(1);
                 for r in 0..renders {
                     let placement = 100 + 1000 * seed as u64 + r as u64;
-                    let image = if *method == "fsot-planned" {
-                        let planned =
-                            planned_masks(scene, MADE_FOR_SIGMA, true, true, size, cache, seed as u64 + 1)?;
-                        render(scene, size.shot, &MaskSampler::planned(&planned.reads(), placement))
-                    } else {
-                        let mask = method_mask(method, MADE_FOR_SIGMA, size, cache, seed as u64 + 1)?;
-                        render(scene, size.shot, &MaskSampler::new(&mask, scene.dims(), placement))
+                    let image = match method_masks.get(seed) {
+                        Some(mask) => {
+                            render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement))
+                        }
+                        None => {
+                            let planned = planned_masks(
+                                scene,
+                                MADE_FOR_SIGMA,
+                                true,
+                                true,
+                                size,
+                                cache,
+                                seed as u64 + 1,
+                            )?;
+                            render(scene, size.shot, &MaskSampler::planned(&planned.reads(), placement))
+                        }
                     };
+                    // TAA once per alpha the judges use.
+                    let mut resolved_image: Vec<(f64, Vec<Vec<f64>>)> = Vec::new();
                     for (k, j) in JUDGES.iter().enumerate() {
-                        let frames = taa(&image, j.alpha);
+                        if !resolved_image.iter().any(|(a, _)| *a == j.alpha) {
+                            resolved_image.push((j.alpha, taa(&image, j.alpha)));
+                        }
+                        let frames =
+                            &resolved_image.iter().find(|(a, _)| *a == j.alpha).expect("resolved above").1;
                         let value = match j.filter {
-                            Filter::Channels => channels_apart(&frames, &resolved[k], &channels, start, n),
-                            Filter::Plain => {
-                                relative_errors(&frames, &resolved[k], &seen[k], &eyes[k], start, n).1
+                            Filter::Channels => {
+                                channels_apart(frames, &resolved[k], &seen[k], &channels, start, n)
                             }
-                            _ => relative_errors(&frames, &resolved[k], &seen[k], &eyes[k], start, n).0,
+                            Filter::Plain => {
+                                relative_errors(frames, &resolved[k], &seen[k], &eyes[k], start, n).1
+                            }
+                            _ => relative_errors(frames, &resolved[k], &seen[k], &eyes[k], start, n).0,
                         };
                         absolute[m][k][seed] += value / renders as f64;
                     }

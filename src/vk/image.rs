@@ -25,6 +25,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::buffer::{Buffer, Location};
 use super::check;
+use super::commands::barrier;
 use super::context::Context;
 use crate::error::{Error, Result};
 
@@ -335,21 +336,7 @@ pub fn read_back(ctx: &Context, target: &ImageTarget, texel_bytes: u32) -> Resul
             ctx.device().cmd_copy_image_to_buffer(cmd, target.image, src, staging.raw, &[whole_copy(target)])
         };
         transition(ctx, cmd, target, (src, target.layout_after), read, EVERY_COMMAND);
-        let host = vk::MemoryBarrier::default()
-            .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-            .dst_access_mask(vk::AccessFlags::HOST_READ);
-        // SAFETY: as above.
-        unsafe {
-            ctx.device().cmd_pipeline_barrier(
-                cmd,
-                vk::PipelineStageFlags::TRANSFER,
-                vk::PipelineStageFlags::HOST,
-                vk::DependencyFlags::empty(),
-                &[host],
-                &[],
-                &[],
-            )
-        };
+        barrier(ctx, cmd); // the copy's writes visible to the host
     })?;
     staging.read(bytes)
 }
