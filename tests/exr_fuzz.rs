@@ -1,6 +1,7 @@
 //! Fuzzing the EXR reader (proptest, a small fixed corpus of mutations per run):
 //! whatever bytes arrive, reading gives either a valid mask (every sample in
 //! [0, 1), as many as its tile holds) or an error with a reason, never a panic.
+//! `FSOT_FUZZ_CASES=N` runs N cases per property instead of 300.
 
 use fsot::io::exr;
 use fsot::mask::Mask;
@@ -68,7 +69,7 @@ fn apply(mut bytes: Vec<u8>, m: &Mutation) -> Vec<u8> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 300, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: std::env::var("FSOT_FUZZ_CASES").ok().and_then(|n| n.parse().ok()).unwrap_or(300), failure_persistence: None, ..ProptestConfig::default() })]
 
     #[test]
     fn mutated_files_are_read_or_refused_never_a_panic(
@@ -96,4 +97,20 @@ fn the_corpus_itself_reads_back() {
     for bytes in corpus() {
         assert!(exr::decode(&bytes).is_ok());
     }
+}
+
+/// The exr crate sizes its buffers from the header: a mutated file in a CI run once
+/// made it ask for 61 GB and abort the process. Here a data window grows to
+/// 100000 x 100000 the same way; the reader refuses it from the header alone.
+#[test]
+fn a_header_promising_more_pixels_than_the_file_holds_is_refused_before_reading() {
+    let mut bytes = corpus()[0].clone();
+    let key = b"dataWindow\0box2i\0";
+    let at = bytes.windows(key.len()).position(|w| w == key).expect("every part has a data window");
+    // box2i: size (4 bytes), then x_min, y_min, x_max, y_max.
+    let corners = at + key.len() + 4;
+    bytes[corners + 8..corners + 12].copy_from_slice(&99_999i32.to_le_bytes());
+    bytes[corners + 12..corners + 16].copy_from_slice(&99_999i32.to_le_bytes());
+    let reason = exr::decode(&bytes).expect_err("a 100000 x 100000 part from a few hundred bytes");
+    assert!(reason.contains("promises"), "{reason}");
 }

@@ -88,8 +88,41 @@ pub fn read(path: &Path) -> Result<Mask> {
     decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
 }
 
+/// How many times its own size a file may expand to. Deflate, the densest of
+/// EXR's codecs, tops out near 1032:1, so a valid file stays well inside this.
+const MAX_EXPANSION: usize = 4096;
+
+/// Reads the headers alone and refuses a file whose pixels would take more memory
+/// than its bytes could hold (or than the largest tile), before anything is
+/// allocated for them: the exr crate sizes its buffers from the header.
+fn check_promised_size(bytes: &[u8]) -> std::result::Result<(), String> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|e| format!("not a readable EXR file ({e})"))?;
+    let mut promised = 0usize;
+    for header in &meta.headers {
+        let part = header
+            .layer_size
+            .0
+            .checked_mul(header.layer_size.1)
+            .and_then(|pixels| pixels.checked_mul(header.channels.bytes_per_pixel))
+            .and_then(|b| promised.checked_add(b));
+        promised = part.unwrap_or(usize::MAX);
+    }
+    let largest_tile = crate::problem::MAX_POINTS * crate::problem::MAX_DIMS * 4;
+    let limit = bytes.len().saturating_mul(MAX_EXPANSION).min(largest_tile);
+    if promised > limit {
+        return Err(format!(
+            "the header promises {promised} bytes of pixels from a file of {} bytes (at most {limit} \
+             accepted); refused before reading the pixels",
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
 /// Decodes EXR bytes into a mask; the error is a reason for the user.
 pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
+    check_promised_size(bytes)?;
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
