@@ -2,8 +2,8 @@
 //! module per shader family in OUT_DIR: `glsl/sort/` (the generic radix sort of
 //! `src/vk/`) into `sort_shaders.rs`, `glsl/fsot/` (the optimizer's passes) into
 //! `fsot_shaders.rs`. Each `.comp` gives `pub const NAME: &[u8]` (the file's stem,
-//! upper case); a line `// variant SUFFIX: MACRO` in a `.comp` also compiles it
-//! with MACRO defined as `NAME_SUFFIX` (e.g. the float-atomic variants).
+//! upper case); a line `// variant SUFFIX: MACRO...` in a `.comp` also compiles it
+//! with each MACRO defined, as `NAME_SUFFIX` (e.g. the float-atomic variants).
 //! `#include "x.glsl"` resolves inside the family's folder.
 //!
 //! Also: `FSOT_COMMIT` (the git commit built, "-dirty" with uncommitted
@@ -87,7 +87,7 @@ fn compile_family(dir: &Path, out_dir: &Path, family: &str) {
             // every block, binding and offset against the Rust mirror; debug
             // instructions change no code.
             options.set_generate_debug_info();
-            if let Some(m) = &define {
+            for m in define.iter().flat_map(|m| m.split_whitespace()) {
                 options.add_macro_definition(m, None);
             }
             let include_dir = dir.to_path_buf();

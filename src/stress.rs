@@ -219,8 +219,9 @@ fn accumulate_gpu(ctx: &Context, n: u32) -> Result<Check> {
     })
 }
 
-/// A few iterations under an extreme setting or shape, on the CPU path and (d <= 2)
-/// the GPU: samples stay in [0, 1) and finite, and the objective does not get worse.
+/// A few iterations under an extreme setting or shape, on the CPU path and the GPU
+/// (d >= 3 where it has shaderFloat64): samples stay in [0, 1) and finite, and the
+/// objective does not get worse.
 fn extreme(
     name: &str,
     tile: Tile,
@@ -246,7 +247,7 @@ fn extreme(
             seconds,
         });
     };
-    let gpu = ctx.filter(|_| tile.dims <= 2);
+    let gpu = ctx.filter(|c| tile.dims <= crate::gpu::CLOSED_FORM_DIMS || c.info().float64);
     for (backend, ctx) in [("cpu", None), ("vulkan", gpu)] {
         if backend == "vulkan" && ctx.is_none() {
             continue;

@@ -96,7 +96,6 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--init", "missing.exr"], "cannot read"),
         (&["--init", "garbage.exr"], "not a readable EXR"),
         (&["--out", "no/such/folder/m.exr"], "does not exist"),
-        (&["--backend", "vulkan", "--dims", "3"], "d <= 2"),
         (&["--backend", "vulkan", "--device", "no-such-gpu"], "no device matches"),
         (&["--until", "sometimes"], "--until must be"),
         (&["--until", "objective:-1"], "--until must be"),
@@ -488,5 +487,37 @@ fn a_c_header_compiles_and_holds_the_masks_levels() {
                 }
             }
         }
+    }
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn vulkan_takes_three_four_and_eight_dimensions_with_the_validation_layer_on() {
+    // FSOT_VALIDATION=1: the command fails if the layer says anything.
+    let dir = tempfile::tempdir().unwrap();
+    for dims in ["3", "4", "8"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args([
+                "optimize",
+                "--backend",
+                "vulkan",
+                "--dims",
+                dims,
+                "--size",
+                "8x8x4",
+                "--iterations",
+                "20",
+            ])
+            .args(["--out", "m.exr"])
+            .env("FSOT_VALIDATION", "1")
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = format!("{}{}", stderr(&o), String::from_utf8_lossy(&o.stdout));
+        assert!(o.status.success(), "d = {dims}: {err}");
+        assert!(err.contains("backend: vulkan") && err.contains("(vulkan)"), "d = {dims}: {err}");
+        assert!(err.contains(&format!("d = {dims}")), "{err}");
+        let mask = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+        assert_eq!(mask.tile.dims, dims.parse::<usize>().unwrap());
     }
 }

@@ -3,7 +3,7 @@
 mod common;
 
 use fsot::backend::Backend;
-use fsot::gpu::shape::LANE_MAX;
+use fsot::gpu::shape::{TransportShape, LANE_BUDGET, LANE_MAX};
 use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::mask::Mask;
@@ -118,11 +118,17 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
 #[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
-        large_classes_with(transport);
+        large_classes_with(transport, 2);
     }
 }
 
-fn large_classes_with(transport: TransportKind) {
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn large_classes_in_three_dimensions_give_the_cpu_displacements() {
+    large_classes_with(TransportKind::Workgroup, 3);
+}
+
+fn large_classes_with(transport: TransportKind, dims: usize) {
     // One slice per iteration, so each read-back is one class. In classes of
     // thousands of points some projections lie within float32 rounding of each
     // other and may rank the other way round on the GPU; such a point must then
@@ -131,7 +137,7 @@ fn large_classes_with(transport: TransportKind) {
     if refused_here(&ctx, transport) {
         return;
     }
-    let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
+    let tile = Tile::new(16, 16, 8, 4, dims).unwrap();
     let mut s = settings("taa", 400, 5);
     s.slices = Some(1);
     let kernel = Kernel::new(s.kernel, &tile);
@@ -158,14 +164,14 @@ fn large_classes_with(transport: TransportKind) {
         let mut order: Vec<(f64, u32, f64)> = members
             .iter()
             .map(|&(p, delta)| {
-                let i = p as usize * 2;
-                (fsot::transport::project(&mask.samples[i..i + 2], &slice), p, delta)
+                let i = p as usize * dims;
+                (fsot::transport::project(&mask.samples[i..i + dims], &slice), p, delta)
             })
             .collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
         for (r, &(proj, p, delta)) in order.iter().enumerate() {
-            let i = p as usize * 2;
-            let along = g[i] * slice.theta[0] + g[i + 1] * slice.theta[1];
+            let i = p as usize * dims;
+            let along: f64 = (0..dims).map(|k| g[i + k] * slice.theta[k]).sum();
             if (along - delta).abs() < 1e-5 {
                 continue;
             }
@@ -183,7 +189,7 @@ fn large_classes_with(transport: TransportKind) {
             break;
         }
     }
-    eprintln!("{transport:?}: checked {checked} large classes, {ties} near-tie rank swaps");
+    eprintln!("{transport:?}, d = {dims}: checked {checked} large classes, {ties} near-tie rank swaps");
     assert!(checked >= 3, "too few large classes drawn");
     assert_eq!(gpu.overflowed(), 0);
     drop(gpu);
@@ -282,12 +288,79 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     common::assert_no_validation_messages(&ctx);
 }
 
+/// A run of `kernel` on `tile` with the transport forced, or why it is refused.
+fn forced(
+    ctx: &fsot::vk::Context,
+    tile: Tile,
+    kernel: &str,
+    transport: TransportKind,
+) -> Result<VulkanRun, String> {
+    let options =
+        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    VulkanRun::new(ctx, tile, settings(kernel, 5, 1), None, options).map_err(|e| e.to_string())
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions() {
+    // The f64 box-spline targets against the CPU path's f64 reference, on both
+    // transports. Per lane, a CPU implementation's loop budget takes the f64
+    // targets of small classes only: d = 4 and 8 with these classes are refused
+    // there, clearly, and its workgroups are sized so each invocation's share
+    // fits.
+    let Some(ctx) = common::gpu_context() else { return };
+    for dims in [3, 4, 8] {
+        let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
+        for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+            if refused_here(&ctx, transport) {
+                continue;
+            }
+            let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
+            let lane = TransportShape::lane_iterations(kernel.taps.len() as u32, dims);
+            if transport == TransportKind::PerLane && lane > LANE_BUDGET {
+                assert!(dims >= 4, "d = 3 must fit the per-lane budget here ({lane})");
+                let err = forced(&ctx, tile, "taa", transport).err().expect("over the loop budget");
+                assert!(err.contains("loop budget"), "{err}");
+                continue;
+            }
+            compare_on_mask(&Mask::white(tile, 21), "taa", true, transport);
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn full_runs_in_three_four_and_eight_dimensions_reach_the_cpu_objective_within_five_percent() {
+    let Some(ctx) = common::gpu_context() else { return };
+    for dims in [3, 4, 8] {
+        let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
+        let s = settings("perceptual-taa", 100, 7);
+        let cpu = optimize(tile, s, None).unwrap();
+        let mut gpu = VulkanRun::new(&ctx, tile, s, None, VulkanOptions::default()).unwrap();
+        while !gpu.finished() {
+            gpu.step_batch(u32::MAX).unwrap();
+        }
+        let g = gpu.mask().unwrap();
+        let (sc, sg) = (score(&cpu, s.kernel, 8192).objective, score(&g, s.kernel, 8192).objective);
+        let white = score(&Mask::white(tile, 7), s.kernel, 8192).objective;
+        eprintln!("d = {dims}: objective cpu {sc:.4e}, vulkan {sg:.4e}, white {white:.4e}");
+        assert!(sg < 0.8 * white, "d = {dims}: the run did not optimise ({sg} against white {white})");
+        assert!((sg - sc).abs() / sc < 0.05, "d = {dims}: cpu {sc} vulkan {sg}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     let Some(ctx) = common::gpu_context() else { return };
+    // A device without shaderFloat64 (here: the same device, wrapped as a host
+    // that did not enable it) cannot take d >= 3, and says so.
+    let guest =
+        fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
     let err = VulkanRun::new(
-        &ctx,
+        &guest,
         Tile::new(8, 8, 4, 1, 3).unwrap(),
         settings("taa", 5, 1),
         None,
@@ -295,7 +368,16 @@ fn tiles_the_gpu_path_cannot_take_get_a_clear_error() {
     )
     .err()
     .unwrap();
-    assert!(err.to_string().contains("d <= 2"), "{err}");
+    assert!(err.to_string().contains("shaderFloat64"), "{err}");
+    drop(guest);
+    // On a CPU implementation, classes whose f64 targets would pass its loop
+    // budget are refused rather than silently cut short: d = 8 with classes of
+    // thousands of samples (4 spp).
+    if ctx.info().is_cpu() {
+        let err = forced(&ctx, Tile::new(16, 16, 8, 4, 8).unwrap(), "taa", TransportKind::Workgroup).err();
+        let err = err.expect("d = 8 with large classes on a CPU implementation");
+        assert!(err.contains("loop budget") && err.contains("CPU backend"), "{err}");
+    }
     common::assert_no_validation_messages(&ctx);
 }
 

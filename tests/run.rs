@@ -109,22 +109,32 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
-    let tile = Tile::new(8, 8, 2, 1, 3).unwrap(); // d = 3: the CPU path only
-    let run = Run::start(tile, settings(5), None, RunOptions::default()).unwrap();
-    assert_eq!(run.backend().kind(), BackendKind::Cpu);
-    assert!(run.note().starts_with("cpu"), "{}", run.note());
     let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(8, 8, 2, 1, 3).unwrap();
+    if ctx.info().is_cpu() {
+        // Unhanded, auto looks for a GPU: a CPU implementation is not one.
+        let run = Run::start(tile, settings(5), None, RunOptions::default()).unwrap();
+        assert_eq!(run.backend().kind(), BackendKind::Cpu);
+        assert!(run.note().starts_with("cpu"), "{}", run.note());
+    }
     let handed = RunOptions { context: Some(ctx.clone()), ..RunOptions::default() };
-    let on_gpu = Run::start(Tile::new(8, 8, 2, 1, 2).unwrap(), settings(5), None, handed.clone()).unwrap();
-    assert_eq!(on_gpu.backend().kind(), BackendKind::Vulkan, "a handed context is taken whatever its type");
+    for dims in [2, 3, 8] {
+        let on_gpu =
+            Run::start(Tile::new(8, 8, 2, 1, dims).unwrap(), settings(5), None, handed.clone()).unwrap();
+        assert_eq!(on_gpu.backend().kind(), BackendKind::Vulkan, "d = {dims}: a handed context is taken");
+    }
+    // A device without shaderFloat64 cannot take d >= 3: auto says so and uses the CPU.
+    let guest =
+        fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
+    let handed = RunOptions { context: Some(guest.clone()), ..RunOptions::default() };
     let refused = Run::start(tile, settings(5), None, handed).unwrap();
     assert_eq!(refused.backend().kind(), BackendKind::Cpu);
     assert!(
-        refused.note().contains("no Vulkan GPU used") && refused.note().contains("d <= 2"),
+        refused.note().contains("no Vulkan GPU used") && refused.note().contains("shaderFloat64"),
         "{}",
         refused.note()
     );
-    drop((on_gpu, refused));
+    drop((refused, guest));
     common::assert_no_validation_messages(&ctx);
 }
 

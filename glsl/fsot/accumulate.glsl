@@ -10,7 +10,8 @@ void fsot_add_component(uint index, float value) {
 #endif
 }
 
-// The member `point` moves by delta along theta (d <= 2, as fsot_project).
+// The member `point` moves by delta along theta (components 0 and 1 written
+// out, as fsot_project; the rest in the FSOT_ANY_DIMS variants).
 void fsot_add_displacement(uint point, uint dims, float delta, float theta[FSOT_MAX_DIMS]) {
     uint base = point * dims;
     if (theta[0] != 0.0) {
@@ -19,6 +20,13 @@ void fsot_add_displacement(uint point, uint dims, float delta, float theta[FSOT_
     if (dims > 1u && theta[1] != 0.0) {
         fsot_add_component(base + 1u, delta * theta[1]);
     }
+#ifdef FSOT_ANY_DIMS
+    for (uint k = 2u; k < dims; ++k) {
+        if (theta[k] != 0.0) {
+            fsot_add_component(base + k, delta * theta[k]);
+        }
+    }
+#endif
 }
 
 // A class of n members whose squared distances to their targets sum to `squared`.

@@ -5,9 +5,13 @@
 // towards the exact target of rank r, and add the displacements into the
 // per-coordinate accumulators. Classes larger than FSOT_LOCAL_MAX are written out
 // for the global radix sort (transport_large.comp finishes them). Included by
-// build.rs as TRANSPORT (fixed point, deterministic) and TRANSPORT_FLOAT.
+// build.rs as TRANSPORT (fixed point, deterministic) and TRANSPORT_FLOAT, and
+// for d >= 3 (f64 targets) as TRANSPORT_DIMS and TRANSPORT_DIMS_FLOAT.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
+// variant DIMS: FSOT_ANY_DIMS
+// variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 #extension GL_KHR_shader_subgroup_basic : require
+#define FSOT_SHARED_BREAKS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "transport_common.glsl"
@@ -35,6 +39,13 @@ shared FsotSlice s_slice;
 shared uint s_n;
 shared int s_large;
 shared float s_part[gl_WorkGroupSize.x];
+
+// Sends the member of rank i towards `target`; its squared distance.
+float send(FsotSlice s, uint i, float target) {
+    float delta = target - s_key[i];
+    fsot_add_displacement(s_val[i], pc.dims, delta, s.theta);
+    return delta * delta;
+}
 
 void process_slice(uint slice) {
     uint tid = gl_LocalInvocationID.x;
@@ -90,14 +101,32 @@ void process_slice(uint slice) {
             sync();
         }
     }
-    // Only d <= 2 reaches the GPU path (the host checks): two components.
-    FsotTrapezoid z = fsot_trapezoid(s.theta[0], s.theta[1]);
+    FsotTargets z = fsot_targets(s);
     float local_cost = 0.0;
-    for (uint i = tid; i < n; i += wg) {
-        float delta = fsot_rank_target(z, i, n) - s_key[i];
-        local_cost += delta * delta;
-        fsot_add_displacement(s_val[i], pc.dims, delta, s.theta);
+#ifdef FSOT_ANY_DIMS
+    // Each invocation walks a run of the lower half's ranks (each quantile from
+    // the last), sending rank q and its mirror n - 1 - q.
+    fsot_fill_breaks(z, tid, wg);
+    sync();
+    uint half_n = n / 2u;
+    uint chunk = (half_n + wg - 1u) / wg;
+    uint q0 = min(tid * chunk, half_n), q1 = min(q0 + chunk, half_n);
+    if (q0 < q1) {
+        FsotWalk w = fsot_walk(z, n, q0);
+        for (uint q = q0; q < q1; ++q) {
+            double m = fsot_walk_step(z, n, w);
+            local_cost += send(s, q, fsot_box_low_target(z, m));
+            local_cost += send(s, n - 1u - q, fsot_box_high_target(z, m));
+        }
     }
+    if ((n & 1u) == 1u && tid == 0u) {
+        local_cost += send(s, half_n, fsot_box_centre(z));
+    }
+#else
+    for (uint i = tid; i < n; i += wg) {
+        local_cost += send(s, i, fsot_target(z, i, n));
+    }
+#endif
     s_part[tid] = local_cost;
     sync();
     for (uint stride = wg / 2u; stride > 0u; stride >>= 1) {

@@ -2,6 +2,7 @@
 // for CPU implementations): same buffers, same rules. Include after bindings.glsl
 // and the pass's push-constant block `pc` (TransportPush).
 #include "accumulate.glsl"
+#include "rank_targets.glsl"
 
 // Class size (samples) of a slice: taps whose threshold exceeds its level
 // (thresholds decrease), times spp.
@@ -32,9 +33,8 @@ uint fsot_class_point(FsotSlice s, uint i) {
 }
 
 // Projection of a point on the slice's direction after its toroidal shift.
-// Written out for d <= 2, the only dimensions the GPU path takes (the host
-// checks): a loop over a run-time count with indexed private arrays costs
-// gathers on SIMD drivers.
+// For d <= 2 written out: a loop over a run-time count with indexed private
+// arrays costs gathers on SIMD drivers.
 float fsot_project(FsotSlice s, uint point) {
     uint base = point * pc.dims;
     float y = samples[base] - s.shift[0];
@@ -43,6 +43,12 @@ float fsot_project(FsotSlice s, uint point) {
         y = samples[base + 1u] - s.shift[1];
         p += s.theta[1] * (y - floor(y));
     }
+#ifdef FSOT_ANY_DIMS
+    for (uint k = 2u; k < pc.dims; ++k) {
+        y = samples[base + k] - s.shift[k];
+        p += s.theta[k] * (y - floor(y));
+    }
+#endif
     return p;
 }
 

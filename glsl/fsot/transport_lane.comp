@@ -6,6 +6,8 @@
 // larger than FSOT_LANE_MAX go to the large-class path (global radix sort), as in
 // transport.comp; GPUs use that pass instead.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
+// variant DIMS: FSOT_ANY_DIMS
+// variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "transport_common.glsl"
@@ -59,6 +61,13 @@ void heap_sort(uint n) {
     }
 }
 
+// Sends the member of rank i towards `target`; its squared distance.
+float send(FsotSlice s, uint i, float target) {
+    float delta = target - sorted_key[i];
+    fsot_add_displacement(sorted_point[i], pc.dims, delta, s.theta);
+    return delta * delta;
+}
+
 void main() {
     uint slice = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
     if (slice >= pc.slices) {
@@ -81,15 +90,16 @@ void main() {
     // Bucket sort: O(n) expected, few per-lane memory accesses (each one a
     // gather on a SIMD driver), then an insertion sort that only has to order
     // keys within a bucket; ties by point index, the CPU's order.
-    FsotTrapezoid z = fsot_trapezoid(s.theta[0], s.theta[1]);
-    float scale = float(n) / max(z.a1 + z.a2, 1e-30);
+    FsotTargets z = fsot_targets(s);
+    float low = fsot_targets_low(z);
+    float scale = float(n) / max(fsot_targets_width(z), 1e-30);
     for (uint b = 0u; b < n; ++b) {
         bucket_start[b] = 0u;
     }
     for (uint i = 0u; i < n; ++i) {
         float p = fsot_project(s, fsot_class_point(s, i));
         key[i] = p;
-        bucket_start[lane_bucket(p, z.offset, scale, n)] += 1u;
+        bucket_start[lane_bucket(p, low, scale, n)] += 1u;
     }
     uint total = 0u;
     uint pairs = 0u; // pairs sharing a bucket: at most this many insertion moves
@@ -101,7 +111,7 @@ void main() {
     }
     for (uint i = 0u; i < n; ++i) {
         float p = key[i];
-        uint b = lane_bucket(p, z.offset, scale, n);
+        uint b = lane_bucket(p, low, scale, n);
         uint at = bucket_start[b];
         bucket_start[b] = at + 1u;
         sorted_key[at] = p;
@@ -137,12 +147,25 @@ void main() {
     } else {
         heap_sort(n);
     }
-    // Only d <= 2 reaches the GPU path (the host checks): two components.
     float cost = 0.0;
-    for (uint i = 0u; i < n; ++i) {
-        float delta = fsot_rank_target(z, i, n) - sorted_key[i];
-        cost += delta * delta;
-        fsot_add_displacement(sorted_point[i], pc.dims, delta, s.theta);
+#ifdef FSOT_ANY_DIMS
+    // The lower half's ranks in order, each quantile solved from the last
+    // (src/targets.rs: rank_targets), each with its mirror n - 1 - q.
+    fsot_fill_breaks_alone(z);
+    uint half_n = n / 2u;
+    FsotWalk w = fsot_walk(z, n, 0u);
+    for (uint q = 0u; q < half_n; ++q) {
+        double m = fsot_walk_step(z, n, w);
+        cost += send(s, q, fsot_box_low_target(z, m));
+        cost += send(s, n - 1u - q, fsot_box_high_target(z, m));
     }
+    if ((n & 1u) == 1u) {
+        cost += send(s, half_n, fsot_box_centre(z));
+    }
+#else
+    for (uint i = 0u; i < n; ++i) {
+        cost += send(s, i, fsot_target(z, i, n));
+    }
+#endif
     fsot_add_cost(pc.cost_slot, cost, n);
 }

@@ -17,9 +17,10 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/fsot_shaders.rs"));
 }
 
-/// Largest dimension the GPU path handles (its exact targets are the closed form
-/// for d <= 2).
-pub const GPU_MAX_DIMS: usize = 2;
+/// Largest dimension whose exact targets the GPU path takes in float32 closed
+/// form; beyond it, the f64 box spline (`glsl/fsot/targets.glsl`), which needs
+/// shaderFloat64.
+pub const CLOSED_FORM_DIMS: usize = 2;
 /// Iterations recorded per submission.
 pub const BATCH: u32 = 32;
 

@@ -4,7 +4,7 @@
 use super::buffers::RunBuffers;
 use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
-use super::shape::{TransportShape, LANE_MAX, LOCAL_MAX};
+use super::shape::{TransportShape, LANE_MAX, LARGE_WORKGROUP, LOCAL_MAX};
 use crate::error::Result;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
 
@@ -45,11 +45,12 @@ fn pipeline(
 }
 
 impl RunPipelines {
-    /// The passes for this shape and accumulator, bound to `buffers` (and the
-    /// large-class sort's buffers).
+    /// The passes for this shape, sample dimension and accumulator, bound to
+    /// `buffers` (and the large-class sort's buffers).
     pub fn new(
         ctx: &Context,
         shape: &TransportShape,
+        dims: usize,
         float_acc: bool,
         buffers: &RunBuffers,
         sort: Option<&RadixSort>,
@@ -63,11 +64,17 @@ impl RunPipelines {
             Ok(p)
         };
         let tpush = std::mem::size_of::<TransportPush>();
-        let transport_spv = match (shape.per_lane, float_acc) {
-            (true, true) => shaders::TRANSPORT_LANE_FLOAT,
-            (true, false) => shaders::TRANSPORT_LANE,
-            (false, true) => shaders::TRANSPORT_FLOAT,
-            (false, false) => shaders::TRANSPORT,
+        // d <= 2: the float32 closed-form targets; otherwise the f64 box spline.
+        let any_dims = dims > 2;
+        let transport_spv = match (shape.per_lane, any_dims, float_acc) {
+            (true, false, true) => shaders::TRANSPORT_LANE_FLOAT,
+            (true, false, false) => shaders::TRANSPORT_LANE,
+            (true, true, true) => shaders::TRANSPORT_LANE_DIMS_FLOAT,
+            (true, true, false) => shaders::TRANSPORT_LANE_DIMS,
+            (false, false, true) => shaders::TRANSPORT_FLOAT,
+            (false, false, false) => shaders::TRANSPORT,
+            (false, true, true) => shaders::TRANSPORT_DIMS_FLOAT,
+            (false, true, false) => shaders::TRANSPORT_DIMS,
         };
         let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
         let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, local_max];
@@ -80,10 +87,15 @@ impl RunPipelines {
                 let gather = pipeline(ctx, shaders::LARGE_GATHER, 0, &[256], 2)?;
                 let gather = bound(gather, GATHER_BY_SEGMENT, Some(&buffers.large_seg))?;
                 let gather = bound(gather, GATHER_BY_PROJECTION, Some(&buffers.large_pkey))?;
-                let spv = if float_acc { shaders::TRANSPORT_LARGE_FLOAT } else { shaders::TRANSPORT_LARGE };
-                // 128 invocations whatever the device: a class may hold taps x
-                // spp samples, and each invocation loops over n / WG.
-                let transport = bound(pipeline(ctx, spv, tpush, &[128], 1)?, 0, None)?;
+                let spv = match (any_dims, float_acc) {
+                    (false, true) => shaders::TRANSPORT_LARGE_FLOAT,
+                    (false, false) => shaders::TRANSPORT_LARGE,
+                    (true, true) => shaders::TRANSPORT_LARGE_DIMS_FLOAT,
+                    (true, false) => shaders::TRANSPORT_LARGE_DIMS,
+                };
+                // The same invocations whatever the device: a class may hold
+                // taps x spp samples, and each invocation loops over n / WG.
+                let transport = bound(pipeline(ctx, spv, tpush, &[LARGE_WORKGROUP], 1)?, 0, None)?;
                 let args = bound(pipeline(ctx, shaders::LARGE_ARGS, 0, &[], 1)?, 0, None)?;
                 Some(LargePipelines { args, gather, transport })
             }

@@ -16,7 +16,7 @@ use super::layout::{
 };
 use super::pipelines::{RunPipelines, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
-use super::{VulkanOptions, BATCH, GPU_MAX_DIMS};
+use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
 use crate::cpu_backend::FIXED_SCALE;
 use crate::error::{Error, Result};
@@ -64,10 +64,10 @@ impl VulkanRun {
         options: VulkanOptions,
     ) -> Result<Self> {
         let info = ctx.info().clone();
-        if tile.dims > GPU_MAX_DIMS {
-            return Err(Error::invalid(format!(
-                "the Vulkan optimizer handles d <= {GPU_MAX_DIMS} (closed-form targets); d = {} runs on the CPU backend",
-                tile.dims
+        if tile.dims > CLOSED_FORM_DIMS && !info.float64 {
+            return Err(Error::VulkanUnavailable(format!(
+                "{} lacks shaderFloat64, which the exact targets for d >= 3 need; d = {} runs on the CPU backend",
+                info.name, tile.dims
             )));
         }
         if !info.int64_atomics {
@@ -81,7 +81,7 @@ impl VulkanRun {
         let samples = initial_samples(&tile, &settings, init)?;
         let float_acc = !options.deterministic && info.float_atomic_add;
         let max_class = (kernel.taps.len() * tile.spp) as u32;
-        let shape = transport_shape(ctx, max_class, &options)?;
+        let shape = transport_shape(ctx, max_class, tile.dims, &options)?;
         let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
@@ -89,7 +89,7 @@ impl VulkanRun {
         let buffers =
             RunBuffers::new(ctx, &tile, &kernel, &thresholds, &samples, adam, float_acc, &large, local_max)?;
         let sort = buffers.large_sort(ctx, &large)?;
-        let pipelines = RunPipelines::new(ctx, &shape, float_acc, &buffers, sort.as_ref())?;
+        let pipelines = RunPipelines::new(ctx, &shape, tile.dims, float_acc, &buffers, sort.as_ref())?;
         let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,
@@ -283,9 +283,13 @@ impl VulkanRun {
 }
 
 /// The transport shape for this device and kernel, or why the asked one cannot be.
-fn transport_shape(ctx: &Context, max_class: u32, options: &VulkanOptions) -> Result<TransportShape> {
+fn transport_shape(
+    ctx: &Context,
+    max_class: u32,
+    dims: usize,
+    options: &VulkanOptions,
+) -> Result<TransportShape> {
     let info = ctx.info();
-    let mut shape = TransportShape::for_device(info, max_class, options.transport_shape);
     match options.transport {
         Some(TransportKind::PerLane) if max_class > LOOP_BUDGET / 2 => {
             return Err(Error::invalid("the per-lane transport cannot take classes this large"))
@@ -298,9 +302,15 @@ fn transport_shape(ctx: &Context, max_class: u32, options: &VulkanOptions) -> Re
                 info.name
             )))
         }
-        Some(TransportKind::PerLane) => shape.per_lane = true,
-        Some(TransportKind::Workgroup) => shape.per_lane = false,
-        None => {}
+        _ => {}
+    }
+    let shape = TransportShape::choose(info, max_class, dims, options.transport, options.transport_shape);
+    if !shape.fits_loop_budget(info, max_class, dims) {
+        return Err(Error::invalid(format!(
+            "classes of up to {max_class} samples in d = {dims} would take {} past its loop budget \
+             (a CPU implementation drops loop iterations past 65535 per invocation); use the CPU backend",
+            info.name
+        )));
     }
     Ok(shape)
 }

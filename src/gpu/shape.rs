@@ -13,6 +13,21 @@ pub const LANE_MAX: u32 = 2048;
 /// Loop iterations one transport invocation may spend over its slices: under half
 /// of lavapipe's cap of 65535 per invocation.
 pub const LOOP_BUDGET: u32 = 30_000;
+/// Loop iterations one per-lane invocation may spend on its slice: its sort's
+/// worst case (the heap-sort fallback, about 47k at LANE_MAX) fits, as do the
+/// f64 targets of small classes.
+pub const LANE_BUDGET: u32 = 60_000;
+/// Workgroup size of the large-class transport (transport_large.comp).
+pub const LARGE_WORKGROUP: u32 = 128;
+
+/// The f64 targets (d >= 3) walk the lower half's ranks, each quantile a
+/// bracketed Newton solve from the last, each step one evaluation of 2^d terms.
+/// Measured (the same solver in f64, random directions, d = 3 to 8, classes of
+/// 16 to 2048): 2.4 to 4.2 steps per rank on average, plus one evaluation of the
+/// moment; at most 21 steps from a cold start. Budgeted: twice the mean per rank,
+/// and 24 for the start.
+const WALK_EVALS: u32 = 10;
+const COLD_EVALS: u32 = 24;
 
 /// The two transport passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,21 +63,53 @@ impl TransportShape {
     /// per-lane transport when the kernel allows. `forced` (invocations, slices
     /// per workgroup): the workgroup transport with that shape.
     pub fn for_device(info: &DeviceInfo, max_class: u32, forced: Option<(u32, u32)>) -> Self {
-        let mut shape = if info.is_cpu() {
-            let wg = info.subgroup_size.clamp(1, 128);
+        Self::choose(info, max_class, 2, None, forced)
+    }
+
+    /// As `for_device`, for samples of `dims` dimensions and a transport `kind`
+    /// (None: by device). For d >= 3 on CPU implementations: the per-lane
+    /// transport only where its f64 targets stay within LANE_BUDGET, otherwise
+    /// workgroups large enough that each invocation's share of the targets stays
+    /// within LOOP_BUDGET (`fits_loop_budget` says whether a shape does).
+    pub fn choose(
+        info: &DeviceInfo,
+        max_class: u32,
+        dims: usize,
+        kind: Option<TransportKind>,
+        forced: Option<(u32, u32)>,
+    ) -> Self {
+        let per_lane = match kind {
+            Some(TransportKind::PerLane) => true,
+            Some(TransportKind::Workgroup) => false,
             // Per lane when one invocation can also write out the largest class
             // for the large-class path within the loop budget.
-            let per_lane = max_class <= LOOP_BUDGET / 2;
+            None => {
+                info.is_cpu()
+                    && max_class <= LOOP_BUDGET / 2
+                    && Self::lane_iterations(max_class.min(LANE_MAX), dims) <= LANE_BUDGET
+            }
+        };
+        let mut shape = if info.is_cpu() {
+            let wg = info.subgroup_size.clamp(1, 128);
             Self { workgroup: wg, slices_per_group: 16, one_subgroup: true, per_lane }
         } else {
             Self {
                 workgroup: 128.min(info.max_workgroup_invocations),
                 slices_per_group: 1,
                 one_subgroup: false,
-                per_lane: false,
+                per_lane,
             }
         };
-        let worst = Self::slice_iterations(max_class.min(LOCAL_MAX), shape.workgroup);
+        let local = max_class.min(LOCAL_MAX);
+        if info.is_cpu() && !per_lane {
+            while shape.workgroup < info.max_workgroup_invocations.min(1024)
+                && Self::group_iterations(local, shape.workgroup, dims) > LOOP_BUDGET
+            {
+                shape.workgroup *= 2;
+            }
+            shape.one_subgroup = shape.workgroup <= info.subgroup_size;
+        }
+        let worst = Self::group_iterations(local, shape.workgroup, dims);
         shape.slices_per_group = shape.slices_per_group.min((LOOP_BUDGET / worst).max(1));
         if let Some((wg, spg)) = forced.filter(|&(wg, spg)| wg > 0 && spg > 0) {
             shape.workgroup = wg.min(info.max_workgroup_invocations);
@@ -82,6 +129,53 @@ impl TransportShape {
         let per_stage = p.div_ceil(wg);
         let stages = log * (log + 1) / 2;
         stages * (per_stage + 1) + 3 * per_stage + 2 * log + 64
+    }
+
+    /// Loop iterations of the f64 targets (d >= 3) for a walk over `ranks`
+    /// consecutive ranks: filling the subset sums, a cold start, the steps.
+    pub fn walk_iterations(ranks: u32, dims: usize) -> u32 {
+        if dims <= 2 {
+            return 0;
+        }
+        let terms = 1u32 << dims;
+        let eval = terms + 1;
+        terms * dims as u32 + (COLD_EVALS + ranks * WALK_EVALS) * eval
+    }
+
+    /// Upper bound on one per-lane invocation's loop iterations for a class of
+    /// `n` (n <= LANE_MAX): clear, count, prefix and place (n each), the sort's
+    /// worst case (insertion moves or the heap-sort fallback), then the targets
+    /// (n for d <= 2; the walk over n / 2 ranks otherwise).
+    pub fn lane_iterations(n: u32, dims: usize) -> u32 {
+        let n = n.max(2);
+        let heap = 3 * n / 2 + (3 * n / 2) * n.ilog2();
+        let targets = if dims <= 2 { n } else { Self::walk_iterations(n / 2, dims) };
+        4 * n + (5 * n).max(heap) + targets
+    }
+
+    /// Upper bound on one workgroup invocation's loop iterations for a class of
+    /// `n` (n <= LOCAL_MAX) with `wg` invocations in `dims` dimensions.
+    pub fn group_iterations(n: u32, wg: u32, dims: usize) -> u32 {
+        Self::slice_iterations(n, wg) + Self::walk_iterations((n / 2).div_ceil(wg), dims)
+    }
+
+    /// Whether every invocation of this shape, and of the large-class pass for
+    /// classes up to `max_class`, stays within lavapipe's loop budget (only CPU
+    /// implementations have one).
+    pub fn fits_loop_budget(&self, info: &DeviceInfo, max_class: u32, dims: usize) -> bool {
+        if !info.is_cpu() {
+            return true;
+        }
+        let local = if self.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let fits_small = if self.per_lane {
+            Self::lane_iterations(max_class.min(local), dims) <= LANE_BUDGET
+        } else {
+            self.slices_per_group * Self::group_iterations(max_class.min(local), self.workgroup, dims)
+                <= LOOP_BUDGET
+        };
+        let fits_large = max_class <= local
+            || Self::walk_iterations((max_class / 2).div_ceil(LARGE_WORKGROUP), dims) <= LOOP_BUDGET;
+        fits_small && fits_large
     }
 
     /// Workgroups of the transport pass for `slices` slices.
@@ -126,6 +220,37 @@ mod tests {
         let heap = 3 * n / 2 + (3 * n / 2) * log;
         let per_lane = 5 * n + insertion.max(heap);
         assert!(per_lane < 50_000, "{per_lane}");
+        // The f64 targets: per lane, d = 3 fits at a few hundred samples and d = 8
+        // does not; workgroups grow until every invocation's share fits.
+        assert!(TransportShape::lane_iterations(700, 3) <= LANE_BUDGET);
+        assert!(TransportShape::lane_iterations(700, 8) > LANE_BUDGET);
+        let lavapipe = DeviceInfo {
+            name: "llvmpipe".into(),
+            driver: String::new(),
+            device_type: ash::vk::PhysicalDeviceType::CPU,
+            subgroup_size: 8,
+            max_storage_buffer_range: 1 << 27,
+            max_workgroup_invocations: 1024,
+            max_shared_memory: 32768,
+            timestamp_period_ns: 1.0,
+            float_atomic_add: true,
+            int64_atomics: true,
+            subgroup_ballot: true,
+            float64: true,
+        };
+        for dims in 1..=8 {
+            for max_class in [2u32, 16, 100, 744, 2048] {
+                let shape = TransportShape::choose(&lavapipe, max_class, dims, None, None);
+                assert!(
+                    shape.fits_loop_budget(&lavapipe, max_class, dims),
+                    "d = {dims}, {max_class}: {shape:?}"
+                );
+                assert!(shape.per_lane || dims > 2 || max_class > LOOP_BUDGET / 2, "{dims} {max_class}");
+            }
+        }
+        // Large classes of d = 8 pass the large-class pass's budget: refused.
+        let shape = TransportShape::choose(&lavapipe, 20_000, 8, None, None);
+        assert!(!shape.fits_loop_budget(&lavapipe, 20_000, 8));
         // A bitonic network of 2048 on 8 invocations: 66 stages of 256 pairs.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 256);
     }

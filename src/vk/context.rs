@@ -33,9 +33,9 @@ pub struct ContextOptions {
 
 /// A device made by a host application (a renderer) for fsot to work on. fsot
 /// never destroys these handles; the host keeps them alive while the Context
-/// lives. `int64_atomics` and `float_atomic_add` say which of those features the
-/// host enabled on the device (the Vulkan optimizer needs the first; the second
-/// is optional).
+/// lives. `int64_atomics`, `float_atomic_add` and `float64` say which of those
+/// features the host enabled on the device (the Vulkan optimizer needs the first,
+/// and the third for d >= 3; the second is optional).
 #[derive(Clone)]
 pub struct ExternalDevice {
     pub entry: ash::Entry,
@@ -46,6 +46,8 @@ pub struct ExternalDevice {
     pub queue_index: u32,
     pub int64_atomics: bool,
     pub float_atomic_add: bool,
+    /// shaderFloat64.
+    pub float64: bool,
     /// The lock the host takes around its own submissions to this queue; fsot
     /// takes it around each of its submissions. None: the host does not submit to
     /// this queue while fsot works on it (fsot then locks its own).
@@ -89,7 +91,9 @@ impl Context {
         let mut float_atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomic_add(info.float_atomic_add);
         let mut extensions: Vec<*const i8> = Vec::new();
-        let features = vk::PhysicalDeviceFeatures::default().shader_int64(info.int64_atomics);
+        let features = vk::PhysicalDeviceFeatures::default()
+            .shader_int64(info.int64_atomics)
+            .shader_float64(info.float64);
         let mut features12 =
             vk::PhysicalDeviceVulkan12Features::default().shader_buffer_int64_atomics(info.int64_atomics);
         let mut create = vk::DeviceCreateInfo::default()
@@ -113,6 +117,7 @@ impl Context {
             queue_index: 0,
             int64_atomics: info.int64_atomics,
             float_atomic_add: info.float_atomic_add,
+            float64: info.float64,
             queue_lock: None,
         };
         Self::build(external, info, Some(instance), messages)
@@ -125,6 +130,7 @@ impl Context {
         let mut info = device::info(&external.instance, external.physical_device);
         info.int64_atomics &= external.int64_atomics;
         info.float_atomic_add &= external.float_atomic_add;
+        info.float64 &= external.float64;
         Self::build(external, info, None, Box::new(Mutex::new(Vec::new())))
     }
 
@@ -200,6 +206,7 @@ impl Context {
             queue_index: s.queue_index,
             int64_atomics: s.info.int64_atomics,
             float_atomic_add: s.info.float_atomic_add,
+            float64: s.info.float64,
             queue_lock: Some(s.queue_lock.clone()),
         }
     }

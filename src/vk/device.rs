@@ -21,6 +21,8 @@ pub struct DeviceInfo {
     pub int64_atomics: bool,
     /// Subgroup ballot operations in compute shaders (the radix sort needs them).
     pub subgroup_ballot: bool,
+    /// shaderFloat64: 64-bit floats in shaders.
+    pub float64: bool,
 }
 
 impl DeviceInfo {
@@ -88,6 +90,7 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
     let mut plain2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
     // SAFETY: as above.
     unsafe { instance.get_physical_device_features2(pd, &mut plain2) };
+    let float64 = plain2.features.shader_float64 == vk::TRUE;
     let int64_atomics =
         plain2.features.shader_int64 == vk::TRUE && features12.shader_buffer_int64_atomics == vk::TRUE;
     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
@@ -117,5 +120,6 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         int64_atomics,
         subgroup_ballot: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT),
+        float64,
     }
 }

@@ -127,6 +127,7 @@ impl Host {
             queue_index: 0,
             int64_atomics: self.int64_atomics,
             float_atomic_add: false,
+            float64: false,
             queue_lock: Some(self.lock.clone()),
         })
         .unwrap()
