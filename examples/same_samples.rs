@@ -19,8 +19,18 @@ fn main() -> ExitCode {
     };
     let differing = a.samples.iter().zip(&b.samples).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
     let same = a.tile == b.tile && differing == 0;
+    // Distance on the torus: 0.999 and 0.001 are 0.002 apart.
+    let largest = a
+        .samples
+        .iter()
+        .zip(&b.samples)
+        .map(|(x, y)| {
+            let d = (x - y).abs();
+            d.min(1.0 - d)
+        })
+        .fold(0.0f32, f32::max);
     println!(
-        "{}: {} of {} samples differ",
+        "{}: {} of {} samples differ, by at most {largest:e} (on the torus)",
         if same { "bit-identical" } else { "DIFFERENT" },
         differing + a.samples.len().abs_diff(b.samples.len()),
         a.samples.len()

@@ -1,5 +1,6 @@
 //! The CPU backend: the reference implementation of the optimizer, multi-threaded
-//! with rayon (`CpuRun`, one implementation of `backend::Backend`). Deterministic whatever the thread count: slices are pure functions of
+//! with rayon (`CpuRun`, one implementation of `backend::Backend`). Deterministic
+//! whatever the thread count: slices are pure functions of
 //! (seed, iteration, index), displacements are summed in 64-bit fixed point (integer
 //! addition is associative, so the order in which threads add does not matter), and
 //! the update is element-wise.
@@ -23,36 +24,73 @@ use crate::transport::{mean_cost, transport_slice, Scratch, SliceCost};
 /// 2^23 of headroom over the largest sums that occur).
 pub const FIXED_SCALE: f64 = (1u64 << 40) as f64;
 
-/// Sparse per-sample accumulation of displacements, in fixed point.
-pub struct Accumulator {
-    values: Vec<AtomicI64>,
+/// `x.round() as i64` (half away from zero) without a call to round, which is not
+/// inlined without SSE4.1: x - trunc(x) is exact for |x| < 2^52.
+#[inline]
+pub fn round_half_away(x: f64) -> i64 {
+    let i = x as i64;
+    let frac = x - i as f64;
+    if frac >= 0.5 {
+        i + 1
+    } else if frac <= -0.5 {
+        i - 1
+    } else {
+        i
+    }
 }
+
+/// Per-coordinate sums of displacements in fixed point (2^-40): integer sums, so
+/// the result is the same whatever order the contributions arrive in. Each
+/// worker thread of the pool adds into its own lane with a plain load and store
+/// (one writer per lane: no locked instruction, no cache line passed between
+/// cores); a thread outside the pool, or a pool larger than at creation, adds
+/// into a shared lane with an atomic add. Reading sums the lanes. Tiles whose
+/// lanes would take more than LANES_MAX_BYTES use the shared lane alone.
+pub struct Accumulator {
+    /// One per pool thread, then the shared lane.
+    lanes: Vec<Vec<AtomicI64>>,
+    len: usize,
+}
+
+/// Memory the per-thread lanes may take.
+const LANES_MAX_BYTES: usize = 256 << 20;
 
 impl Accumulator {
     pub fn new(len: usize) -> Self {
-        Self { values: (0..len).map(|_| AtomicI64::new(0)).collect() }
+        let threads = rayon::current_num_threads();
+        let own = if (threads + 1) * len * 8 <= LANES_MAX_BYTES && threads > 1 { threads } else { 0 };
+        let lanes = (0..=own).map(|_| (0..len).map(|_| AtomicI64::new(0)).collect()).collect();
+        Self { lanes, len }
     }
     #[inline]
     pub fn add(&self, index: usize, value: f64) {
-        let q = (value * FIXED_SCALE).round() as i64;
-        self.values[index].fetch_add(q, Ordering::Relaxed);
+        let q = round_half_away(value * FIXED_SCALE);
+        let shared = self.lanes.len() - 1;
+        match rayon::current_thread_index().filter(|&t| t < shared) {
+            // This thread is the lane's only writer: a load and a store suffice.
+            Some(t) => {
+                let slot = &self.lanes[t][index];
+                slot.store(slot.load(Ordering::Relaxed) + q, Ordering::Relaxed);
+            }
+            None => {
+                self.lanes[shared][index].fetch_add(q, Ordering::Relaxed);
+            }
+        }
     }
-    /// Reads one sum and resets it to zero.
+    /// The sum at `index`, which is reset to zero. Call when no thread adds.
     #[inline]
     pub fn take(&self, index: usize) -> f64 {
-        self.values[index].swap(0, Ordering::Relaxed) as f64 / FIXED_SCALE
+        let sum: i64 = self.lanes.iter().map(|lane| lane[index].swap(0, Ordering::Relaxed)).sum();
+        sum as f64 / FIXED_SCALE
     }
     pub fn len(&self) -> usize {
-        self.values.len()
+        self.len
     }
     pub fn is_empty(&self) -> bool {
-        self.values.is_empty()
+        self.len == 0
     }
 }
 
-/// Runs one iteration: `slices` slices of iteration number `iteration`, then the
-/// update with step scale `scale` (the schedule's). Returns the iteration's
-/// objective estimate (before its update).
 #[allow(clippy::too_many_arguments)]
 pub fn iterate(
     samples: &mut [f32],
@@ -270,5 +308,22 @@ impl Backend for CpuRun {
 
     fn report(&self) -> Report {
         Report::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rounding_without_libm_matches_round_half_away_from_zero() {
+        let below_half = 0.5 - f64::EPSILON / 4.0; // 0.49999999999999994
+        let mut values = vec![0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, below_half, -below_half, 1e-300];
+        values.extend([(1u64 << 51) as f64 + 0.5, -((1u64 << 51) as f64) - 0.5, 4503599627370495.5]);
+        let mut rng = crate::rng::Stream::new(7);
+        values.extend((0..100_000).map(|_| (rng.next_f64() - 0.5) * FIXED_SCALE * 0.02));
+        for v in values {
+            assert_eq!(round_half_away(v), v.round() as i64, "{v:e}");
+        }
     }
 }

@@ -199,7 +199,7 @@ pub fn bench_scatter(ctx: &Context, n: u32, repeats: u32) -> Result<ScatterBench
             return Err(Error::invalid(format!("the GPU's float scatter is off by {e:e}")));
         }
     }
-    // The CPU path's accumulator: contributions in parallel chunks, atomics.
+    // The CPU path's accumulator: contributions in parallel chunks, a lane per thread.
     let cpu_acc = Accumulator::new(targets as usize);
     let mut cpu_times = Vec::new();
     let mut cpu_sums = Vec::new();
