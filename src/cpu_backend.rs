@@ -52,6 +52,26 @@ pub struct Accumulator {
     len: usize,
 }
 
+/// Where one thread adds: its own lane, or the shared one.
+pub struct Lane<'a> {
+    values: &'a [AtomicI64],
+    own: bool,
+}
+
+impl Lane<'_> {
+    #[inline]
+    pub fn add(&self, index: usize, value: f64) {
+        let q = round_half_away(value * FIXED_SCALE);
+        let slot = &self.values[index];
+        if self.own {
+            // This thread is the lane's only writer: a load and a store suffice.
+            slot.store(slot.load(Ordering::Relaxed) + q, Ordering::Relaxed);
+        } else {
+            slot.fetch_add(q, Ordering::Relaxed);
+        }
+    }
+}
+
 /// Memory the per-thread lanes may take.
 const LANES_MAX_BYTES: usize = 256 << 20;
 
@@ -62,19 +82,19 @@ impl Accumulator {
         let lanes = (0..=own).map(|_| (0..len).map(|_| AtomicI64::new(0)).collect()).collect();
         Self { lanes, len }
     }
+    /// Adds `value` at `index`, in this thread's lane.
     #[inline]
     pub fn add(&self, index: usize, value: f64) {
-        let q = round_half_away(value * FIXED_SCALE);
+        self.lane().add(index, value);
+    }
+
+    /// This thread's lane (look it up once, add many times).
+    #[inline]
+    pub fn lane(&self) -> Lane<'_> {
         let shared = self.lanes.len() - 1;
         match rayon::current_thread_index().filter(|&t| t < shared) {
-            // This thread is the lane's only writer: a load and a store suffice.
-            Some(t) => {
-                let slot = &self.lanes[t][index];
-                slot.store(slot.load(Ordering::Relaxed) + q, Ordering::Relaxed);
-            }
-            None => {
-                self.lanes[shared][index].fetch_add(q, Ordering::Relaxed);
-            }
+            Some(t) => Lane { values: &self.lanes[t], own: true },
+            None => Lane { values: &self.lanes[shared], own: false },
         }
     }
     /// The sum at `index`, which is reset to zero. Call when no thread adds.
@@ -111,11 +131,12 @@ pub fn iterate(
             .into_par_iter()
             .map_init(Scratch::default, |scratch, index| {
                 let slice = sampler.draw(iteration, index);
+                let lane = acc.lane();
                 transport_slice(samples, tile, kernel, &slice, scratch, |point, delta| {
                     let base = point as usize * d;
                     for k in 0..d {
                         if slice.theta[k] != 0.0 {
-                            acc.add(base + k, delta * slice.theta[k]);
+                            lane.add(base + k, delta * slice.theta[k]);
                         }
                     }
                 })
