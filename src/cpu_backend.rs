@@ -30,13 +30,8 @@ pub const FIXED_SCALE: f64 = (1u64 << 40) as f64;
 pub fn round_half_away(x: f64) -> i64 {
     let i = x as i64;
     let frac = x - i as f64;
-    if frac >= 0.5 {
-        i + 1
-    } else if frac <= -0.5 {
-        i - 1
-    } else {
-        i
-    }
+    // Branch-free: which way a fraction goes is a coin toss.
+    i + (frac >= 0.5) as i64 - (frac <= -0.5) as i64
 }
 
 /// Per-coordinate sums of displacements in fixed point (2^-40): integer sums, so
