@@ -46,6 +46,13 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   step $B/fsot optimize --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa-det.exr"
   step $B/fsot optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile --out "$OUT/h100-32x32x16-taa.exr"
   step $B/fsot score --kernel taa "$OUT/h100-32x32x16-taa.exr"
+  # Issue 16: the paper's tile at 256x256x64, and d = 4 and 8 (f64 targets) on
+  # the GPU beside the CPU path at 64x64x16.
+  step $B/fsot optimize --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile --out "$OUT/gpu-256x256x64-ptaa.exr"
+  for d in 4 8; do
+    step $B/fsot optimize --backend vulkan --size 64x64x16 --dims $d --kernel perceptual-taa --profile --out "$OUT/gpu-64x64x16-ptaa-d$d.exr"
+    [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --backend cpu --size 64x64x16 --dims $d --kernel perceptual-taa --out "$OUT/cpu-64x64x16-ptaa-d$d.exr"
+  done
   # Issue 13: a scene plan on the GPU (1-D + 2-D + invisible, 64x64x32), and the
   # plateau rule on the paper's tile.
   step $B/fsot optimize --scene bench/results/issue13-new-scene.toml --out "$OUT/scene" --backend vulkan

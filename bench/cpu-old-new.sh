@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# The CPU path's time per iteration, an old build against this one in one run, on
+# the two problems issue 16 names (32x32x16 and 64x64x16, d = 2, taa, all cores):
+# three alternating runs of each binary per problem, the median, and whether the
+# two binaries' masks are bit-identical (examples/same_samples.rs).
+# Usage: bench/cpu-old-new.sh OLD_REV OUT_FILE   (OLD_REV built in a worktree)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+old_rev=${1:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
+out=${2:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
+work=$(mktemp -d)
+trap 'git worktree remove --force "$work/old" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
+git worktree add --quiet --detach "$work/old" "$old_rev"
+(cd "$work/old" && CARGO_TARGET_DIR="$PWD/../old-target" cargo build --release --quiet --bin fsot)
+cargo build --release --quiet --bin fsot --example same_samples
+old="$work/old-target/release/fsot"
+new=target/release/fsot
+head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+{
+  echo "# bench/cpu-old-new.sh: $head"
+  echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | masks"
+  echo "---|---|---|---|---|---"
+  for problem in 32x32x16:1000 64x64x16:300; do
+    size=${problem%%:*}
+    its=${problem##*:}
+    for bin in old new; do : > "$work/$bin.times"; done
+    for round in 1 2 3; do
+      for bin in old new; do
+        exe=$old
+        [ "$bin" = new ] && exe=$new
+        line=$("$exe" optimize --backend cpu --size "$size" --dims 2 --kernel taa --seed 7 \
+          --iterations "$its" --out "$work/$bin-$size.exr" 2>&1 | grep -o "iterations in [0-9.]* s")
+        echo "$line" | awk '{print $3}' >> "$work/$bin.times"
+      done
+    done
+    o=$(sort -g "$work/old.times" | sed -n 2p)
+    n=$(sort -g "$work/new.times" | sed -n 2p)
+    same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr" | head -1 | cut -d: -f1 || true)
+    echo "$size d=2 taa | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $same"
+  done
+} | tee "$out"
