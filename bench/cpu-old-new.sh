@@ -3,17 +3,21 @@
 # the two problems issue 16 names (32x32x16 and 64x64x16, d = 2, taa, all cores):
 # three alternating runs of each binary per problem, the median, and whether the
 # two binaries' masks are bit-identical (examples/same_samples.rs).
-# Usage: bench/cpu-old-new.sh OLD_REV OUT_FILE   (OLD_REV built in a worktree)
+# Usage: [OLD_BIN=path] bench/cpu-old-new.sh OLD_REV OUT_FILE   (else OLD_REV is built in a worktree)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 old_rev=${1:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
 out=${2:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
 work=$(mktemp -d)
 trap 'git worktree remove --force "$work/old" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
-git worktree add --quiet --detach "$work/old" "$old_rev"
-(cd "$work/old" && CARGO_TARGET_DIR="$PWD/../old-target" cargo build --release --quiet --bin fsot)
+# OLD_BIN: a binary already built from OLD_REV (saves the build).
+old=${OLD_BIN:-}
+if [ -z "$old" ]; then
+  git worktree add --quiet --detach "$work/old" "$old_rev"
+  (cd "$work/old" && CARGO_TARGET_DIR="$PWD/../old-target" cargo build --release --quiet --bin fsot)
+  old="$work/old-target/release/fsot"
+fi
 cargo build --release --quiet --bin fsot --example same_samples
-old="$work/old-target/release/fsot"
 new=target/release/fsot
 head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
