@@ -22,8 +22,8 @@ new=target/release/fsot
 head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# bench/cpu-old-new.sh: $head"
-  echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | masks"
-  echo "---|---|---|---|---|---"
+  echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | objective old / new | masks"
+  echo "---|---|---|---|---|---|---"
   for problem in 32x32x16:1000 64x64x16:300; do
     size=${problem%%:*}
     its=${problem##*:}
@@ -33,13 +33,14 @@ head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)
         exe=$old
         [ "$bin" = new ] && exe=$new
         line=$("$exe" optimize --backend cpu --size "$size" --dims 2 --kernel taa --seed 7 \
-          --iterations "$its" --out "$work/$bin-$size.exr" 2>&1 | grep -o "iterations in [0-9.]* s")
-        echo "$line" | awk '{print $3}' >> "$work/$bin.times"
+          --iterations "$its" --out "$work/$bin-$size.exr" 2>&1 | grep "iterations in")
+        echo "$line" | grep -o "iterations in [0-9.]* s" | awk '{print $3}' >> "$work/$bin.times"
+        echo "$line" | grep -o -- "-> [0-9.e-]*" | awk '{print $2}' > "$work/$bin.objective"
       done
     done
     o=$(sort -g "$work/old.times" | sed -n 2p)
     n=$(sort -g "$work/new.times" | sed -n 2p)
-    same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr" | head -1 | cut -d: -f1 || true)
-    echo "$size d=2 taa | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $same"
+    same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr" | head -1 || true)
+    echo "$size d=2 taa | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $(cat "$work/old.objective") / $(cat "$work/new.objective") | $same"
   done
 } | tee "$out"
