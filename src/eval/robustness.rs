@@ -160,11 +160,14 @@ pub fn run_robustness(
                     // TAA once per alpha the judges use.
                     let mut resolved_image: Vec<(f64, Vec<Vec<f64>>)> = Vec::new();
                     for (k, j) in JUDGES.iter().enumerate() {
-                        if !resolved_image.iter().any(|(a, _)| *a == j.alpha) {
-                            resolved_image.push((j.alpha, taa(&image, j.alpha)));
-                        }
-                        let frames =
-                            &resolved_image.iter().find(|(a, _)| *a == j.alpha).expect("resolved above").1;
+                        let at = match resolved_image.iter().position(|(a, _)| *a == j.alpha) {
+                            Some(at) => at,
+                            None => {
+                                resolved_image.push((j.alpha, taa(&image, j.alpha)));
+                                resolved_image.len() - 1
+                            }
+                        };
+                        let frames = &resolved_image[at].1;
                         let value = match j.filter {
                             Filter::Channels => {
                                 channels_apart(frames, &resolved[k], &seen[k], &channels, start, n)

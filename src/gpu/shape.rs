@@ -60,17 +60,13 @@ impl TransportShape {
     /// workgroup (launches are dear), fewer when the kernel's largest class would
     /// take an invocation past LOOP_BUDGET loop iterations (lavapipe silently
     /// drops iterations past 65535 per invocation). On CPU implementations, the
-    /// per-lane transport when the kernel allows. `forced` (invocations, slices
-    /// per workgroup): the workgroup transport with that shape.
-    pub fn for_device(info: &DeviceInfo, max_class: u32, forced: Option<(u32, u32)>) -> Self {
-        Self::choose(info, max_class, 2, None, forced)
-    }
-
-    /// As `for_device`, for samples of `dims` dimensions and a transport `kind`
-    /// (None: by device). For d >= 3 on CPU implementations: the per-lane
-    /// transport only where its f64 targets stay within LANE_BUDGET, otherwise
-    /// workgroups large enough that each invocation's share of the targets stays
-    /// within LOOP_BUDGET (`fits_loop_budget` says whether a shape does).
+    /// per-lane transport when the kernel allows. For samples of `dims`
+    /// dimensions, d >= 3 on CPU implementations: the per-lane transport only
+    /// where its f64 targets stay within LANE_BUDGET, otherwise workgroups large
+    /// enough that each invocation's share of the targets stays within
+    /// LOOP_BUDGET (`fits_loop_budget` says whether a shape does). `kind` forces
+    /// a transport (None: by device); `forced` (invocations, slices per
+    /// workgroup): the workgroup transport with that shape.
     pub fn choose(
         info: &DeviceInfo,
         max_class: u32,
