@@ -1,10 +1,12 @@
 //! Compiles the compute shaders to SPIR-V with shaderc and generates one Rust
 //! module per shader family in OUT_DIR: `glsl/sort/` (the generic radix sort of
 //! `src/vk/`) into `sort_shaders.rs`, `glsl/fsot/` (the optimizer's passes) into
-//! `fsot_shaders.rs`. Each `.comp` gives `pub const NAME: &[u8]` (the file's stem,
+//! `fsot_shaders.rs`, `glsl/swap/` (the peers' swap search) into
+//! `swap_shaders.rs`. Each `.comp` gives `pub const NAME: &[u8]` (the file's stem,
 //! upper case); a line `// variant SUFFIX: MACRO...` in a `.comp` also compiles it
 //! with each MACRO defined, as `NAME_SUFFIX` (e.g. the float-atomic variants).
-//! `#include "x.glsl"` resolves inside the family's folder.
+//! `#include "x.glsl"` resolves inside the family's folder (`../fsot/x.glsl`
+//! reaches another family's).
 //!
 //! Also: `FSOT_COMMIT` (the git commit built, "-dirty" with uncommitted
 //! changes; "unknown" outside a checkout), which raw result files carry, and
@@ -17,7 +19,7 @@ fn main() {
     let root = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap()).join("glsl");
     let out_dir = PathBuf::from(env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed=glsl");
-    for family in ["sort", "fsot"] {
+    for family in ["sort", "fsot", "swap"] {
         compile_family(&root.join(family), &out_dir, family);
     }
     println!("cargo:rustc-env=FSOT_COMMIT={}", commit());

@@ -4,6 +4,7 @@
 
 use crate::baselines::fast::{fast_mask, FastSpec};
 use crate::baselines::stbn::stbn_mask_with;
+use crate::baselines::swap::SwapDevice;
 use crate::error::Result;
 use crate::mask::Mask;
 use crate::problem::Tile;
@@ -36,9 +37,16 @@ pub struct Made {
     pub note: Option<String>,
 }
 
-/// Makes the mask of `method` for `tile` from `seed` (fsot: the settings' seed);
-/// `on_pass(pass, energy)` after each pass of a swap search.
-pub fn make(method: &Method, tile: Tile, seed: u64, on_pass: &mut dyn FnMut(u32, f64)) -> Result<Made> {
+/// Makes the mask of `method` for `tile` from `seed` (fsot: the settings' seed),
+/// the swap searches on `device`; `on_pass(pass, energy)` after each pass of a
+/// swap search.
+pub fn make(
+    method: &Method,
+    tile: Tile,
+    seed: u64,
+    device: &SwapDevice,
+    on_pass: &mut dyn FnMut(u32, f64),
+) -> Result<Made> {
     let (mask, note) = match method {
         Method::White => {
             let mut m = Mask::white(tile, seed);
@@ -46,19 +54,21 @@ pub fn make(method: &Method, tile: Tile, seed: u64, on_pass: &mut dyn FnMut(u32,
             (m, None)
         }
         Method::Stbn { sigma, sigma_t, passes } => {
-            (stbn_mask_with(tile, *sigma, *sigma_t, *passes, seed, &mut *on_pass)?, None)
+            (stbn_mask_with(tile, *sigma, *sigma_t, *passes, seed, device, &mut *on_pass)?, None)
         }
         Method::Fast { spec, passes } => {
-            let (mask, report) = fast_mask(tile, spec, *passes, seed, &mut *on_pass)?;
+            let (mask, report) = fast_mask(tile, spec, *passes, seed, device, &mut *on_pass)?;
             let note = format!(
-                "{} ({} neighbours per pixel): loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated)",
+                "{} ({} neighbours per pixel) on {}: loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated, {} dropped)",
                 spec.describe(),
                 report.offsets,
+                device.describe(),
                 report.start_energy,
                 report.trace.last().copied().unwrap_or(report.start_energy),
                 report.accepted,
                 report.proposed,
-                report.recomputed
+                report.recomputed,
+                report.dropped
             );
             (mask, Some(note))
         }

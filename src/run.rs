@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use crate::backend::{Backend, BackendChoice};
+use crate::baselines::swap::SwapDevice;
 use crate::checkpoint;
 use crate::cpu_backend::CpuRun;
 use crate::error::{Error, Result};
@@ -327,19 +328,7 @@ fn start_backend(
     options: &RunOptions,
 ) -> Result<(Box<dyn Backend>, String)> {
     let gpu = |require_gpu_type: bool| -> Result<Box<dyn Backend>> {
-        let ctx = match &options.context {
-            Some(c) => c.clone(),
-            None => Context::new(&ContextOptions {
-                validation: options.validation,
-                device: options.device.clone(),
-            })?,
-        };
-        if require_gpu_type && ctx.info().is_cpu() {
-            return Err(Error::VulkanUnavailable(format!(
-                "the only Vulkan device is {}, a CPU implementation",
-                ctx.info().name
-            )));
-        }
+        let ctx = context_for(options, require_gpu_type)?;
         Ok(Box::new(VulkanRun::new(&ctx, tile, settings, init, options.vulkan)?))
     };
     let cpu = || -> Result<Box<dyn Backend>> { Ok(Box::new(CpuRun::new(tile, settings, init)?)) };
@@ -361,6 +350,46 @@ fn start_backend(
     };
     let note = backend.describe();
     Ok((backend, note))
+}
+
+/// The Vulkan context of a run: the caller's, or one made on the named device
+/// (or the first); with `require_gpu_type`, a CPU implementation is refused.
+fn context_for(options: &RunOptions, require_gpu_type: bool) -> Result<Context> {
+    let ctx = match &options.context {
+        Some(c) => c.clone(),
+        None => {
+            Context::new(&ContextOptions { validation: options.validation, device: options.device.clone() })?
+        }
+    };
+    if require_gpu_type && ctx.info().is_cpu() {
+        return Err(Error::VulkanUnavailable(format!(
+            "the only Vulkan device is {}, a CPU implementation",
+            ctx.info().name
+        )));
+    }
+    Ok(ctx)
+}
+
+/// Where the peers' swap searches run under `options`, by the rule of a run:
+/// `cpu`, `vulkan` (an error without a device), or `auto` (a GPU, or a device
+/// named or handed in, else the CPU). Returns the device and the choice in words.
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    let device = match options.backend {
+        BackendChoice::Cpu => SwapDevice::Cpu,
+        BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
+        BackendChoice::Auto => {
+            match context_for(options, options.device.is_none() && options.context.is_none()) {
+                Ok(ctx) => SwapDevice::Vulkan(ctx),
+                Err(e) => {
+                    let cpu = SwapDevice::Cpu;
+                    let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
+                    return Ok((cpu, note));
+                }
+            }
+        }
+    };
+    let note = device.describe();
+    Ok((device, note))
 }
 
 /// Runs the optimizer to the end on the CPU path, with no observer.

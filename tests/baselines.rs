@@ -3,7 +3,7 @@
 
 use fsot::baselines::fast::{fast_mask, FastSpec};
 use fsot::baselines::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
-use fsot::baselines::swap::{PairEnergy, ValueTerm};
+use fsot::baselines::swap::{PairEnergy, SwapDevice, ValueTerm};
 use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
@@ -64,7 +64,7 @@ fn annealing_accepts_uphill_swaps_yet_the_energy_falls_pass_after_pass() {
     // energy; the energy at the end of each pass still falls, monotonically,
     // and matches the energy summed afresh.
     let tile = Tile::new(24, 24, 8, 1, 2).unwrap();
-    let (values, report) = stbn_vector(tile, 1.9, 1.9, 8, 4, |_, _| {}).unwrap();
+    let (values, report) = stbn_vector(tile, 1.9, 1.9, 8, 4, &SwapDevice::Cpu, |_, _| {}).unwrap();
     assert!(report.uphill > 0, "no uphill move: not annealing");
     let mut last = report.start_energy;
     for (pass, &e) in report.trace.iter().enumerate() {
@@ -83,12 +83,12 @@ fn fast_and_vector_stbn_masks_beat_white_noise_under_taa() {
         (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0
     };
     let scalar = Tile::new(32, 32, 16, 1, 1).unwrap();
-    let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, |_, _| {}).unwrap();
+    let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, &SwapDevice::Cpu, |_, _| {}).unwrap();
     let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
     eprintln!("FAST / white under TAA: {ratio:.3}");
     assert!(ratio < 0.10, "{ratio}"); // measured 0.085; 15% margin
     let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
-    let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, |_, _| {}).unwrap();
+    let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, &SwapDevice::Cpu, |_, _| {}).unwrap();
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);
     eprintln!("vector STBN / white under TAA: {ratio:.3}");
     assert!(ratio < 0.51, "{ratio}"); // measured 0.444; 15% margin

@@ -521,3 +521,33 @@ fn vulkan_takes_three_four_and_eight_dimensions_with_the_validation_layer_on() {
         assert_eq!(mask.tile.dims, dims.parse::<usize>().unwrap());
     }
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fast_and_vector_stbn_search_on_vulkan_with_the_validation_layer_on() {
+    // FSOT_VALIDATION=1: the command fails, writing nothing, if the layer says anything.
+    let dir = tempfile::tempdir().unwrap();
+    for method in [&["--method", "fast"][..], &["--method", "stbn", "--dims", "2"]] {
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--passes", "4", "--out", "m.exr"])
+            .args(method)
+            .env("FSOT_VALIDATION", "1")
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = format!("{}{}", stderr(&o), String::from_utf8_lossy(&o.stdout));
+        assert!(o.status.success(), "{method:?}: {err}");
+        assert!(err.contains("backend: vulkan"), "{method:?}: {err}");
+        let mask = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+        assert_eq!(mask.tile.pixels(), 8 * 8 * 4);
+        if method[1] == "fast" {
+            assert!(err.contains("on vulkan"), "{err}");
+            assert_eq!(
+                mask.meta.iter().find(|(k, _)| k == "backend").map(|(_, v)| v.as_str()),
+                Some("vulkan")
+            );
+        } else {
+            assert!(mask.meta.iter().any(|(_, v)| v.contains("passes on vulkan")), "{:?}", mask.meta);
+        }
+    }
+}

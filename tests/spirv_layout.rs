@@ -8,6 +8,7 @@ use std::collections::HashMap;
 use fsot::gpu::layout::{
     self, HashPush, LargeMetaHead, LargeSegment, ScatterPush, TransportPush, UpdatePush,
 };
+use fsot::gpu::swap::layout::{self as swap, SwapOffset, SwapProposal, SwapPush, SwapStats};
 use fsot::vk::sort::{self, RadixPush};
 use rspirv::dr::{load_bytes, Module, Operand};
 use rspirv::spirv::{Decoration, Op, StorageClass};
@@ -29,6 +30,10 @@ fn mirrors() -> Vec<Mirror> {
         fields!(HashPush; key, count),
         fields!(LargeSegment; slice, first, size, pad),
         fields!(RadixPush; shift, blocks, chunks, pad),
+        fields!(SwapPush; width, height, frames, dims, offsets, term, inv_sigma2, temperature, pass_key, first, count, batch, retry, last),
+        fields!(SwapOffset; dx, dy, dt, weight),
+        fields!(SwapProposal; p, q, delta, state),
+        fields!(SwapStats; energy, accepted, dropped, uphill, retried),
     ]
 }
 
@@ -176,10 +181,12 @@ fn check_family(
             }
         }
         // Structs inside buffers.
-        if let Some(seg) = r.struct_named("LargeSegment") {
-            let m = mirrors.iter().find(|m| m.0 == "LargeSegment").unwrap();
-            let want: Vec<(String, u32)> = m.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
-            assert_eq!(r.layout(seg), want, "{shader}: LargeSegment");
+        for name in ["LargeSegment", "SwapOffset", "SwapProposal", "SwapStats"] {
+            if let Some(id) = r.struct_named(name) {
+                let m = mirrors.iter().find(|m| m.0 == name).unwrap();
+                let want: Vec<(String, u32)> = m.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
+                assert_eq!(r.layout(id), want, "{shader}: {name}");
+            }
         }
         if let Some(meta) = r.struct_named("LargeMeta") {
             let got = r.layout(meta);
@@ -222,6 +229,16 @@ fn every_sort_binding_and_struct_matches_its_rust_mirror() {
     for (name, _) in sort::binding::BLOCKS {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no sort pass");
     }
+}
+
+#[test]
+fn every_swap_binding_and_struct_matches_its_rust_mirror() {
+    let seen =
+        check_family("swap", fsot::gpu::swap::shaders::ALL, &swap::binding::BLOCKS, swap::binding::BINDINGS);
+    for (name, _) in swap::binding::BLOCKS {
+        assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no swap pass");
+    }
+    assert_eq!(swap::binding::BLOCKS.len() as u32, swap::binding::BINDINGS);
 }
 
 #[test]

@@ -12,7 +12,7 @@
 //! each pixel). Autocorrelations are taken on the wrapping tile, so the mask
 //! tiles seamlessly.
 
-use crate::baselines::swap::{swap_search, PairEnergy, Schedule, SwapReport, ValueTerm};
+use crate::baselines::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
 use crate::error::{Error, Result};
 use crate::mask::Mask;
 use crate::problem::Tile;
@@ -282,17 +282,18 @@ pub fn stratified_values(tile: &Tile, seed: u64, label: u32) -> Vec<f32> {
     values
 }
 
-/// A FAST mask: greedy swaps from stratified values.
+/// A FAST mask: greedy swaps from stratified values, searched on `device`.
 pub fn fast_mask(
     tile: Tile,
     spec: &FastSpec,
     passes: u32,
     seed: u64,
+    device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
 ) -> Result<(Mask, SwapReport)> {
     let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance)?;
     let mut samples = stratified_values(&tile, seed, 0xfa57);
-    let report = swap_search(
+    let report = device.search(
         &energy,
         &mut samples,
         Schedule::greedy(passes),
@@ -304,6 +305,7 @@ pub fn fast_mask(
         ("kernel".to_string(), spec.describe()),
         ("seed".to_string(), seed.to_string()),
         ("passes".to_string(), passes.to_string()),
+        ("backend".to_string(), device.kind().to_string()),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
     meta.sort();

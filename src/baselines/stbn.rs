@@ -15,7 +15,7 @@
 //! pixel weights times the sample term exp(-|a - b|^(d/2)).
 
 use crate::baselines::fast::stratified_values;
-use crate::baselines::swap::{swap_search, PairEnergy, Schedule, SwapReport, ValueTerm};
+use crate::baselines::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
 use crate::error::{Error, Result};
 use crate::problem::Tile;
 use crate::rng::{derive, seed_key, Stream};
@@ -240,24 +240,27 @@ pub fn stbn_vector(
     sigma_t: f64,
     passes: u32,
     seed: u64,
+    device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
 ) -> Result<(Vec<f32>, SwapReport)> {
     check_sigmas(sigma_xy, sigma_t)?;
     let energy = PairEnergy::new(tile, &stbn_offsets(sigma_xy, sigma_t), ValueTerm::Gaussian { sigma: 1.0 })?;
     let mut values = stratified_values(&tile, seed, 0x57b2);
     let schedule = Schedule { passes, start_temperature: ANNEALING.0, greedy_share: ANNEALING.1 };
-    let report = swap_search(&energy, &mut values, schedule, derive(seed_key(seed), 0x57b3), on_pass)?;
+    let report = device.search(&energy, &mut values, schedule, derive(seed_key(seed), 0x57b3), on_pass)?;
     Ok((values, report))
 }
 
 /// An STBN mask: void-and-cluster for d = 1 (rank r of N becomes the sample
-/// (r + 0.5) / N), annealing for d >= 2 (`passes` passes).
+/// (r + 0.5) / N, on the CPU), annealing for d >= 2 (`passes` passes, searched
+/// on `device`).
 pub fn stbn_mask_with(
     tile: Tile,
     sigma_xy: f64,
     sigma_t: f64,
     passes: u32,
     seed: u64,
+    device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
 ) -> Result<crate::mask::Mask> {
     let (samples, how) = if tile.dims == 1 {
@@ -265,8 +268,8 @@ pub fn stbn_mask_with(
         let n = ranks.len() as f64;
         (ranks.iter().map(|&r| ((r as f64 + 0.5) / n) as f32).collect(), "void-and-cluster".to_string())
     } else {
-        let (values, _) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, on_pass)?;
-        (values, format!("annealing, {passes} passes"))
+        let (values, _) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, device, on_pass)?;
+        (values, format!("annealing, {passes} passes on {}", device.kind()))
     };
     let mut meta = vec![
         ("method".to_string(), "stbn".to_string()),
@@ -283,7 +286,7 @@ pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<c
     if tile.dims != 1 {
         return Err(Error::invalid("stbn_mask makes scalar masks; use stbn_mask_with for vectors"));
     }
-    stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, |_, _| {})
+    stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, &SwapDevice::Cpu, |_, _| {})
 }
 
 fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {

@@ -93,6 +93,12 @@ impl PairEnergy {
     pub fn offsets(&self) -> &[Offset] {
         &self.offsets
     }
+    pub fn tile(&self) -> &Tile {
+        &self.tile
+    }
+    pub fn term(&self) -> ValueTerm {
+        self.term
+    }
 
     /// (x, y, frame) of pixel p.
     #[inline]
@@ -201,7 +207,8 @@ impl Schedule {
         Self { passes, start_temperature: 0.0, greedy_share: 1.0 }
     }
 
-    fn temperature(&self, t0: f64, pass: u32) -> f64 {
+    /// The temperature of pass `pass`, from the starting one.
+    pub(crate) fn temperature(&self, t0: f64, pass: u32) -> f64 {
         let annealed = (self.passes as f64 * (1.0 - self.greedy_share)).floor();
         if annealed <= 0.0 || pass as f64 >= annealed {
             return 0.0;
@@ -223,8 +230,56 @@ pub struct SwapReport {
     /// Accepted swaps that raised the energy (annealing at temperature > 0).
     pub uphill: u64,
     /// Proposals whose delta was computed again because an earlier swap of
-    /// their batch changed a value it read.
+    /// their batch changed a value it read (the CPU path).
     pub recomputed: u64,
+    /// Proposals taken on their batch's starting values but dropped because an
+    /// earlier taken swap of the batch moved a value they read (Vulkan).
+    pub dropped: u64,
+}
+
+/// Where a swap search runs.
+#[derive(Clone, Default)]
+pub enum SwapDevice {
+    /// Rayon on the CPU cores: the exact sequential search.
+    #[default]
+    Cpu,
+    /// Compute passes on a Vulkan device (`gpu::swap`).
+    Vulkan(crate::vk::Context),
+}
+
+impl SwapDevice {
+    /// The device in words.
+    pub fn describe(&self) -> String {
+        match self {
+            SwapDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            SwapDevice::Vulkan(ctx) => format!("vulkan ({})", ctx.info().name),
+        }
+    }
+
+    /// The kind of device, as masks record it: `cpu` or `vulkan`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SwapDevice::Cpu => "cpu",
+            SwapDevice::Vulkan(_) => "vulkan",
+        }
+    }
+
+    /// `swap_search` on this device.
+    pub fn search(
+        &self,
+        energy: &PairEnergy,
+        values: &mut [f32],
+        schedule: Schedule,
+        key: u32,
+        on_pass: impl FnMut(u32, f64),
+    ) -> Result<SwapReport> {
+        match self {
+            SwapDevice::Cpu => swap_search(energy, values, schedule, key, on_pass),
+            SwapDevice::Vulkan(ctx) => {
+                crate::gpu::swap::swap_search(ctx, energy, values, schedule, key, on_pass)
+            }
+        }
+    }
 }
 
 /// One random proposal (p, q, u) of a pass: two distinct pixels and the
@@ -236,7 +291,7 @@ fn propose(rng: &mut Stream, n: usize) -> (usize, usize, f64) {
 }
 
 /// Mean |delta| over 256 random proposals: the scale of the temperature.
-fn mean_abs_delta(energy: &PairEnergy, values: &[f32], key: u32) -> f64 {
+pub(crate) fn mean_abs_delta(energy: &PairEnergy, values: &[f32], key: u32) -> f64 {
     let mut rng = Stream::new(derive(key, 0x7e3b));
     let n = energy.tile.pixels();
     let proposals: Vec<_> = (0..256).map(|_| propose(&mut rng, n)).collect();

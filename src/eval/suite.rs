@@ -20,6 +20,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::baselines::fast::{FastSpec, Filter};
+use crate::baselines::swap::SwapDevice;
 use crate::error::{Error, Result};
 use crate::eval::eye::Eye;
 use crate::eval::jod::{Judge, DISPLAY};
@@ -196,7 +197,7 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed
         },
         other => return Err(Error::invalid(format!("unknown method `{other}`"))),
     };
-    let mask = make(&method, t, seed, &mut |_, _| {})?.mask;
+    let mask = make(&method, t, seed, &SwapDevice::Cpu, &mut |_, _| {})?.mask;
     crate::io::atomic::make_folder(cache)?;
     crate::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)

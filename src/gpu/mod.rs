@@ -1,13 +1,15 @@
 //! The fsot optimizer's Vulkan backend, built on the generic layer in `vk/`:
 //! the binding layout and its Rust mirror (`layout`), the transport's launch shape
 //! (`shape`), the buffer plan (`buffers`), the pipelines (`pipelines`) and the run
-//! (`run`, `VulkanRun`, one implementation of `backend::Backend`).
+//! (`run`, `VulkanRun`, one implementation of `backend::Backend`); and the peers'
+//! swap search on Vulkan (`swap`).
 
 pub mod buffers;
 pub mod layout;
 pub mod pipelines;
 pub mod run;
 pub mod shape;
+pub mod swap;
 
 pub use run::VulkanRun;
 pub use shape::{TransportKind, TransportShape};

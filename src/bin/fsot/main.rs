@@ -17,6 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use fsot::backend::{BackendChoice, Report};
 use fsot::baselines::fast::{Combine, Filter};
+use fsot::baselines::swap::SwapDevice;
 use fsot::error::{Error, Result};
 use fsot::gpu::VulkanOptions;
 use fsot::io::atomic::AtomicFile;

@@ -259,15 +259,27 @@ pub(crate) fn make_baseline(
         },
         Method::Fsot => return Err(Error::invalid("fsot runs through the library run")),
     };
+    // The swap searches go where --backend says, as fsot's runs do; white noise
+    // and void-and-cluster are made on the CPU.
+    let device = if method.swaps(&tile) {
+        let (device, note) = fsot::run::swap_device(&run_options(args)?)?;
+        eprintln!("backend: {note}");
+        device
+    } else {
+        SwapDevice::Cpu
+    };
     let start = Instant::now();
     let bar = swap_bar(args.passes, method.swaps(&tile));
-    let made = fsot::method::make(&method, tile, args.seed, &mut |_, e| {
+    let made = fsot::method::make(&method, tile, args.seed, &device, &mut |_, e| {
         bar.inc(1);
         bar.set_message(format!("{e:.6e}"));
     })?;
     bar.finish_and_clear();
     if let Some(note) = &made.note {
         eprintln!("{note}");
+    }
+    if let SwapDevice::Vulkan(ctx) = &device {
+        backend_report(&Report { validation_messages: ctx.validation_messages(), ..Report::default() })?;
     }
     let mask = made.mask;
     let seconds = start.elapsed().as_secs_f64();
