@@ -54,23 +54,14 @@ pub fn make(
             (m, None)
         }
         Method::Stbn { sigma, sigma_t, passes } => {
-            (stbn_mask_with(tile, *sigma, *sigma_t, *passes, seed, device, &mut *on_pass)?, None)
+            let (mask, report) =
+                stbn_mask_with(tile, *sigma, *sigma_t, *passes, seed, device, &mut *on_pass)?;
+            let note = report.map(|r| format!("vector stbn annealing: {}", r.describe(device)));
+            (mask, note)
         }
         Method::Fast { spec, passes } => {
             let (mask, report) = fast_mask(tile, spec, *passes, seed, device, &mut *on_pass)?;
-            let note = format!(
-                "{} ({} neighbours per pixel) on {}: loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated, {} dropped)",
-                spec.describe(),
-                report.offsets,
-                device.describe(),
-                report.start_energy,
-                report.trace.last().copied().unwrap_or(report.start_energy),
-                report.accepted,
-                report.proposed,
-                report.recomputed,
-                report.dropped
-            );
-            (mask, Some(note))
+            (mask, Some(format!("{}: {}", spec.describe(), report.describe(device))))
         }
         Method::Fsot(settings) => (crate::run::optimize(tile, *settings, None)?, None),
     };

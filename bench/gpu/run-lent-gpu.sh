@@ -5,13 +5,13 @@
 #   (cd .gl && apt-get download vulkan-validationlayers)   # for the GPU tests
 #   cargo build --release && cargo test --release --no-run
 #   mkdir -p .gl/bin && cp target/release/fsot .gl/bin/
-#   for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_failures vk_layer run stress bench; do
+#   for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_failures vk_layer run stress bench; do
 #     cp "$(ls -t target/release/deps/$t-* | grep -v '\.d$' | head -1)" .gl/bin/$t; done
 #   strip .gl/bin/*
 # Other builds to compare (say, the sort before a change) go in as .gl/bin/fsot-NAME;
 # their sort is measured beside this one's. Then run this script from the
 # repository root on the GPU machine, with OUT set. Arguments pick sections (sort,
-# optimize, tests, bench, stress); none runs them all.
+# optimize, swap, tests, bench, stress); none runs them all.
 set -u
 want() { [ $# -eq 0 ] && return 0; for a in "${ARGS[@]}"; do [ "$a" = "$1" ] && return 0; done; [ ${#ARGS[@]} -eq 0 ]; }
 ARGS=("$@")
@@ -59,11 +59,20 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   step $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile --out "$OUT/h100-128x128x30-ptaa-plateau.exr"
   [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --backend cpu --size 128x128x30 --dims 2 --kernel perceptual-taa --out "$OUT/cpu16-128x128x30-ptaa.exr"
   fi
+  if want swap; then
+  # Issue 16: the peers' swap searches on the GPU beside the CPU path (FAST and
+  # vector STBN, 64x64x16, 32 passes, seed 1), validation off for timing.
+  for m in fast stbn; do
+    step $B/fsot optimize --method $m --dims 2 --backend vulkan --size 64x64x16 --passes 32 --seed 1 --out "$OUT/gpu-$m-64x64x16.exr"
+    [ "${SKIP_CPU:-0}" = 1 ] || step $B/fsot optimize --method $m --dims 2 --backend cpu --size 64x64x16 --passes 32 --seed 1 --out "$OUT/cpu-$m-64x64x16.exr"
+  done
+  step $B/fsot optimize --method fast --dims 2 --backend vulkan --size 128x128x64 --passes 32 --seed 1 --out "$OUT/gpu-fast-128x128x64.exr"
+  fi
   if want tests; then
   echo; echo "### GPU tests on this device, validation layer on"
   # Tests that run the command line look for it where it was built.
   mkdir -p "$(dirname "$BUILT_FSOT")" 2>/dev/null && cp $B/fsot "$BUILT_FSOT"
-  for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_failures vk_layer run stress bench; do
+  for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_failures vk_layer run stress bench; do
     [ -x "$B/$t" ] && step "$B/$t" --test-threads 1
   done
   fi

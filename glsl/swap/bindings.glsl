@@ -17,6 +17,9 @@
 
 // Largest sample dimension (the value term's loop is unrolled to it).
 #define SWAP_MAX_DIMS 8
+// The sample dimension, a specialization constant (constant 0 is the
+// workgroup size): loops over it unroll to exactly its length.
+layout(constant_id = 1) const uint SWAP_DIMS = 1u;
 // Fixed-point scale of the energy change summed in SwapStats: 2^32.
 #define SWAP_ENERGY_SCALE 4294967296.0
 // ValueTerm: exp(-|a - b|^(d/2) / sigma^2), or -|a - b|.
@@ -28,7 +31,6 @@ struct SwapPush {
     uint width;
     uint height;
     uint frames;
-    uint dims;
     uint offsets;      // entries of Offsets
     uint term;         // SWAP_TERM_*
     float inv_sigma2;  // 1 / sigma^2 of the Gaussian term

@@ -6,6 +6,7 @@
 // offsets are symmetric), so each one's change, made on the round's starting
 // values, is exact, and none reads what another writes.
 #include "bindings.glsl"
+#extension GL_EXT_control_flow_attributes : require
 
 layout(local_size_x_id = 0) in;
 layout(push_constant) uniform Push { SwapPush pc; };
@@ -47,10 +48,10 @@ void main() {
         return;
     }
     proposals[i].state = SWAP_APPLIED;
-    for (uint k = 0u; k < pc.dims; k++) {
-        float v = values[s.p * pc.dims + k];
-        values[s.p * pc.dims + k] = values[s.q * pc.dims + k];
-        values[s.q * pc.dims + k] = v;
+    [[unroll]] for (uint k = 0u; k < SWAP_DIMS; k++) {
+        float v = values[s.p * SWAP_DIMS + k];
+        values[s.p * SWAP_DIMS + k] = values[s.q * SWAP_DIMS + k];
+        values[s.q * SWAP_DIMS + k] = v;
     }
     atomicAdd(stats.energy, int64_t(round(s.delta * SWAP_ENERGY_SCALE)));
     atomicAdd(stats.accepted, 1u);

@@ -251,7 +251,7 @@ pub fn stbn_vector(
     Ok((values, report))
 }
 
-/// An STBN mask: void-and-cluster for d = 1 (rank r of N becomes the sample
+/// An STBN mask and, for vectors, what the search did: void-and-cluster for d = 1 (rank r of N becomes the sample
 /// (r + 0.5) / N, on the CPU), annealing for d >= 2 (`passes` passes, searched
 /// on `device`).
 pub fn stbn_mask_with(
@@ -262,13 +262,15 @@ pub fn stbn_mask_with(
     seed: u64,
     device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
-) -> Result<crate::mask::Mask> {
+) -> Result<(crate::mask::Mask, Option<SwapReport>)> {
+    let mut report = None;
     let (samples, how) = if tile.dims == 1 {
         let ranks = void_and_cluster(&tile, sigma_xy, sigma_t, seed)?;
         let n = ranks.len() as f64;
         (ranks.iter().map(|&r| ((r as f64 + 0.5) / n) as f32).collect(), "void-and-cluster".to_string())
     } else {
-        let (values, _) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, device, on_pass)?;
+        let (values, r) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, device, on_pass)?;
+        report = Some(r);
         (values, format!("annealing, {passes} passes on {}", device.kind()))
     };
     let mut meta = vec![
@@ -278,7 +280,7 @@ pub fn stbn_mask_with(
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
     meta.sort();
-    Ok(crate::mask::Mask { tile, samples, meta })
+    Ok((crate::mask::Mask { tile, samples, meta }, report))
 }
 
 /// A scalar STBN mask (void-and-cluster).
@@ -286,7 +288,7 @@ pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<c
     if tile.dims != 1 {
         return Err(Error::invalid("stbn_mask makes scalar masks; use stbn_mask_with for vectors"));
     }
-    stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, &SwapDevice::Cpu, |_, _| {})
+    stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, &SwapDevice::Cpu, |_, _| {}).map(|(m, _)| m)
 }
 
 fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {

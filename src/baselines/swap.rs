@@ -237,6 +237,24 @@ pub struct SwapReport {
     pub dropped: u64,
 }
 
+impl SwapReport {
+    /// What the search did on `device`, in a line.
+    pub fn describe(&self, device: &SwapDevice) -> String {
+        format!(
+            "{} neighbours per pixel, on {}: loss {:.6e} -> {:.6e}, {} of {} proposed swaps taken ({} re-evaluated, {} dropped, {} uphill)",
+            self.offsets,
+            device.describe(),
+            self.start_energy,
+            self.trace.last().copied().unwrap_or(self.start_energy),
+            self.accepted,
+            self.proposed,
+            self.recomputed,
+            self.dropped,
+            self.uphill
+        )
+    }
+}
+
 /// Where a swap search runs.
 #[derive(Clone, Default)]
 pub enum SwapDevice {

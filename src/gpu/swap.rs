@@ -70,7 +70,6 @@ pub mod layout {
         pub width: u32,
         pub height: u32,
         pub frames: u32,
-        pub dims: u32,
         pub offsets: u32,
         pub term: u32,
         pub inv_sigma2: f32,
@@ -117,8 +116,11 @@ pub mod layout {
 
 use layout::{binding, SwapOffset, SwapProposal, SwapPush, SwapStats};
 
-/// Invocations per workgroup of both passes.
+/// Invocations per workgroup of both passes: on GPUs, and on CPU
+/// implementations (lavapipe), where a workgroup runs on one core and a small
+/// batch must still spread over every core.
 const WORKGROUP: u32 = 64;
+const WORKGROUP_CPU: u32 = 8;
 /// Rounds per batch: the first, then rounds over the proposals dropped in the
 /// last (each applies at least the earliest of them).
 pub const ROUNDS: u32 = 4;
@@ -190,7 +192,6 @@ pub fn swap_search(
             width: tile.width as u32,
             height: tile.height as u32,
             frames: tile.frames as u32,
-            dims: d as u32,
             offsets: table.len() as u32,
             term,
             inv_sigma2,
@@ -241,11 +242,13 @@ struct Passes {
     claims: Buffer,
     stats: Buffer,
     readback: Buffer,
+    workgroup: u32,
     ctx: Context,
 }
 
 impl Passes {
     fn new(ctx: &Context, values: &[f32], pixels: usize, table: &[SwapOffset], batch: usize) -> Result<Self> {
+        let dims = (values.len() / pixels) as u32;
         let values_buf = Buffer::with_data(ctx, values, Location::Device, "swap values")?;
         let offsets = Buffer::with_data(ctx, table, Location::Device, "swap offsets")?;
         let proposals = Buffer::new(
@@ -258,6 +261,7 @@ impl Passes {
         let stats_bytes = std::mem::size_of::<SwapStats>() as u64;
         let stats = Buffer::new(ctx, stats_bytes, Location::Device, "swap stats")?;
         let readback = Buffer::new(ctx, stats_bytes, Location::Readback, "swap stats read-back")?;
+        let workgroup = if ctx.info().is_cpu() { WORKGROUP_CPU } else { WORKGROUP };
         let pipeline = |spirv: &[u8]| -> Result<ComputePipeline> {
             let p = ComputePipeline::new(
                 ctx,
@@ -267,7 +271,7 @@ impl Passes {
                     images: &[],
                     uniforms: &[],
                     push_bytes: std::mem::size_of::<SwapPush>() as u32,
-                    spec: &[WORKGROUP],
+                    spec: &[workgroup, dims],
                     sets: 1,
                 },
             )?;
@@ -292,6 +296,7 @@ impl Passes {
             claims,
             stats,
             readback,
+            workgroup,
             ctx: ctx.clone(),
         })
     }
@@ -307,7 +312,7 @@ impl Passes {
             }
             barrier(ctx, cmd);
             for push in batches {
-                let groups = [push.count.div_ceil(WORKGROUP), 1, 1];
+                let groups = [push.count.div_ceil(self.workgroup), 1, 1];
                 self.propose.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
                 barrier(ctx, cmd);
                 self.commit.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
