@@ -88,4 +88,12 @@ pub trait Backend: Send {
     /// iterations.
     fn set_scale(&mut self, scale: Option<f32>);
     fn report(&self) -> Report;
+    /// The Vulkan run behind this backend, when it is one (runs on one device
+    /// can step together: `VulkanRun::step_together`).
+    fn as_vulkan(&self) -> Option<&crate::gpu::VulkanRun> {
+        None
+    }
+    fn as_vulkan_mut(&mut self) -> Option<&mut crate::gpu::VulkanRun> {
+        None
+    }
 }

@@ -422,9 +422,11 @@ struct GroupFile<'a> {
 
 impl Plan {
     /// Makes every mask of the plan into `dir` (each written atomically), then
-    /// `dir/plan.json`. Each optimized mask checkpoints to `dir/.NAME.ckpt` (every
-    /// `every` iterations and when cancelled); with `resume`, masks already written
-    /// are kept and a checkpoint is continued.
+    /// `dir/plan.json`. The optimized masks run side by side
+    /// (`Run::run_together`): on Vulkan, on one device, a batch of each in one
+    /// submission; on the CPU, one after the other. Each checkpoints to
+    /// `dir/.NAME.ckpt` (every `every` iterations and when cancelled); with
+    /// `resume`, masks already written are kept and checkpoints are continued.
     #[allow(clippy::too_many_arguments)]
     pub fn execute(
         &self,
@@ -437,7 +439,11 @@ impl Plan {
     ) -> Result<Outcome> {
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
-        let mut made = Vec::new();
+        let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
+        // The runs to make: the mask's index, its file reserved, the run.
+        let mut pending: Vec<(usize, AtomicFile)> = Vec::new();
+        let mut runs: Vec<Run> = Vec::new();
+        let mut shared: Option<RunOptions> = None;
         for (index, m) in self.masks.iter().enumerate() {
             let path = dir.join(&m.file);
             let out = AtomicFile::create(&path)?;
@@ -446,42 +452,62 @@ impl Plan {
                 let mut mask = Mask::white(tile, m.seed);
                 mask.set_meta("version", env!("CARGO_PKG_VERSION"));
                 crate::io::exr::write(&mask, out)?;
-                made.push(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
+                made[index] = Some(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
                 continue;
             }
             let settings = self.settings(m);
             if resume {
                 if let Some(done) = already_made(&path, &tile, &settings) {
-                    made.push(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
+                    made[index] = Some(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
                     continue;
                 }
             }
+            // One Vulkan device for the plan, opened once.
+            let options = match &shared {
+                Some(o) => o,
+                None => shared.insert(crate::run::shared_context(options)?),
+            };
             let checkpoint = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
             let resume_this = resume && checkpoint.exists();
             let run_options = RunOptions {
                 checkpoint: Some(Checkpointing { path: checkpoint, every, resume: resume_this }),
                 ..options.clone()
             };
-            let mut run = Run::start(tile, settings, None, run_options)?;
+            let run = Run::start(tile, settings, None, run_options)?;
             on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
-            let start = Instant::now();
-            let outcome = run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))?;
-            if let Outcome::Cancelled { .. } = outcome {
-                return Ok(outcome);
-            }
-            let seconds = start.elapsed().as_secs_f64();
-            let iterations = run.iteration();
-            // With Vulkan's validation layer on, any message means a fault: stop.
-            if let Some(first) = run.backend().report().validation_messages.first() {
-                return Err(Error::invalid(format!(
-                    "the Vulkan validation layer reported, making {}: {first}",
-                    m.file
-                )));
-            }
-            crate::io::exr::write(&run.finish()?, out)?;
-            on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
-            made.push(Made { file: m.file.clone(), iterations, seconds });
+            pending.push((index, out));
+            runs.push(run);
         }
+        let indices: Vec<usize> = pending.iter().map(|(i, _)| *i).collect();
+        let mut outs: Vec<Option<AtomicFile>> = pending.into_iter().map(|(_, out)| Some(out)).collect();
+        // Each mask is written as its run ends, so a cancel keeps what is made.
+        // (Both observers speak through `on`, never at once.)
+        let on = std::cell::RefCell::new(on);
+        let outcome = Run::run_together(
+            &mut runs,
+            cancel,
+            &mut |r, event| (*on.borrow_mut())(PlanEvent::Run { index: indices[r], event }),
+            &mut |r, run| {
+                let index = indices[r];
+                let file = &self.masks[index].file;
+                // With Vulkan's validation layer on, any message means a fault: stop.
+                if let Some(first) = run.backend().report().validation_messages.first() {
+                    return Err(Error::invalid(format!(
+                        "the Vulkan validation layer reported, making {file}: {first}"
+                    )));
+                }
+                let out = outs[r].take().ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
+                let (iterations, seconds) = (run.iteration(), run.seconds());
+                crate::io::exr::write(&run.finish_in_place()?, out)?;
+                (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });
+                made[index] = Some(Made { file: file.clone(), iterations, seconds });
+                Ok(())
+            },
+        )?;
+        if let Outcome::Cancelled { .. } = outcome {
+            return Ok(outcome);
+        }
+        let made: Vec<Made> = made.into_iter().flatten().collect();
         plan_file.commit(self.document(&made)?.as_bytes())?;
         Ok(Outcome::Reached)
     }

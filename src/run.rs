@@ -112,6 +112,9 @@ pub struct Run {
     plateau: Option<(Plateau, PlateauState)>,
     /// The stopping rule ended the run.
     stopped: bool,
+    /// Seconds spent stepping this run (a step shared with other runs counts in
+    /// full for each).
+    busy: f64,
 }
 
 impl Run {
@@ -143,6 +146,7 @@ impl Run {
             next_checkpoint,
             plateau,
             stopped: false,
+            busy: 0.0,
         })
     }
 
@@ -207,6 +211,23 @@ impl Run {
     /// One step of the backend towards `to` (a batch on the GPU, stopping at the
     /// next checkpoint), then the checkpoint when one is due.
     fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
+        let count = self.next_step(to);
+        let start = std::time::Instant::now();
+        let costs = self.backend.step_up_to(count);
+        self.busy += start.elapsed().as_secs_f64();
+        self.stepped(&costs?, on)
+    }
+
+    /// Seconds spent stepping this run (a step shared with other runs, in
+    /// `run_together`, counts in full for each).
+    pub fn seconds(&self) -> f64 {
+        self.busy
+    }
+
+    /// The iterations the next step may take towards `to`: up to the next
+    /// checkpoint, and under a stopping rule to the end of its window (where
+    /// the rule decides); sets the step scale the rule's schedule gives.
+    fn next_step(&mut self, to: u32) -> u32 {
         let mut stop = match &self.options.checkpoint {
             Some(_) => to.min(self.next_checkpoint),
             None => to,
@@ -216,9 +237,14 @@ impl Run {
             stop = stop.min(self.iteration() + rule.window.max(1) - state.count);
             self.backend.set_scale(Some(state.scale));
         }
-        let costs = self.backend.step_up_to(stop.saturating_sub(self.iteration()).max(1))?;
+        stop.saturating_sub(self.iteration()).max(1)
+    }
+
+    /// After a step that gave `costs`: the stopping rule, progress, and the
+    /// checkpoint when one is due.
+    fn stepped(&mut self, costs: &[f64], on: &mut dyn FnMut(Event)) -> Result<()> {
         if let Some((rule, state)) = &mut self.plateau {
-            for &c in &costs {
+            for &c in costs {
                 let window_end = state.count + 1 == rule.window.max(1);
                 self.stopped |= state.observe(rule, c);
                 if let (true, Until::Objective(target)) = (window_end, self.settings.until) {
@@ -240,9 +266,109 @@ impl Run {
         Ok(())
     }
 
+    /// Runs several runs to their ends side by side (a scene plan's masks):
+    /// those on Vulkan on one device step together, a batch of each in one
+    /// submission (`VulkanRun::step_together`); any other steps on its own.
+    /// `on(r, event)` hears run r; `done(r, run)` is called once as run r ends
+    /// (to write its mask while the others go on). Stops between steps when
+    /// `cancel` is set, saving every unfinished run; a GPU that fails hands each
+    /// of its runs over to the CPU path as `advance` does.
+    pub fn run_together(
+        runs: &mut [Run],
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(usize, Event),
+        done: &mut dyn FnMut(usize, &Run) -> Result<()>,
+    ) -> Result<Outcome> {
+        let mut reported = vec![false; runs.len()];
+        loop {
+            for (r, run) in runs.iter().enumerate() {
+                if run.finished() && !reported[r] {
+                    reported[r] = true;
+                    done(r, run)?;
+                }
+            }
+            let open: Vec<usize> = (0..runs.len()).filter(|&r| !runs[r].finished()).collect();
+            if open.is_empty() {
+                return Ok(Outcome::Reached);
+            }
+            if cancel.is_cancelled() {
+                let mut saved = None;
+                for &r in &open {
+                    saved = runs[r].save()?.or(saved);
+                }
+                let iteration = runs[open[0]].iteration();
+                return Ok(Outcome::Cancelled { iteration, saved });
+            }
+            // The runs that can share a submission with the first open Vulkan run.
+            let lead = open.iter().copied().find(|&r| runs[r].backend.as_vulkan().is_some());
+            let group: Vec<usize> = match lead {
+                Some(l) => open
+                    .iter()
+                    .copied()
+                    .filter(|&r| {
+                        let (a, b) = (runs[l].backend.as_vulkan(), runs[r].backend.as_vulkan());
+                        matches!((a, b), (Some(a), Some(b)) if a.shares_device_with(b))
+                    })
+                    .collect(),
+                None => Vec::new(),
+            };
+            if group.len() < 2 {
+                // Alone: the run's own step, with its fall-back.
+                let r = open[0];
+                let to = runs[r].settings.iterations;
+                match runs[r].step_once(to, &mut |e| on(r, e)) {
+                    Ok(()) => {}
+                    Err(e) if runs[r].can_fall_back(&e) => runs[r].fall_back(&e, &mut |ev| on(r, ev))?,
+                    Err(e) => return Err(e),
+                }
+                continue;
+            }
+            let counts: Vec<u32> = group
+                .iter()
+                .map(|&r| {
+                    let to = runs[r].settings.iterations;
+                    runs[r].next_step(to)
+                })
+                .collect();
+            let start = std::time::Instant::now();
+            let result = {
+                let mut members: Vec<&mut VulkanRun> = Vec::with_capacity(group.len());
+                for (r, run) in runs.iter_mut().enumerate() {
+                    if group.contains(&r) {
+                        if let Some(v) = run.backend.as_vulkan_mut() {
+                            members.push(v);
+                        }
+                    }
+                }
+                VulkanRun::step_together(&mut members, &counts)
+            };
+            for &r in &group {
+                runs[r].busy += start.elapsed().as_secs_f64();
+            }
+            match result {
+                Ok(costs) => {
+                    for (&r, c) in group.iter().zip(&costs) {
+                        runs[r].stepped(c, &mut |e| on(r, e))?;
+                    }
+                }
+                Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {
+                    for &r in &group {
+                        runs[r].fall_back(&e, &mut |ev| on(r, ev))?;
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
     /// The mask as it is now, with its provenance. When the run is complete its
     /// checkpoint is removed.
     pub fn finish(self) -> Result<Mask> {
+        self.finish_in_place()
+    }
+
+    /// As `finish`, leaving the run in place (for runs held in a slice).
+    pub fn finish_in_place(&self) -> Result<Mask> {
         let mask = self.backend.mask()?;
         if let (Some(c), true) = (&self.options.checkpoint, self.finished()) {
             if c.path.exists() {
@@ -354,7 +480,7 @@ fn start_backend(
 
 /// The Vulkan context of a run: the caller's, or one made on the named device
 /// (or the first); with `require_gpu_type`, a CPU implementation is refused.
-fn context_for(options: &RunOptions, require_gpu_type: bool) -> Result<Context> {
+pub(crate) fn context_for(options: &RunOptions, require_gpu_type: bool) -> Result<Context> {
     let ctx = match &options.context {
         Some(c) => c.clone(),
         None => {
@@ -390,6 +516,24 @@ pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
     };
     let note = device.describe();
     Ok((device, note))
+}
+
+/// Options for several runs that should share one Vulkan device (a scene
+/// plan's masks, stepped together): the context `options` would open, made once,
+/// under the same rule (`auto`: a GPU, or a device named or handed in). Where
+/// `auto` finds none, or the choice is the CPU, `options` as they are.
+pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
+    if options.context.is_some() || options.backend == BackendChoice::Cpu {
+        return Ok(options.clone());
+    }
+    let context = match options.backend {
+        BackendChoice::Auto => match context_for(options, options.device.is_none()) {
+            Ok(ctx) => ctx,
+            Err(_) => return Ok(options.clone()),
+        },
+        _ => context_for(options, false)?,
+    };
+    Ok(RunOptions { context: Some(context), ..options.clone() })
 }
 
 /// Runs the optimizer to the end on the CPU path, with no observer.

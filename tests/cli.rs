@@ -551,3 +551,28 @@ fn fast_and_vector_stbn_search_on_vulkan_with_the_validation_layer_on() {
         }
     }
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_scene_plan_runs_on_vulkan_its_masks_side_by_side_with_the_validation_layer_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
+                 [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--scene", "s.toml", "--out", "masks", "--backend", "vulkan"])
+        .env("FSOT_VALIDATION", "1")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.exr", "lens.exr"] {
+        let mask = fsot::io::exr::read(&dir.path().join("masks").join(f)).unwrap();
+        let backend = mask.meta.iter().find(|(k, _)| k == "backend").map(|(_, v)| v.clone());
+        assert!(backend.as_deref().is_some_and(|b| b.starts_with("vulkan")), "{f}: {backend:?}");
+    }
+    let plan: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("masks/plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["groups"].as_array().unwrap().len(), 3);
+}

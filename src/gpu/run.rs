@@ -204,63 +204,108 @@ impl VulkanRun {
     /// Runs up to `max` iterations (at most BATCH) in one submission; returns each
     /// iteration's objective estimate.
     pub fn step_batch(&mut self, max: u32) -> Result<Vec<f64>> {
-        let count = max.min(BATCH).min(self.settings.iterations - self.iteration);
-        if count == 0 {
-            return Ok(Vec::new());
+        let mut costs = Self::step_together(&mut [self], &[max])?;
+        Ok(costs.pop().unwrap_or_default())
+    }
+
+    /// Does `other` work on the same device (so the two can share a submission)?
+    pub fn shares_device_with(&self, other: &VulkanRun) -> bool {
+        self.ctx.device().handle() == other.ctx.device().handle()
+    }
+
+    /// Several runs on one device stepped in one submission: up to `max[r]`
+    /// iterations of run r (at most BATCH), recorded pass by pass, so that the
+    /// runs' transport passes run side by side with no barrier between them, as
+    /// do their updates (several masks in flight: small masks fill a large GPU
+    /// together). Returns each run's objective estimates. Timestamps (the
+    /// profile) are taken for a run stepped alone.
+    pub fn step_together(runs: &mut [&mut VulkanRun], max: &[u32]) -> Result<Vec<Vec<f64>>> {
+        let Some(first) = runs.first() else { return Ok(Vec::new()) };
+        if max.len() != runs.len() || runs.iter().any(|r| !r.shares_device_with(first)) {
+            return Err(Error::invalid("runs stepped together must share one device, each with its count"));
         }
-        let ctx = &self.ctx;
-        let b = &self.buffers;
-        let values = self.tile.values() as u32;
+        let counts: Vec<u32> = runs
+            .iter()
+            .zip(max)
+            .map(|(r, &m)| m.min(BATCH).min(r.settings.iterations - r.iteration))
+            .collect();
+        let most = counts.iter().copied().max().unwrap_or(0);
+        if most == 0 {
+            return Ok(vec![Vec::new(); runs.len()]);
+        }
+        let ctx = first.ctx.clone();
+        let alone = runs.len() == 1;
         let cost_bytes = BATCH as u64 * std::mem::size_of::<CostSlot>() as u64;
-        let stamp = |cmd, i| {
-            if let Some(t) = &self.timer {
-                t.stamp(cmd, i);
-            }
-        };
-        ctx.submit(|cmd| {
-            zero(ctx, cmd, &b.costs, 0, vk::WHOLE_SIZE);
-            if let Some(t) = &self.timer {
-                t.reset(cmd);
-            }
-            barrier(ctx, cmd);
-            for k in 0..count {
-                let it = self.iteration + k;
-                let push = self.transport_push(it, k);
-                stamp(cmd, 4 * k);
-                self.record_transport(cmd, &push);
-                stamp(cmd, 4 * k + 1);
-                self.record_large(cmd, &push);
-                stamp(cmd, 4 * k + 2);
-                let update = self.update_push(it);
-                self.pipelines.update.dispatch(
-                    cmd,
-                    0,
-                    two_d(values.div_ceil(256)),
-                    bytemuck::bytes_of(&update),
-                );
-                barrier(ctx, cmd);
-                stamp(cmd, 4 * k + 3);
-            }
-            copy(ctx, cmd, &b.costs, &b.readback, cost_bytes, 0);
-            copy(
-                ctx,
-                cmd,
-                &b.large_meta,
-                &b.readback,
-                std::mem::size_of::<LargeMetaHead>() as u64,
-                cost_bytes,
-            );
-            barrier(ctx, cmd);
-        })?;
-        let raw: Vec<u8> = b.readback.read(cost_bytes as usize + std::mem::size_of::<LargeMetaHead>())?;
-        let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes as usize]);
-        let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes as usize..]);
+        let head_bytes = std::mem::size_of::<LargeMetaHead>() as u64;
+        {
+            let runs: Vec<&VulkanRun> = runs.iter().map(|r| &**r).collect();
+            let timer = runs[0].timer.as_ref().filter(|_| alone);
+            let stamp = |cmd, i| {
+                if let Some(t) = timer {
+                    t.stamp(cmd, i);
+                }
+            };
+            ctx.submit(|cmd| {
+                for r in &runs {
+                    zero(&ctx, cmd, &r.buffers.costs, 0, vk::WHOLE_SIZE);
+                }
+                if let Some(t) = timer {
+                    t.reset(cmd);
+                }
+                barrier(&ctx, cmd);
+                for k in 0..most {
+                    let active: Vec<(&VulkanRun, TransportPush)> = runs
+                        .iter()
+                        .zip(&counts)
+                        .filter(|(_, &c)| k < c)
+                        .map(|(r, _)| (*r, r.transport_push(r.iteration + k, k)))
+                        .collect();
+                    stamp(cmd, 4 * k);
+                    for (r, _) in &active {
+                        zero(&ctx, cmd, &r.buffers.large_meta, 0, head_bytes);
+                    }
+                    barrier(&ctx, cmd);
+                    for (r, push) in &active {
+                        let groups = two_d(r.shape.groups(r.slices));
+                        r.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
+                    }
+                    barrier(&ctx, cmd);
+                    stamp(cmd, 4 * k + 1);
+                    for (r, push) in &active {
+                        r.record_large(cmd, push);
+                    }
+                    stamp(cmd, 4 * k + 2);
+                    for (r, _) in &active {
+                        let update = r.update_push(r.iteration + k);
+                        let groups = two_d((r.tile.values() as u32).div_ceil(256));
+                        r.pipelines.update.dispatch(cmd, 0, groups, bytemuck::bytes_of(&update));
+                    }
+                    barrier(&ctx, cmd);
+                    stamp(cmd, 4 * k + 3);
+                }
+                for r in &runs {
+                    copy(&ctx, cmd, &r.buffers.costs, &r.buffers.readback, cost_bytes, 0);
+                    copy(&ctx, cmd, &r.buffers.large_meta, &r.buffers.readback, head_bytes, cost_bytes);
+                }
+                barrier(&ctx, cmd);
+            })?;
+        }
+        runs.iter_mut().zip(&counts).map(|(r, &count)| r.finish_batch(count, alone)).collect()
+    }
+
+    /// After a batch of `count` iterations: the objective estimates, overflowed
+    /// large classes and timestamps read back.
+    fn finish_batch(&mut self, count: u32, timed: bool) -> Result<Vec<f64>> {
+        let cost_bytes = BATCH as usize * std::mem::size_of::<CostSlot>();
+        let raw: Vec<u8> = self.buffers.readback.read(cost_bytes + std::mem::size_of::<LargeMetaHead>())?;
+        let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes]);
+        let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes..]);
         self.overflowed += head.large_overflow as u64;
         let costs = slots[..count as usize]
             .iter()
             .map(|s| if s.count > 0 { s.squared as f64 / COST_SCALE / s.count as f64 } else { 0.0 })
             .collect();
-        if let Some(t) = &self.timer {
+        if let (Some(t), true) = (&self.timer, timed && count > 0) {
             let ns = t.read_ns(4 * count)?;
             for k in 0..count as usize {
                 self.profile.transport_ns += ns[4 * k + 1] - ns[4 * k];
@@ -407,6 +452,13 @@ impl Backend for VulkanRun {
 
     fn set_scale(&mut self, scale: Option<f32>) {
         self.scale = scale;
+    }
+
+    fn as_vulkan(&self) -> Option<&VulkanRun> {
+        Some(self)
+    }
+    fn as_vulkan_mut(&mut self) -> Option<&mut VulkanRun> {
+        Some(self)
     }
 
     fn report(&self) -> Report {

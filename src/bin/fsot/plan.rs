@@ -115,23 +115,21 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let cancel = CancelFlag::on_interrupt()?;
-    let mut before = 0u64; // iterations of the masks already made
-    let mut current = 0u64;
+    // Iterations of each mask so far (the masks run side by side).
+    let mut done = vec![0u64; plan.masks.len()];
     let outcome =
         plan.execute(&args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| match e {
-            PlanEvent::Start { file, iteration, .. } => {
-                bar.set_message(file.to_string());
-                current = iteration as u64;
-                bar.set_position(before + current);
+            PlanEvent::Start { index, iteration, .. } => {
+                done[index] = iteration as u64;
+                bar.set_position(done.iter().sum());
             }
-            PlanEvent::Run { event: Event::Progress { iteration, .. }, .. } => {
-                current = iteration as u64;
-                bar.set_position(before + current);
+            PlanEvent::Run { index, event: Event::Progress { iteration, .. } } => {
+                done[index] = iteration as u64;
+                bar.set_position(done.iter().sum());
+                bar.set_message(plan.masks[index].file.clone());
             }
             PlanEvent::Run { .. } => {}
             PlanEvent::Done { file, iterations, seconds, .. } => {
-                before += iterations as u64;
-                current = 0;
                 bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
             }
         })?;

@@ -1,0 +1,64 @@
+//! Several masks in flight on one Vulkan device (a scene plan's runs stepped
+//! together, a batch of each in one submission) against each run stepped alone
+//! (lavapipe in CI, validation on).
+
+mod common;
+
+use fsot::backend::Backend;
+use fsot::gpu::{VulkanOptions, VulkanRun};
+use fsot::kernel::KernelSpec;
+use fsot::problem::Tile;
+use fsot::settings::Settings;
+
+fn run(ctx: &fsot::vk::Context, tile: Tile, kernel: &str, seed: u64) -> VulkanRun {
+    let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
+    s.iterations = 60;
+    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    VulkanRun::new(ctx, tile, s, None, options).unwrap()
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn runs_stepped_together_make_bit_for_bit_the_masks_they_make_alone() {
+    let Some(ctx) = common::gpu_context() else { return };
+    // A 1-D and a 2-D mask, and one whose classes reach the large-class stage
+    // (the global sort) at 64 spp.
+    let cases = [
+        (Tile::new(16, 16, 8, 1, 1).unwrap(), "perceptual-taa", 1),
+        (Tile::new(8, 8, 4, 1, 2).unwrap(), "taa", 2),
+        (Tile::new(8, 8, 4, 64, 2).unwrap(), "taa", 3),
+    ];
+    let make = || cases.map(|(tile, kernel, seed)| run(&ctx, tile, kernel, seed));
+    let mut together = make();
+    let mut alone = make();
+    assert!(together[2].large_capacity() > 0, "the 64 spp case must reach the large-class stage");
+    // Unequal steps, as a plan's stopping rules give: runs end at different times.
+    let steps: [[u32; 3]; 3] = [[32, 20, 7], [28, 32, 32], [0, 8, 21]];
+    for counts in steps {
+        let mut members: Vec<&mut VulkanRun> = together.iter_mut().collect();
+        let costs_together = VulkanRun::step_together(&mut members, &counts).unwrap();
+        for ((r, &count), costs) in alone.iter_mut().zip(&counts).zip(&costs_together) {
+            let costs_alone = if count > 0 { r.step_batch(count).unwrap() } else { Vec::new() };
+            assert_eq!(&costs_alone, costs, "objective estimates");
+        }
+    }
+    for (k, (a, b)) in together.iter().zip(&alone).enumerate() {
+        assert_eq!(a.iteration(), b.iteration());
+        assert_eq!(a.samples().unwrap(), b.samples().unwrap(), "case {k}: samples differ");
+        assert_eq!(a.overflowed(), 0);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn runs_on_different_devices_are_not_stepped_together() {
+    let Some(a) = common::gpu_context() else { return };
+    let Some(b) = common::gpu_context() else { return };
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let (mut x, mut y) = (run(&a, tile, "taa", 1), run(&b, tile, "taa", 1));
+    assert!(!x.shares_device_with(&y));
+    let err = VulkanRun::step_together(&mut [&mut x, &mut y], &[4, 4]).expect_err("two devices");
+    assert!(err.to_string().contains("share one device"), "{err}");
+    assert_eq!((x.iteration(), y.iteration()), (0, 0), "nothing ran");
+}
