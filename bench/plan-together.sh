@@ -2,7 +2,8 @@
 # A scene plan on Vulkan with its masks in flight together (one submission per
 # batch of every mask) against a build that makes them one after the other:
 # wall time of `fsot optimize --scene` and the masks' iterations, each build
-# with --deterministic, and whether the two builds' masks are the same bits.
+# with --deterministic, and whether the two builds' masks hold the same samples
+# bit for bit (examples/same_samples.rs; the files' metadata may differ).
 # Usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]
 #   (VK_DRIVER_FILES picks the device; lavapipe by default)
 set -euo pipefail
@@ -22,7 +23,7 @@ for which in old new; do
   echo "$which ($bin): $(python3 -c "print(round($end - $start, 1))") s wall"
   grep -E "iterations in" "$work/$which.log" | sed 's/^/  /'
 done
+cargo build --release --quiet --example same_samples
 for f in "$work"/new/*.exr; do
-  name=$(basename "$f")
-  if cmp -s "$f" "$work/old/$name"; then echo "$name: same bytes"; else echo "$name: differs"; fi
+  echo "$(basename "$f"): $(target/release/examples/same_samples "$work/old/$(basename "$f")" "$f" 2>&1 | head -1)"
 done
