@@ -5,7 +5,7 @@ mod common;
 
 use fsot::rng::{derive, Stream};
 use fsot::vk::sort::float_key;
-use fsot::vk::{RadixSort, SortCount};
+use fsot::vk::{RadixSort, SortCount, SortPath};
 
 fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
@@ -112,5 +112,65 @@ fn refuses_more_pairs_than_it_can_hold() {
     let mut sort = RadixSort::new(&ctx, 1000, SortCount::Host).unwrap();
     assert!(sort.set_count(1001).is_err());
     assert!(RadixSort::new(&ctx, u32::MAX, SortCount::Host).is_err());
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn every_path_sorts_stably_by_any_number_of_low_bits() {
+    // The single-workgroup pass (one block by default, forced here far past it),
+    // the histogram's tail scan (up to TAIL_MAX_BLOCKS blocks) and the four block
+    // passes (forced at small counts), by 8, 20 and 32 bits (one, three and four
+    // passes: an odd count ends in the second buffers), on keys with many
+    // duplicates in their low bits.
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut sort = RadixSort::new(&ctx, 300_000, SortCount::Host).unwrap();
+    let block = sort.shape().block;
+    let tail_max = fsot::vk::sort::TAIL_MAX_BLOCKS * block;
+    assert!(sort.single_pass(Some(block)) && !sort.single_pass(Some(block + 1)));
+    assert!(sort.tail_scan(Some(tail_max)) && !sort.tail_scan(Some(tail_max + 1)));
+    assert!(!sort.single_pass(None), "a count only on the GPU never takes the single pass");
+    let mut rng = Stream::new(derive(9, 9));
+    let sizes = [
+        0,
+        1,
+        2,
+        7,
+        255,
+        256,
+        257,
+        block - 1,
+        block,
+        block + 1,
+        2 * block + 1,
+        65536,
+        tail_max,
+        tail_max + 1,
+    ];
+    for path in [SortPath::Auto, SortPath::Single, SortPath::Tail, SortPath::Blocks] {
+        sort.path = path;
+        for &n in &sizes {
+            if path == SortPath::Single && n > 100_000 {
+                continue; // one workgroup: slow past a few blocks on lavapipe
+            }
+            for bits in [8u32, 20, 32] {
+                let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() & 0xfff0_0fff).collect();
+                let vals: Vec<u32> = (0..n).collect();
+                let (gk, gv) = sort.sort_pairs_by(&keys, &vals, bits).unwrap();
+                // Whole 8-bit digits: 20 bits sort by the low 24.
+                let digits = bits.div_ceil(8) * 8;
+                let mask = if digits == 32 { u32::MAX } else { (1 << digits) - 1 };
+                let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
+                pairs.sort_by_key(|p| p.0 & mask); // stable
+                let (ck, cv): (Vec<u32>, Vec<u32>) = pairs.into_iter().unzip();
+                assert!(
+                    gk == ck && gv == cv,
+                    "{path:?}, n = {n}, {bits} bits: differs from the CPU's stable sort"
+                );
+            }
+        }
+    }
     common::assert_no_validation_messages(&ctx);
 }

@@ -36,9 +36,18 @@ layout(std430, set = 0, binding = SORT_BINDING_KEYS_IN) readonly buffer KeysIn {
 layout(std430, set = 0, binding = SORT_BINDING_VALS_IN) readonly buffer ValsIn { uint vals_in[]; };
 layout(std430, set = 0, binding = SORT_BINDING_KEYS_OUT) writeonly buffer KeysOut { uint keys_out[]; };
 layout(std430, set = 0, binding = SORT_BINDING_VALS_OUT) writeonly buffer ValsOut { uint vals_out[]; };
-layout(std430, set = 0, binding = SORT_BINDING_HIST) buffer Hist { uint hist[]; };
+// The histogram is read by the workgroup that scans it in the histogram pass's
+// TAIL variant, after other workgroups wrote it: coherent there.
+#ifdef SORT_SCAN_TAIL
+#define SORT_HIST_COHERENT coherent
+#else
+#define SORT_HIST_COHERENT
+#endif
+layout(std430, set = 0, binding = SORT_BINDING_HIST) SORT_HIST_COHERENT buffer Hist { uint hist[]; };
 layout(std430, set = 0, binding = SORT_BINDING_PARTIALS) buffer Partials { uint partials[]; };
 // Indirect dispatches when the count is only on the GPU: blocks, then scan chunks.
+// (partials[0] is the TAIL histogram's count of finished workgroups, zeroed by the
+// host before a sort and by the scanning workgroup after each pass.)
 layout(std430, set = 0, binding = SORT_BINDING_ARGS) writeonly buffer SortArgs { uvec4 sort_args[]; };
 
 #endif

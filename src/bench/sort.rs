@@ -8,7 +8,7 @@ use super::timing::median;
 use crate::error::{Error, Result};
 use crate::rng::{derive, Stream};
 use crate::vk::commands::{barrier, copy};
-use crate::vk::{Buffer, Context, Location, RadixSort, SortCount, Timer};
+use crate::vk::{Buffer, Context, Location, RadixSort, SortCount, SortPath, Timer};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SortBench {
@@ -24,6 +24,12 @@ pub struct SortBench {
     pub stages_ms: [f64; 3],
     /// Pairs per block on this device.
     pub block: u32,
+    /// The passes the sort took, in words, and its dispatches.
+    pub passes: &'static str,
+    pub dispatches: u32,
+    /// Median GPU time of copying the keys and payloads once (read and write:
+    /// 16 bytes per pair), in the same submissions: the device's copy bandwidth.
+    pub copy_seconds: f64,
 }
 
 impl SortBench {
@@ -33,12 +39,26 @@ impl SortBench {
     pub fn cpu_pairs_per_second(&self) -> f64 {
         self.n as f64 / self.cpu_seconds
     }
+    /// Bytes a sort must move: 4 passes, each reading and writing the keys and
+    /// payloads once (16 bytes per pair).
+    pub fn bytes_moved(&self) -> f64 {
+        4.0 * 16.0 * self.n as f64
+    }
+    /// The sort's effective bandwidth, bytes per second.
+    pub fn sort_bandwidth(&self) -> f64 {
+        self.bytes_moved() / self.gpu_seconds
+    }
+    /// The copy's bandwidth (16 bytes per pair moved), bytes per second.
+    pub fn copy_bandwidth(&self) -> f64 {
+        16.0 * self.n as f64 / self.copy_seconds
+    }
 }
 
 /// Sorts `n` random 32-bit keys with 32-bit payloads `repeats` times on the GPU
-/// (after a warm-up, the same input restored before each run) and on the CPU;
-/// checks the GPU result against the CPU's.
-pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
+/// (after a warm-up, the same input restored before each run, by the passes
+/// `path` picks) and on the CPU; checks the GPU result against the CPU's. Times
+/// a plain copy of the pairs in the same submission, for the copy bandwidth.
+pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result<SortBench> {
     if n == 0 || repeats == 0 {
         return Err(Error::invalid("the sort benchmark needs at least one pair and one repeat"));
     }
@@ -46,25 +66,32 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
     let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
     let vals: Vec<u32> = (0..n).collect();
     let mut sort = RadixSort::new(ctx, n, SortCount::Host)?;
+    sort.path = path;
     sort.set_count(n)?;
     let bytes = n as u64 * 4;
     let pristine_k = Buffer::with_data(ctx, &keys, Location::Device, "bench-keys")?;
     let pristine_v = Buffer::with_data(ctx, &vals, Location::Device, "bench-vals")?;
     let runs = repeats + 2;
-    let timer = Timer::new(ctx, 2 * runs)?;
+    let timer = Timer::new(ctx, 4 * runs)?;
     ctx.submit(|cmd| {
         timer.reset(cmd);
         for r in 0..runs {
+            // The restore, timed: the copy bandwidth.
+            barrier(ctx, cmd);
+            timer.stamp(cmd, 4 * r);
             copy(ctx, cmd, &pristine_k, &sort.keys[0], bytes, 0);
             copy(ctx, cmd, &pristine_v, &sort.vals[0], bytes, 0);
             barrier(ctx, cmd);
-            timer.stamp(cmd, 2 * r);
+            timer.stamp(cmd, 4 * r + 1);
+            timer.stamp(cmd, 4 * r + 2);
             sort.record(cmd, 32, Some(n));
-            timer.stamp(cmd, 2 * r + 1);
+            timer.stamp(cmd, 4 * r + 3);
         }
     })?;
-    let ns = timer.read_ns(2 * runs)?;
-    let gpu_seconds = median((2..runs as usize).map(|r| (ns[2 * r + 1] - ns[2 * r]) * 1e-9).collect());
+    let ns = timer.read_ns(4 * runs)?;
+    let span =
+        |a: usize| median((2..runs as usize).map(|r| (ns[4 * r + a + 1] - ns[4 * r + a]) * 1e-9).collect());
+    let (copy_seconds, gpu_seconds) = (span(0), span(2));
     // One more run with a timestamp after every dispatch, for the breakdown.
     let stages = Timer::new(ctx, 17)?;
     ctx.submit(|cmd| {
@@ -104,5 +131,20 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32) -> Result<SortBench> {
         cpu_threads: rayon::current_num_threads(),
         stages_ms,
         block: sort.shape().block,
+        passes: if sort.single_pass(Some(n)) {
+            "one workgroup per pass"
+        } else if sort.tail_scan(Some(n)) {
+            "histogram with its tail scan, scatter"
+        } else {
+            "histogram, two scan dispatches, scatter"
+        },
+        dispatches: if sort.single_pass(Some(n)) {
+            4
+        } else if sort.tail_scan(Some(n)) {
+            8
+        } else {
+            16
+        },
+        copy_seconds,
     })
 }

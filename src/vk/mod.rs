@@ -36,7 +36,7 @@ pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 pub use pipeline::{ComputeDesc, ComputePipeline};
-pub use sort::{RadixSort, SortCount};
+pub use sort::{RadixSort, SortCount, SortPath};
 pub use timer::Timer;
 
 pub mod shaders {

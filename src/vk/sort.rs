@@ -4,7 +4,12 @@
 //! 8 bits per pass; each pass is histogram -> two-dispatch exclusive scan ->
 //! stable scatter (`glsl/sort/`): reduce-then-scan, so no workgroup ever waits on
 //! another (correct on lavapipe, which does not guarantee forward progress between
-//! workgroups). Equal keys keep their input order (stable), so a sort by several
+//! workgroups). Small sorts cut the fixed cost of the dispatches (`SortPath`):
+//! up to `TAIL_MAX_BLOCKS` blocks the histogram's last workgroup to finish scans
+//! the histogram itself (`radix_histogram.comp`'s `TAIL` variant: it waits on
+//! no one, it only counts who is done), two dispatches per pass instead of four;
+//! a count the host knows fits one block takes one dispatch per pass
+//! (`radix_small.comp`: the whole pass in one workgroup). Equal keys keep their input order (stable), so a sort by several
 //! keys is a sequence of sorts, least significant first. The element count is
 //! set by the host (`SortCount::Host`) or read on the GPU from the first word of
 //! a buffer a producer pass writes (`SortCount::Device`): then the sort sizes its
@@ -14,7 +19,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::buffer::{Buffer, Location};
-use super::commands::{barrier, copy};
+use super::commands::{barrier, copy, zero};
 use super::context::Context;
 use super::pipeline::{ComputeDesc, ComputePipeline};
 use super::shaders;
@@ -60,6 +65,28 @@ pub struct RadixPush {
 /// Offsets of the indirect dispatches `radix_args.comp` writes.
 const ARG_BLOCKS: u64 = 0;
 const ARG_CHUNKS: u64 = 16;
+
+/// Most blocks whose histogram the last histogram workgroup scans itself
+/// (256 x 64 entries, eight scan chunks of 2048).
+pub const TAIL_MAX_BLOCKS: u32 = 64;
+
+/// Which passes a sort records.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SortPath {
+    /// One workgroup per pass for a count the host knows fits one block; the
+    /// histogram's tail scan up to `TAIL_MAX_BLOCKS` blocks; the four block
+    /// passes beyond.
+    #[default]
+    Auto,
+    /// Histogram, two scan dispatches and scatter over blocks, whatever the count.
+    Blocks,
+    /// The histogram's tail scan and the scatter (up to `TAIL_MAX_BLOCKS`
+    /// blocks; past it, `Blocks`).
+    Tail,
+    /// One workgroup per pass whenever the host knows the count (for tests and
+    /// benchmarks: it takes any count, slowly past a few hundred thousand).
+    Single,
+}
 
 /// Where the element count comes from.
 #[derive(Clone, Copy)]
@@ -114,6 +141,8 @@ impl SortShape {
 
 pub struct RadixSort {
     pub capacity: u32,
+    /// Which passes `record` uses.
+    pub path: SortPath,
     shape: SortShape,
     blocks: u32,
     /// The host-written count (`SortCount::Host`).
@@ -125,11 +154,13 @@ pub struct RadixSort {
     scan_reduce: ComputePipeline,
     scan_apply: ComputePipeline,
     scatter: ComputePipeline,
+    histogram_tail: ComputePipeline,
+    single: ComputePipeline,
     /// With a device count: the pass that sizes the dispatches, and its output.
     args: Option<(ComputePipeline, Buffer)>,
     // Used through the descriptor sets; dropped after the pipelines.
     _hist: Buffer,
-    _partials: Buffer,
+    partials: Buffer,
     ctx: Context,
 }
 
@@ -191,11 +222,13 @@ impl RadixSort {
                 },
             )
         };
-        let (histogram, scan_reduce, scan_apply, scatter) = (
+        let (histogram, scan_reduce, scan_apply, scatter, histogram_tail, single) = (
             pass(shaders::RADIX_HISTOGRAM)?,
             pass(shaders::SCAN_REDUCE)?,
             pass(shaders::SCAN_APPLY)?,
             pass(shaders::RADIX_SCATTER)?,
+            pass(shaders::RADIX_HISTOGRAM_TAIL)?,
+            pass(shaders::RADIX_SMALL)?,
         );
         let count_buffer: &Buffer = match (count, &host_count) {
             (SortCount::Device(c), _) => c,
@@ -231,12 +264,13 @@ impl RadixSort {
                 (binding::HIST, &hist),
                 (binding::PARTIALS, &partials),
             ];
-            for p in [&histogram, &scan_reduce, &scan_apply, &scatter] {
+            for p in [&histogram, &scan_reduce, &scan_apply, &scatter, &histogram_tail, &single] {
                 p.bind(s, &set)?;
             }
         }
         Ok(Self {
             capacity,
+            path: SortPath::Auto,
             shape,
             blocks,
             host_count,
@@ -246,9 +280,11 @@ impl RadixSort {
             scan_reduce,
             scan_apply,
             scatter,
+            histogram_tail,
+            single,
             args,
             _hist: hist,
-            _partials: partials,
+            partials,
             ctx: ctx.clone(),
         })
     }
@@ -267,7 +303,9 @@ impl RadixSort {
         own.upload(&[n])
     }
 
-    /// Records a sort of `keys[0]`/`vals[0]` by their low `bits` bits (1 to 32);
+    /// Records a sort of `keys[0]`/`vals[0]` by their low `bits` bits (1 to 32;
+    /// whole 8-bit digits, so by the low 8 x ceil(bits / 8) bits: bits above
+    /// `bits` should be zero);
     /// the result is in `keys[0]`/`vals[0]`. Barriers included before and after.
     /// `known`: the element count when the host knows it (smaller dispatches);
     /// None: the count is only on the GPU.
@@ -275,9 +313,27 @@ impl RadixSort {
         self.record_timed(cmd, bits, known, None)
     }
 
+    /// Does a sort of `known` pairs take the single-workgroup pass?
+    pub fn single_pass(&self, known: Option<u32>) -> bool {
+        match (self.path, known) {
+            (SortPath::Single, Some(_)) => true,
+            (SortPath::Auto, Some(n)) => n <= self.shape.block,
+            _ => false,
+        }
+    }
+
+    /// Does a sort of `known` pairs (None: up to the capacity) scan its
+    /// histogram in the histogram's last workgroup?
+    pub fn tail_scan(&self, known: Option<u32>) -> bool {
+        let blocks = known.unwrap_or(self.capacity).div_ceil(self.shape.block).max(1);
+        matches!(self.path, SortPath::Auto | SortPath::Tail) && blocks <= TAIL_MAX_BLOCKS
+    }
+
     /// As `record`; with a timer, stamps 0..=4 x passes: before the first
     /// dispatch, then after each of a pass's histogram, scan reduce, scan apply
-    /// and scatter.
+    /// and scatter (with the tail scan, the three after the histogram: the scan
+    /// counts in it; on the single-workgroup path, the three before its one
+    /// dispatch: all its time counts as scatter).
     pub fn record_timed(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
         let stamp = |i: u32| {
             if let Some(t) = timer {
@@ -286,6 +342,18 @@ impl RadixSort {
         };
         let passes = bits.clamp(1, 32).div_ceil(8);
         barrier(&self.ctx, cmd);
+        if self.single_pass(known) {
+            stamp(0);
+            for pass in 0..passes {
+                let push = RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, pad: 0 };
+                (1..4).for_each(|i| stamp(i + 4 * pass));
+                self.single.dispatch(cmd, (pass % 2) as usize, [1, 1, 1], bytemuck::bytes_of(&push));
+                barrier(&self.ctx, cmd);
+                stamp(4 + 4 * pass);
+            }
+            self.finish_odd(cmd, passes);
+            return;
+        }
         // With the count only on the GPU, size every dispatch from it (indirect).
         let indirect = match (known, &self.args) {
             (None, Some((pipeline, buffer))) => {
@@ -300,6 +368,12 @@ impl RadixSort {
             None => self.blocks,
         };
         let chunks = (256 * blocks).div_ceil(self.shape.block);
+        let tail = self.tail_scan(known);
+        if tail {
+            // The finished-workgroup count starts at zero.
+            zero(&self.ctx, cmd, &self.partials, 0, 4);
+            barrier(&self.ctx, cmd);
+        }
         stamp(0);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
@@ -313,19 +387,31 @@ impl RadixSort {
                 Some(args) => pipeline.dispatch_indirect(cmd, src, args, arg, p),
                 None => pipeline.dispatch(cmd, src, [groups, 1, 1], p),
             };
-            run(&self.histogram, blocks, ARG_BLOCKS);
-            barrier(&self.ctx, cmd);
-            stamp(1 + 4 * pass);
-            run(&self.scan_reduce, chunks, ARG_CHUNKS);
-            barrier(&self.ctx, cmd);
-            stamp(2 + 4 * pass);
-            run(&self.scan_apply, chunks, ARG_CHUNKS);
-            barrier(&self.ctx, cmd);
-            stamp(3 + 4 * pass);
+            if tail {
+                run(&self.histogram_tail, blocks, ARG_BLOCKS);
+                barrier(&self.ctx, cmd);
+                (1..4).for_each(|i| stamp(i + 4 * pass));
+            } else {
+                run(&self.histogram, blocks, ARG_BLOCKS);
+                barrier(&self.ctx, cmd);
+                stamp(1 + 4 * pass);
+                run(&self.scan_reduce, chunks, ARG_CHUNKS);
+                barrier(&self.ctx, cmd);
+                stamp(2 + 4 * pass);
+                run(&self.scan_apply, chunks, ARG_CHUNKS);
+                barrier(&self.ctx, cmd);
+                stamp(3 + 4 * pass);
+            }
             run(&self.scatter, blocks, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
             stamp(4 + 4 * pass);
         }
+        self.finish_odd(cmd, passes);
+    }
+
+    /// After an odd number of passes the result is in the second buffers:
+    /// copied back to the first.
+    fn finish_odd(&self, cmd: vk::CommandBuffer, passes: u32) {
         if passes % 2 == 1 {
             copy(&self.ctx, cmd, &self.keys[1], &self.keys[0], self.keys[1].size, 0);
             copy(&self.ctx, cmd, &self.vals[1], &self.vals[0], self.vals[1].size, 0);
@@ -335,6 +421,12 @@ impl RadixSort {
 
     /// Uploads pairs, sorts them by all 32 bits, reads them back.
     pub fn sort_pairs(&mut self, keys: &[u32], vals: &[u32]) -> Result<(Vec<u32>, Vec<u32>)> {
+        self.sort_pairs_by(keys, vals, 32)
+    }
+
+    /// Uploads pairs, sorts them stably by the low `bits` bits of their keys
+    /// (whole digits, as `record`), reads them back.
+    pub fn sort_pairs_by(&mut self, keys: &[u32], vals: &[u32], bits: u32) -> Result<(Vec<u32>, Vec<u32>)> {
         if keys.len() != vals.len() {
             return Err(Error::invalid(format!("{} keys but {} payloads", keys.len(), vals.len())));
         }
@@ -345,7 +437,7 @@ impl RadixSort {
         }
         self.keys[0].upload(keys)?;
         self.vals[0].upload(vals)?;
-        self.ctx.submit(|cmd| self.record(cmd, 32, Some(n)))?;
+        self.ctx.submit(|cmd| self.record(cmd, bits, Some(n)))?;
         Ok((self.keys[0].download(n as usize)?, self.vals[0].download(n as usize)?))
     }
 }

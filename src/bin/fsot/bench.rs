@@ -5,7 +5,7 @@ use serde_json::json;
 
 use super::*;
 use fsot::bench::convergence::Point;
-use fsot::vk::Context;
+use fsot::vk::{Context, SortPath};
 
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
@@ -23,7 +23,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
         ) if n == 0 || repeats == 0 => Err(Error::invalid("--n and --repeats must be at least 1")),
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
-            let b = fsot::bench::bench_sort(&ctx, n, repeats)?;
+            let b = fsot::bench::bench_sort(&ctx, n, repeats, SortPath::Auto)?;
             println!(
                 "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",
                 b.n,
@@ -34,6 +34,16 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
                 b.cpu_pairs_per_second() * 1e-9,
                 b.cpu_threads
             );
+            println!("  {}", bandwidth_line(&b));
+            println!("  passes: {} ({} dispatches)", b.passes, b.dispatches);
+            if b.dispatches < 16 {
+                let blocks = fsot::bench::bench_sort(&ctx, n, repeats, SortPath::Blocks)?;
+                println!(
+                    "  the four block passes on the same pairs (16 dispatches): {:.3} ms = {:.3} G pairs/s",
+                    blocks.gpu_seconds * 1e3,
+                    blocks.gpu_pairs_per_second() * 1e-9
+                );
+            }
             println!(
                 "  one profiled sort ({}-pair blocks), 4 passes: histogram {:.3} ms, scan {:.3} ms, scatter {:.3} ms",
                 b.block, b.stages_ms[0], b.stages_ms[1], b.stages_ms[2]
@@ -47,6 +57,17 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// A sort's bytes moved against the copy bandwidth measured in the same run.
+pub(crate) fn bandwidth_line(b: &fsot::bench::SortBench) -> String {
+    format!(
+        "bytes moved: {:.1} MB (4 passes x 16 bytes per pair) at {:.1} GB/s; a copy of the pairs in the same run: {:.1} GB/s; the sort at {:.0}% of the copy's bandwidth",
+        b.bytes_moved() * 1e-6,
+        b.sort_bandwidth() * 1e-9,
+        b.copy_bandwidth() * 1e-9,
+        100.0 * b.sort_bandwidth() / b.copy_bandwidth()
+    )
 }
 
 /// One scatter measurement in words.
@@ -319,7 +340,7 @@ fn kernel_suites(ctx: &Context, quick: bool, records: &mut Vec<serde_json::Value
         ctx.info().name
     );
     for &n in &sizes {
-        let b = fsot::bench::bench_sort(ctx, n, repeats)?;
+        let b = fsot::bench::bench_sort(ctx, n, repeats, SortPath::Auto)?;
         let gbs = 4.0 * 16.0 * n as f64 / b.gpu_seconds * 1e-9;
         eprintln!("sort {n}: {:.3} G pairs/s", b.gpu_pairs_per_second() * 1e-9);
         table += &format!(

@@ -1,0 +1,67 @@
+#version 450
+// A whole radix pass for small counts in one workgroup (one dispatch per pass
+// instead of four: histogram, scan and scatter fused): the digit counts of every
+// pair, their exclusive scan, then the blocks in order, each placed stably by
+// radix_place.glsl after the runs of the blocks before it. Nothing waits on
+// another workgroup, so it is correct on lavapipe too.
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_EXT_control_flow_attributes : require
+#include "radix_common.glsl"
+#include "radix_place.glsl"
+
+shared uint s_next[256]; // where the next block's first digit d goes
+
+void main() {
+    uint tid = gl_LocalInvocationID.x;
+    uint wg = gl_WorkGroupSize.x;
+    for (uint d = tid; d < 256u; d += wg) { s_next[d] = 0u; }
+    barrier();
+    for (uint i = tid; i < count; i += wg) {
+        atomicAdd(s_next[(keys_in[i] >> pc.shift) & 255u], 1u);
+    }
+    barrier();
+    // Exclusive scan of the 256 counts, by the first subgroup.
+    if (gl_SubgroupID == 0u) {
+        uint per = (256u + gl_SubgroupSize - 1u) / gl_SubgroupSize;
+        uint first = gl_SubgroupInvocationID * per;
+        uint sum = 0u;
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) { sum += s_next[first + j]; }
+        }
+        uint run = subgroupExclusiveAdd(sum);
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) {
+                uint c = s_next[first + j];
+                s_next[first + j] = run;
+                run += c;
+            }
+        }
+    }
+    barrier();
+    for (uint base = 0u; base < count; base += block_size()) {
+        uint key[ITEMS];
+        uint val[ITEMS];
+        [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
+            uint i = place_index(base, j);
+            key[j] = i < count ? keys_in[i] : 0u;
+            val[j] = i < count ? vals_in[i] : 0u;
+        }
+        for (uint d = tid; d < 256u; d += wg) { s_local[d] = 0u; }
+        barrier();
+        [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
+            if (place_index(base, j) < count) {
+                atomicAdd(s_local[(key[j] >> pc.shift) & 255u], 1u);
+            }
+        }
+        barrier();
+        for (uint d = tid; d < 256u; d += wg) {
+            s_dest[d] = s_next[d];
+            s_next[d] += s_local[d];
+        }
+        barrier();
+        place_block(base, key, val);
+        barrier();
+    }
+}
