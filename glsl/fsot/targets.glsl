@@ -1,57 +1,70 @@
-// Exact 1-D targets for any d (1 to 8), in f64: the projection of the uniform
-// hypercube on theta (a box spline), mirrored from src/targets.rs, which explains
-// the inclusion-exclusion form, its conditioning rule and the rank means. Only the
-// FSOT_ANY_DIMS variants include it; they need shaderFloat64, which the host
-// checks. d <= 2 keeps the float32 closed form of common.glsl.
+// Exact 1-D targets for any d (1 to 8): the projection of the uniform hypercube
+// on theta (a box spline), mirrored from src/targets.rs, which explains the
+// inclusion-exclusion form, its conditioning rule and the rank means. Only the
+// FSOT_ANY_DIMS variants include it. Written once in the number type of
+// real.glsl: f64 (shaderFloat64), or with FSOT_DF32 pairs of float32s for
+// devices without it (48 bits against 53: Newton stops sooner, below). d <= 2
+// keeps the float32 closed form of common.glsl.
 #ifndef FSOT_TARGETS_GLSL
 #define FSOT_TARGETS_GLSL
+#include "real.glsl"
 
 // Condition number above which the smallest components are replaced by their
-// mean (src/targets.rs: MAX_CONDITION).
-#define FSOT_MAX_CONDITION 1e8LF
+// mean (src/targets.rs: MAX_CONDITION; the same rule in both number types, so
+// both keep the CPU's components), and Newton's tolerances on F and on the
+// bracket (relative to the support): float32 pairs stop sooner, at what their 48
+// bits can resolve.
+#define FSOT_MAX_CONDITION 1e8
+#ifdef FSOT_DF32
+#define FSOT_F_TOL vec2(1e-13, 0.0)
+#define FSOT_BRACKET_TOL vec2(1e-13, 0.0)
+#else
+#define FSOT_F_TOL 1e-15LF
+#define FSOT_BRACKET_TOL 1e-15LF
+#endif
 // Newton steps per quantile at most (src/targets.rs allows 200; a bracketed
 // Newton from a guess below the root needs far fewer, and lavapipe's loop
 // budget is short).
 #define FSOT_NEWTON_MAX 60u
 
 struct FsotBox {
-    double a[FSOT_MAX_DIMS]; // kept |theta_k|, ascending
-    uint degree;             // how many are kept
-    double norm_f;           // 1 / (d! prod a)
-    double norm_i;           // 1 / ((d+1)! prod a)
-    double total;            // support [0, total] before the shift
-    double offset;           // where the support starts on the real line
+    FsotReal a[FSOT_MAX_DIMS]; // kept |theta_k|, ascending
+    uint degree;               // how many are kept
+    FsotReal norm_f;           // 1 / (d! prod a)
+    FsotReal norm_i;           // 1 / ((d+1)! prod a)
+    FsotReal total;            // support [0, total] before the shift
+    FsotReal offset;           // where the support starts on the real line
 };
 
-double fsot_factorial(uint n) {
-    double f = 1.0LF;
-    for (uint k = 2u; k <= n; ++k) { f *= double(k); }
+FsotReal fsot_factorial(uint n) {
+    FsotReal f = r_of(1.0);
+    for (uint k = 2u; k <= n; ++k) { f = r_mul(f, r_of_uint(k)); }
     return f;
 }
 
 // (sum a)^d / (d! prod a) over a[first..degree): the inclusion-exclusion sum's
 // relative error bound.
-double fsot_box_condition(double a[FSOT_MAX_DIMS], uint first, uint degree) {
-    double sum = 0.0LF, prod = 1.0LF;
-    for (uint k = first; k < degree; ++k) { sum += a[k]; prod *= a[k]; }
-    double power = 1.0LF;
-    for (uint k = first; k < degree; ++k) { power *= sum; }
-    return power / (fsot_factorial(degree - first) * prod);
+FsotReal fsot_box_condition(FsotReal a[FSOT_MAX_DIMS], uint first, uint degree) {
+    FsotReal sum = r_of(0.0), prod = r_of(1.0);
+    for (uint k = first; k < degree; ++k) { sum = r_add(sum, a[k]); prod = r_mul(prod, a[k]); }
+    FsotReal power = r_of(1.0);
+    for (uint k = first; k < degree; ++k) { power = r_mul(power, sum); }
+    return r_div(power, r_mul(fsot_factorial(degree - first), prod));
 }
 
 FsotBox fsot_box(float theta[FSOT_MAX_DIMS], uint dims) {
     FsotBox z;
-    z.offset = 0.0LF;
+    z.offset = r_of(0.0);
     uint kept = 0u;
-    for (uint k = 0u; k < FSOT_MAX_DIMS; ++k) { z.a[k] = 0.0LF; }
+    for (uint k = 0u; k < FSOT_MAX_DIMS; ++k) { z.a[k] = r_of(0.0); }
     for (uint k = 0u; k < dims; ++k) {
-        double t = double(theta[k]);
-        if (t < 0.0LF) { z.offset += t; }
+        float t = theta[k];
+        if (t < 0.0) { z.offset = r_add(z.offset, r_of(t)); }
         // Insertion into the ascending list of nonzero components.
-        if (t != 0.0LF) {
-            double v = abs(t);
+        if (t != 0.0) {
+            FsotReal v = r_of(abs(t));
             uint j = kept;
-            while (j > 0u && z.a[j - 1u] > v) { z.a[j] = z.a[j - 1u]; --j; }
+            while (j > 0u && r_lt(v, z.a[j - 1u])) { z.a[j] = z.a[j - 1u]; --j; }
             z.a[j] = v;
             ++kept;
         }
@@ -59,18 +72,18 @@ FsotBox fsot_box(float theta[FSOT_MAX_DIMS], uint dims) {
     // Drop the smallest while the formula is ill-conditioned (kept >= 1: the
     // host never draws a zero direction).
     uint first = 0u;
-    while (kept - first > 1u && fsot_box_condition(z.a, first, kept) > FSOT_MAX_CONDITION) {
-        z.offset += 0.5LF * z.a[first];
+    while (kept - first > 1u && r_lt(r_of(FSOT_MAX_CONDITION), fsot_box_condition(z.a, first, kept))) {
+        z.offset = r_add(z.offset, r_mul(r_of(0.5), z.a[first]));
         ++first;
     }
     z.degree = kept - first;
     for (uint k = 0u; k < z.degree; ++k) { z.a[k] = z.a[k + first]; }
-    for (uint k = z.degree; k < FSOT_MAX_DIMS; ++k) { z.a[k] = 0.0LF; }
-    double prod = 1.0LF;
-    z.total = 0.0LF;
-    for (uint k = 0u; k < z.degree; ++k) { prod *= z.a[k]; z.total += z.a[k]; }
-    z.norm_f = 1.0LF / (fsot_factorial(z.degree) * prod);
-    z.norm_i = 1.0LF / (fsot_factorial(z.degree + 1u) * prod);
+    for (uint k = z.degree; k < FSOT_MAX_DIMS; ++k) { z.a[k] = r_of(0.0); }
+    FsotReal prod = r_of(1.0);
+    z.total = r_of(0.0);
+    for (uint k = 0u; k < z.degree; ++k) { prod = r_mul(prod, z.a[k]); z.total = r_add(z.total, z.a[k]); }
+    z.norm_f = r_div(r_of(1.0), r_mul(fsot_factorial(z.degree), prod));
+    z.norm_i = r_div(r_of(1.0), r_mul(fsot_factorial(z.degree + 1u), prod));
     return z;
 }
 
@@ -79,16 +92,16 @@ FsotBox fsot_box(float theta[FSOT_MAX_DIMS], uint dims) {
 // invocation. Filled once per slice: loops count against lavapipe's budget of
 // 65535 iterations per invocation, so evaluations must not rebuild them.
 #ifdef FSOT_SHARED_BREAKS
-shared double fsot_breaks[1u << FSOT_MAX_DIMS];
+shared FsotReal fsot_breaks[1u << FSOT_MAX_DIMS];
 #else
-double fsot_breaks[1u << FSOT_MAX_DIMS];
+FsotReal fsot_breaks[1u << FSOT_MAX_DIMS];
 #endif
 
 // Subset sum of mask m, the components added in ascending order (as the CPU).
-double fsot_subset_sum(FsotBox z, uint m) {
-    double b = 0.0LF;
+FsotReal fsot_subset_sum(FsotBox z, uint m) {
+    FsotReal b = r_of(0.0);
     for (uint k = 0u; k < z.degree; ++k) {
-        if ((m & (1u << k)) != 0u) { b += z.a[k]; }
+        if ((m & (1u << k)) != 0u) { b = r_add(b, z.a[k]); }
     }
     return b;
 }
@@ -104,84 +117,96 @@ void fsot_fill_breaks(FsotBox z, uint first, uint step) {
 // The same sums in one invocation, one addition each: b_m is b of m without its
 // highest bit plus that component, the same additions in the same order.
 void fsot_fill_breaks_alone(FsotBox z) {
-    fsot_breaks[0] = 0.0LF;
+    fsot_breaks[0] = r_of(0.0);
     for (uint m = 1u; m < (1u << z.degree); ++m) {
         uint top = uint(findMSB(m));
-        fsot_breaks[m] = fsot_breaks[m ^ (1u << top)] + z.a[top];
+        fsot_breaks[m] = r_add(fsot_breaks[m ^ (1u << top)], z.a[top]);
     }
 }
 
 // x^p for p = 0..7 without a loop.
-double fsot_power(double x, uint p) {
-    double x2 = x * x;
-    double r = (p & 1u) != 0u ? x : 1.0LF;
-    if ((p & 2u) != 0u) { r *= x2; }
-    if ((p & 4u) != 0u) { r *= x2 * x2; }
+FsotReal fsot_power(FsotReal x, uint p) {
+    FsotReal x2 = r_mul(x, x);
+    FsotReal r = (p & 1u) != 0u ? x : r_of(1.0);
+    if ((p & 2u) != 0u) { r = r_mul(r, x2); }
+    if ((p & 4u) != 0u) { r = r_mul(r, r_mul(x2, x2)); }
     return r;
 }
 
 // F, its density and its integral I at s (local coordinates, 0 <= s <= total):
 // every subset S adds (-1)^|S| (s - b_S)_+^d. One loop of 2^d.
-dvec3 fsot_box_eval(FsotBox z, double s) {
-    double f = 0.0LF, dens = 0.0LF, integ = 0.0LF;
+void fsot_box_eval(FsotBox z, FsotReal s, out FsotReal f, out FsotReal dens, out FsotReal integ) {
+    FsotReal fs = r_of(0.0), ds = r_of(0.0), is = r_of(0.0);
     for (uint m = 0u; m < (1u << z.degree); ++m) {
-        double x = s - fsot_breaks[m];
-        if (x <= 0.0LF) { continue; }
-        double xd1 = fsot_power(x, z.degree - 1u);
-        double sign = (bitCount(m) & 1) == 0 ? 1.0LF : -1.0LF;
-        dens += sign * xd1;
-        f += sign * xd1 * x;
-        integ += sign * xd1 * x * x;
+        FsotReal x = r_sub(s, fsot_breaks[m]);
+        if (r_le(x, r_of(0.0))) { continue; }
+        FsotReal xd1 = fsot_power(x, z.degree - 1u);
+        FsotReal xd = r_mul(xd1, x);
+        FsotReal xd2 = r_mul(xd, x);
+        if ((bitCount(m) & 1) == 0) {
+            ds = r_add(ds, xd1);
+            fs = r_add(fs, xd);
+            is = r_add(is, xd2);
+        } else {
+            ds = r_sub(ds, xd1);
+            fs = r_sub(fs, xd);
+            is = r_sub(is, xd2);
+        }
     }
-    return dvec3(f * z.norm_f, dens * z.norm_f * double(z.degree), integ * z.norm_i);
+    f = r_mul(fs, z.norm_f);
+    dens = r_mul(r_mul(ds, z.norm_f), r_of_uint(z.degree));
+    integ = r_mul(is, z.norm_i);
 }
 
 // Solves F(s) = u for u <= 1/2 (local coordinates) from `guess`, with Newton
 // steps kept inside a shrinking bracket (src/targets.rs: local_quantile); also
 // gives the density at the last point evaluated.
-double fsot_box_quantile(FsotBox z, double u, double guess, out double dens) {
-    double lo = 0.0LF, hi = 0.5LF * z.total;
-    double s = clamp(guess, lo, hi);
-    dens = 0.0LF;
+FsotReal fsot_box_quantile(FsotBox z, FsotReal u, FsotReal guess, out FsotReal dens) {
+    FsotReal lo = r_of(0.0), hi = r_mul(r_of(0.5), z.total);
+    FsotReal s = r_lt(guess, lo) ? lo : (r_lt(hi, guess) ? hi : guess);
+    dens = r_of(0.0);
     for (uint it = 0u; it < FSOT_NEWTON_MAX; ++it) {
-        dvec3 e = fsot_box_eval(z, s);
-        dens = e.y;
-        double err = e.x - u;
-        if (abs(err) <= 1e-15LF) { break; }
-        if (err < 0.0LF) { lo = s; } else { hi = s; }
-        double newton = e.y > 0.0LF ? s - err / e.y : lo - 1.0LF;
-        s = (newton > lo && newton < hi) ? newton : 0.5LF * (lo + hi);
-        if (hi - lo <= 1e-15LF * z.total) { break; }
+        FsotReal f, integ;
+        fsot_box_eval(z, s, f, dens, integ);
+        FsotReal err = r_sub(f, u);
+        if (r_le(r_abs(err), FSOT_F_TOL)) { break; }
+        if (r_lt(err, r_of(0.0))) { lo = s; } else { hi = s; }
+        bool step = r_lt(r_of(0.0), dens);
+        FsotReal newton = step ? r_sub(s, r_div(err, dens)) : lo;
+        s = (step && r_lt(lo, newton) && r_lt(newton, hi)) ? newton : r_mul(r_of(0.5), r_add(lo, hi));
+        if (r_le(r_sub(hi, lo), r_mul(FSOT_BRACKET_TOL, z.total))) { break; }
     }
     return s;
 }
 
 // Partial first moment G(s) = s F(s) - I(s).
-double fsot_box_moment(FsotBox z, double s) {
-    dvec3 e = fsot_box_eval(z, s);
-    return s * e.x - e.z;
+FsotReal fsot_box_moment(FsotBox z, FsotReal s) {
+    FsotReal f, dens, integ;
+    fsot_box_eval(z, s, f, dens, integ);
+    return r_sub(r_mul(s, f), integ);
 }
 
 // A starting point below the quantile of u: below every break but 0, F(s) is
 // s^d / (d! prod a), and beyond them F is smaller, so this s never overshoots.
-double fsot_box_guess(FsotBox z, double u) {
-    float root = pow(float(u / z.norm_f), 1.0 / float(z.degree));
-    return min(double(root), 0.5LF * z.total);
+FsotReal fsot_box_guess(FsotBox z, FsotReal u) {
+    float root = pow(r_float(r_div(u, z.norm_f)), 1.0 / float(z.degree));
+    FsotReal half_total = r_mul(r_of(0.5), z.total);
+    return r_lt(r_of(root), half_total) ? r_of(root) : half_total;
 }
 
 // A walk over consecutive ranks of the lower half (q < n / 2), each quantile
 // solved from the last (src/targets.rs: rank_targets): the quantile, G and the
 // density at the lower end of rank `next`.
-struct FsotWalk { double q; double g; double dens; uint next; };
+struct FsotWalk { FsotReal q; FsotReal g; FsotReal dens; uint next; };
 
 FsotWalk fsot_walk(FsotBox z, uint n, uint first) {
     FsotWalk w;
     w.next = first;
-    w.q = 0.0LF;
-    w.g = 0.0LF;
-    w.dens = 0.0LF;
+    w.q = r_of(0.0);
+    w.g = r_of(0.0);
+    w.dens = r_of(0.0);
     if (first > 0u) {
-        double u = double(first) / double(n);
+        FsotReal u = r_div(r_of_uint(first), r_of_uint(n));
         w.q = fsot_box_quantile(z, u, fsot_box_guess(z, u), w.dens);
         w.g = fsot_box_moment(z, w.q);
     }
@@ -189,14 +214,14 @@ FsotWalk fsot_walk(FsotBox z, uint n, uint first) {
 }
 
 // The local mean of rank w.next's quantile interval; steps to the next rank.
-double fsot_walk_step(FsotBox z, uint n, inout FsotWalk w) {
-    double nf = double(n);
-    double u = double(w.next + 1u) / nf;
-    double guess = w.next == 0u ? fsot_box_guess(z, u)
-                 : (w.dens > 0.0LF ? w.q + (1.0LF / nf) / w.dens : w.q);
-    double q = fsot_box_quantile(z, u, guess, w.dens);
-    double g = fsot_box_moment(z, q);
-    double mean = nf * (g - w.g);
+FsotReal fsot_walk_step(FsotBox z, uint n, inout FsotWalk w) {
+    FsotReal nf = r_of_uint(n);
+    FsotReal u = r_div(r_of_uint(w.next + 1u), nf);
+    FsotReal guess = w.next == 0u ? fsot_box_guess(z, u)
+        : (r_lt(r_of(0.0), w.dens) ? r_add(w.q, r_div(r_div(r_of(1.0), nf), w.dens)) : w.q);
+    FsotReal q = fsot_box_quantile(z, u, guess, w.dens);
+    FsotReal g = fsot_box_moment(z, q);
+    FsotReal mean = r_mul(nf, r_sub(g, w.g));
     w.q = q;
     w.g = g;
     w.next += 1u;
@@ -205,9 +230,9 @@ double fsot_walk_step(FsotBox z, uint n, inout FsotWalk w) {
 
 // Targets on the real line of lower-half rank q (local mean m) and of its
 // mirror n - 1 - q.
-float fsot_box_low_target(FsotBox z, double m) { return float(z.offset + m); }
-float fsot_box_high_target(FsotBox z, double m) { return float(z.offset + z.total - m); }
+float fsot_box_low_target(FsotBox z, FsotReal m) { return r_float(r_add(z.offset, m)); }
+float fsot_box_high_target(FsotBox z, FsotReal m) { return r_float(r_sub(r_add(z.offset, z.total), m)); }
 // The middle rank of an odd n.
-float fsot_box_centre(FsotBox z) { return float(z.offset + 0.5LF * z.total); }
+float fsot_box_centre(FsotBox z) { return r_float(r_add(z.offset, r_mul(r_of(0.5), z.total))); }
 
 #endif

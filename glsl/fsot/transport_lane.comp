@@ -8,6 +8,8 @@
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
+// variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
+// variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "transport_common.glsl"
@@ -155,7 +157,7 @@ void main() {
     uint half_n = n / 2u;
     FsotWalk w = fsot_walk(z, n, 0u);
     for (uint q = 0u; q < half_n; ++q) {
-        double m = fsot_walk_step(z, n, w);
+        FsotReal m = fsot_walk_step(z, n, w);
         cost += send(s, q, fsot_box_low_target(z, m));
         cost += send(s, n - 1u - q, fsot_box_high_target(z, m));
     }

@@ -5,6 +5,8 @@
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
+// variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
+// variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #define FSOT_SHARED_BREAKS
 #include "bindings.glsl"
 #include "accumulate.glsl"
@@ -45,7 +47,7 @@ void main() {
     if (q0 < q1) {
         FsotWalk w = fsot_walk(z, n, q0);
         for (uint q = q0; q < q1; ++q) {
-            double m = fsot_walk_step(z, n, w);
+            FsotReal m = fsot_walk_step(z, n, w);
             local_cost += send(s, off + q, fsot_box_low_target(z, m));
             local_cost += send(s, off + n - 1u - q, fsot_box_high_target(z, m));
         }

@@ -20,8 +20,8 @@ pub mod shaders {
 }
 
 /// Largest dimension whose exact targets the GPU path takes in float32 closed
-/// form; beyond it, the f64 box spline (`glsl/fsot/targets.glsl`), which needs
-/// shaderFloat64.
+/// form; beyond it, the box spline (`glsl/fsot/targets.glsl`), in f64 where the
+/// device has shaderFloat64, else in pairs of float32s.
 pub const CLOSED_FORM_DIMS: usize = 2;
 /// Iterations recorded per submission.
 pub const BATCH: u32 = 32;
@@ -38,6 +38,10 @@ pub struct VulkanOptions {
     /// Which transport pass to use: None picks by device (per lane on CPU
     /// implementations, workgroups on GPUs); tests force each.
     pub transport: Option<TransportKind>,
+    /// For d >= 3: the box spline's targets in pairs of float32s even where the
+    /// device has shaderFloat64 (devices without it always take them): for
+    /// tests and comparisons.
+    pub float_pair_targets: bool,
     /// Force the workgroup transport with (invocations, slices per workgroup):
     /// for tuning (the command line reads it from `FSOT_TRANSPORT=WG,SPG`).
     pub transport_shape: Option<(u32, u32)>,

@@ -12,6 +12,18 @@ use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
 pub const GATHER_BY_SEGMENT: usize = 0;
 pub const GATHER_BY_PROJECTION: usize = 1;
 
+/// How the transport passes compute the exact targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Targets {
+    /// d <= 2: float32 closed form.
+    ClosedForm,
+    /// d >= 3: the box spline in f64 (shaderFloat64).
+    F64,
+    /// d >= 3: the box spline in pairs of float32s (`glsl/fsot/real.glsl`), for
+    /// devices without shaderFloat64.
+    FloatPairs,
+}
+
 pub struct RunPipelines {
     pub transport: ComputePipeline,
     pub update: ComputePipeline,
@@ -50,7 +62,7 @@ impl RunPipelines {
     pub fn new(
         ctx: &Context,
         shape: &TransportShape,
-        dims: usize,
+        targets: Targets,
         float_acc: bool,
         buffers: &RunBuffers,
         sort: Option<&RadixSort>,
@@ -64,17 +76,21 @@ impl RunPipelines {
             Ok(p)
         };
         let tpush = std::mem::size_of::<TransportPush>();
-        // d <= 2: the float32 closed-form targets; otherwise the f64 box spline.
-        let any_dims = dims > 2;
-        let transport_spv = match (shape.per_lane, any_dims, float_acc) {
-            (true, false, true) => shaders::TRANSPORT_LANE_FLOAT,
-            (true, false, false) => shaders::TRANSPORT_LANE,
-            (true, true, true) => shaders::TRANSPORT_LANE_DIMS_FLOAT,
-            (true, true, false) => shaders::TRANSPORT_LANE_DIMS,
-            (false, false, true) => shaders::TRANSPORT_FLOAT,
-            (false, false, false) => shaders::TRANSPORT,
-            (false, true, true) => shaders::TRANSPORT_DIMS_FLOAT,
-            (false, true, false) => shaders::TRANSPORT_DIMS,
+        // d <= 2: the float32 closed-form targets; otherwise the box spline, in
+        // f64 or in float32 pairs.
+        let transport_spv = match (shape.per_lane, targets, float_acc) {
+            (true, Targets::ClosedForm, true) => shaders::TRANSPORT_LANE_FLOAT,
+            (true, Targets::ClosedForm, false) => shaders::TRANSPORT_LANE,
+            (true, Targets::F64, true) => shaders::TRANSPORT_LANE_DIMS_FLOAT,
+            (true, Targets::F64, false) => shaders::TRANSPORT_LANE_DIMS,
+            (true, Targets::FloatPairs, true) => shaders::TRANSPORT_LANE_DIMS_DF_FLOAT,
+            (true, Targets::FloatPairs, false) => shaders::TRANSPORT_LANE_DIMS_DF,
+            (false, Targets::ClosedForm, true) => shaders::TRANSPORT_FLOAT,
+            (false, Targets::ClosedForm, false) => shaders::TRANSPORT,
+            (false, Targets::F64, true) => shaders::TRANSPORT_DIMS_FLOAT,
+            (false, Targets::F64, false) => shaders::TRANSPORT_DIMS,
+            (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
+            (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
         let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
         let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, local_max];
@@ -87,11 +103,13 @@ impl RunPipelines {
                 let gather = pipeline(ctx, shaders::LARGE_GATHER, 0, &[256], 2)?;
                 let gather = bound(gather, GATHER_BY_SEGMENT, Some(&buffers.large_seg))?;
                 let gather = bound(gather, GATHER_BY_PROJECTION, Some(&buffers.large_pkey))?;
-                let spv = match (any_dims, float_acc) {
-                    (false, true) => shaders::TRANSPORT_LARGE_FLOAT,
-                    (false, false) => shaders::TRANSPORT_LARGE,
-                    (true, true) => shaders::TRANSPORT_LARGE_DIMS_FLOAT,
-                    (true, false) => shaders::TRANSPORT_LARGE_DIMS,
+                let spv = match (targets, float_acc) {
+                    (Targets::ClosedForm, true) => shaders::TRANSPORT_LARGE_FLOAT,
+                    (Targets::ClosedForm, false) => shaders::TRANSPORT_LARGE,
+                    (Targets::F64, true) => shaders::TRANSPORT_LARGE_DIMS_FLOAT,
+                    (Targets::F64, false) => shaders::TRANSPORT_LARGE_DIMS,
+                    (Targets::FloatPairs, true) => shaders::TRANSPORT_LARGE_DIMS_DF_FLOAT,
+                    (Targets::FloatPairs, false) => shaders::TRANSPORT_LARGE_DIMS_DF,
                 };
                 // The same invocations whatever the device: a class may hold
                 // taps x spp samples, and each invocation loops over n / WG.

@@ -14,7 +14,7 @@ use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
     CostSlot, LargeMetaHead, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE,
 };
-use super::pipelines::{RunPipelines, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
+use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -64,12 +64,11 @@ impl VulkanRun {
         options: VulkanOptions,
     ) -> Result<Self> {
         let info = ctx.info().clone();
-        if tile.dims > CLOSED_FORM_DIMS && !info.float64 {
-            return Err(Error::VulkanUnavailable(format!(
-                "{} lacks shaderFloat64, which the exact targets for d >= 3 need; d = {} runs on the CPU backend",
-                info.name, tile.dims
-            )));
-        }
+        let targets = match (tile.dims > CLOSED_FORM_DIMS, info.float64 && !options.float_pair_targets) {
+            (false, _) => Targets::ClosedForm,
+            (true, true) => Targets::F64,
+            (true, false) => Targets::FloatPairs,
+        };
         if !info.int64_atomics {
             return Err(Error::VulkanUnavailable(format!("{} lacks 64-bit buffer atomics", info.name)));
         }
@@ -89,7 +88,7 @@ impl VulkanRun {
         let buffers =
             RunBuffers::new(ctx, &tile, &kernel, &thresholds, &samples, adam, float_acc, &large, local_max)?;
         let sort = buffers.large_sort(ctx, &large)?;
-        let pipelines = RunPipelines::new(ctx, &shape, tile.dims, float_acc, &buffers, sort.as_ref())?;
+        let pipelines = RunPipelines::new(ctx, &shape, targets, float_acc, &buffers, sort.as_ref())?;
         let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,

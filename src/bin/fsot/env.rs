@@ -15,6 +15,12 @@ pub(crate) fn validation() -> bool {
     std::env::var("FSOT_VALIDATION").map(|v| v == "1").unwrap_or(false)
 }
 
+/// `FSOT_FLOAT_PAIRS=1`: for d >= 3, the box spline's targets in pairs of
+/// float32s even on a device with shaderFloat64 (to compare the two).
+pub(crate) fn float_pair_targets() -> bool {
+    std::env::var("FSOT_FLOAT_PAIRS").map(|v| v == "1").unwrap_or(false)
+}
+
 /// `FSOT_TRANSPORT=WG,SPG`: the workgroup transport forced to that shape (tuning).
 pub(crate) fn transport_shape() -> Option<(u32, u32)> {
     let v = std::env::var("FSOT_TRANSPORT").ok()?;

@@ -158,6 +158,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         profile: args.profile,
         transport: None,
         transport_shape: env::transport_shape(),
+        float_pair_targets: env::float_pair_targets(),
     };
     Ok(RunOptions {
         backend,
