@@ -100,6 +100,14 @@ impl PairEnergy {
         self.term
     }
 
+    /// Proposals per batch at acceptance rate `acceptance`: about one in twenty
+    /// taken swaps then reads a value an earlier one of its batch moved (a
+    /// taken swap makes (2 x offsets + 2) / pixels of the tile stale).
+    pub(crate) fn batch_for(&self, acceptance: f64) -> usize {
+        let footprint = ((2 * self.offsets.len() + 2) as f64 / self.tile.pixels() as f64).min(1.0);
+        (0.05 / (acceptance * footprint)) as usize
+    }
+
     /// (x, y, frame) of pixel p.
     #[inline]
     fn coords(&self, p: usize) -> (usize, usize, usize) {
@@ -300,6 +308,29 @@ impl SwapDevice {
     }
 }
 
+/// Checks a search's values and starts its report (the energy summed); true
+/// when there is nothing to search (fewer than two pixels, or no neighbours),
+/// the trace then filled with the start energy.
+pub(crate) fn start(energy: &PairEnergy, values: &[f32], schedule: Schedule) -> Result<(SwapReport, bool)> {
+    let tile = energy.tile;
+    if values.len() != tile.values() {
+        return Err(Error::invalid("swap search: values do not match the tile"));
+    }
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(Error::invalid("swap search: a value is not finite"));
+    }
+    let mut report = SwapReport {
+        offsets: energy.offsets.len(),
+        start_energy: energy.total(values),
+        ..SwapReport::default()
+    };
+    let trivial = tile.pixels() < 2 || energy.offsets.is_empty();
+    if trivial {
+        report.trace = vec![report.start_energy; schedule.passes as usize];
+    }
+    Ok((report, trivial))
+}
+
 /// One random proposal (p, q, u) of a pass: two distinct pixels and the
 /// uniform number that decides an uphill move.
 fn propose(rng: &mut Stream, n: usize) -> (usize, usize, f64) {
@@ -331,26 +362,12 @@ pub fn swap_search(
     key: u32,
     mut on_pass: impl FnMut(u32, f64),
 ) -> Result<SwapReport> {
-    let tile = energy.tile;
-    let (n, d) = (tile.pixels(), tile.dims);
-    if values.len() != n * d {
-        return Err(Error::invalid("swap search: values do not match the tile"));
-    }
-    if values.iter().any(|v| !v.is_finite()) {
-        return Err(Error::invalid("swap search: a value is not finite"));
-    }
-    let mut report = SwapReport {
-        offsets: energy.offsets.len(),
-        start_energy: energy.total(values),
-        ..SwapReport::default()
-    };
-    let mut current = report.start_energy;
-    if n < 2 || energy.offsets.is_empty() {
-        report.trace = vec![current; schedule.passes as usize];
+    let (n, d) = (energy.tile.pixels(), energy.tile.dims);
+    let (mut report, trivial) = start(energy, values, schedule)?;
+    if trivial {
         return Ok(report);
     }
-    // Share of the tile one accepted swap makes stale.
-    let footprint = ((2 * energy.offsets.len() + 2) as f64 / n as f64).min(1.0);
+    let mut current = report.start_energy;
     let mut acceptance = 0.5f64;
     let mut size = 8usize;
     let t0 = schedule.start_temperature * mean_abs_delta(energy, values, key);
@@ -363,7 +380,7 @@ pub fn swap_search(
             // About one stale proposal in ten: a batch taking k swaps makes
             // about 2 k x footprint of the later ones stale. Grows at most
             // twofold per batch, so one unlucky batch cannot make a huge one.
-            size = ((0.05 / (acceptance * footprint)) as usize).clamp(8, 4096).min(2 * size).min(left);
+            size = energy.batch_for(acceptance).clamp(8, 4096).min(2 * size).min(left);
             left -= size;
             let proposals: Vec<(usize, usize, f64)> = (0..size).map(|_| propose(&mut rng, n)).collect();
             let frozen: &[f32] = values;

@@ -19,7 +19,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use crate::baselines::swap::{mean_abs_delta, PairEnergy, Schedule, SwapReport, ValueTerm};
+use crate::baselines::swap::{mean_abs_delta, start, PairEnergy, Schedule, SwapReport, ValueTerm};
 use crate::error::{Error, Result};
 use crate::rng::derive;
 use crate::vk::buffer::Location;
@@ -142,19 +142,13 @@ pub fn swap_search(
 ) -> Result<SwapReport> {
     let tile = *energy.tile();
     let (n, d) = (tile.pixels(), tile.dims);
-    if values.len() != n * d {
-        return Err(Error::invalid("swap search: values do not match the tile"));
-    }
-    if values.iter().any(|v| !v.is_finite()) {
-        return Err(Error::invalid("swap search: a value is not finite"));
-    }
+    let offsets = energy.offsets();
     if d > layout::MAX_DIMS {
         return Err(Error::invalid(format!(
             "the Vulkan swap search takes d <= {}; d = {d} runs on the CPU backend",
             layout::MAX_DIMS
         )));
     }
-    let offsets = energy.offsets();
     if offsets.len() > MAX_OFFSETS {
         return Err(Error::invalid(format!(
             "the energy has {} neighbours per pixel; the Vulkan swap search takes at most {MAX_OFFSETS} \
@@ -165,13 +159,11 @@ pub fn swap_search(
     if !ctx.info().int64_atomics {
         return Err(Error::VulkanUnavailable(format!("{} lacks 64-bit buffer atomics", ctx.info().name)));
     }
-    let mut report =
-        SwapReport { offsets: offsets.len(), start_energy: energy.total(values), ..SwapReport::default() };
-    let mut current = report.start_energy;
-    if n < 2 || offsets.is_empty() {
-        report.trace = vec![current; schedule.passes as usize];
+    let (mut report, trivial) = start(energy, values, schedule)?;
+    if trivial {
         return Ok(report);
     }
+    let mut current = report.start_energy;
     let (term, inv_sigma2) = match energy.term() {
         ValueTerm::Gaussian { sigma } => (layout::TERM_GAUSSIAN, (1.0 / (sigma * sigma)) as f32),
         ValueTerm::NegDistance => (layout::TERM_NEG_DISTANCE, 0.0),
@@ -181,13 +173,12 @@ pub fn swap_search(
         .map(|o| SwapOffset { dx: o.dx as u32, dy: o.dy as u32, dt: o.dt as u32, weight: o.weight as f32 })
         .collect();
     let search = Passes::new(ctx, values, n, &table, n.min(MAX_BATCH))?;
-    // As the CPU path: the share of the tile one taken swap makes stale.
-    let footprint = ((2 * offsets.len() + 2) as f64 / n as f64).min(1.0);
     let mut acceptance = 0.5f64;
     let t0 = schedule.start_temperature * mean_abs_delta(energy, values, key);
     let mut batch = 1u32;
     for pass in 0..schedule.passes {
-        let size = ((0.05 / (acceptance * footprint)) as usize).clamp(8, MAX_BATCH).min(n);
+        // Sized as the CPU path sizes its batches.
+        let size = energy.batch_for(acceptance).clamp(8, MAX_BATCH).min(n);
         let base = SwapPush {
             width: tile.width as u32,
             height: tile.height as u32,
