@@ -504,7 +504,15 @@ pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
         BackendChoice::Cpu => SwapDevice::Cpu,
         BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
         BackendChoice::Auto => {
-            match context_for(options, options.device.is_none() && options.context.is_none()) {
+            let usable = context_for(options, options.device.is_none() && options.context.is_none())
+                .and_then(|ctx| match ctx.info().int64_atomics {
+                    true => Ok(ctx),
+                    false => Err(Error::VulkanUnavailable(format!(
+                        "{} lacks 64-bit buffer atomics",
+                        ctx.info().name
+                    ))),
+                });
+            match usable {
                 Ok(ctx) => SwapDevice::Vulkan(ctx),
                 Err(e) => {
                     let cpu = SwapDevice::Cpu;
