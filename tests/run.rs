@@ -127,9 +127,9 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
     let guest =
         fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
     let handed = RunOptions { context: Some(guest.clone()), ..RunOptions::default() };
-    let refused = Run::start(tile, settings(5), None, handed).unwrap();
-    assert_eq!(refused.backend().kind(), BackendKind::Vulkan, "{}", refused.note());
-    drop((refused, guest));
+    let taken = Run::start(tile, settings(5), None, handed).unwrap();
+    assert_eq!(taken.backend().kind(), BackendKind::Vulkan, "{}", taken.note());
+    drop((taken, guest));
     common::assert_no_validation_messages(&ctx);
 }
 
