@@ -41,6 +41,12 @@ pub struct Profile {
     pub large_ns: f64,
     pub update_ns: f64,
     pub iterations: u32,
+    /// The least bytes each pass must move per iteration (a model: see
+    /// `gpu::run::VulkanRun::pass_bytes`), so a pass's distance to the memory
+    /// bandwidth's floor can be read off its time.
+    pub transport_bytes: f64,
+    pub large_bytes: f64,
+    pub update_bytes: f64,
 }
 
 impl Profile {

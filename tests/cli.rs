@@ -576,3 +576,24 @@ fn a_scene_plan_runs_on_vulkan_its_masks_side_by_side_with_the_validation_layer_
         serde_json::from_slice(&std::fs::read(dir.path().join("masks/plan.json")).unwrap()).unwrap();
     assert_eq!(plan["groups"].as_array().unwrap().len(), 3);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn profile_prints_each_pass_s_time_and_the_bytes_it_must_move() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"])
+        .args(["--kernel", "perceptual-taa", "--profile", "--out", "m.exr"])
+        .env("FSOT_VALIDATION", "1")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{out}", stderr(&o));
+    assert!(out.contains("profile (4 iterations, per iteration): transport"), "{out}");
+    // 8x8x4 x 16 spp x 2 coordinates, each read (4 bytes) and added into (a 4-byte
+    // float or 8-byte fixed-point atomic) at least once per iteration.
+    let line = out.lines().find(|l| l.contains("least bytes per iteration")).expect("the bytes line");
+    let mb: f64 = line.split("transport ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!(mb * 1e6 >= 8.0 * (8 * 8 * 4 * 16 * 2) as f64, "{line}");
+}

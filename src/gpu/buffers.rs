@@ -13,10 +13,12 @@ use crate::vk::{Buffer, Context, Location, RadixSort, SortCount};
 
 /// The large-class stage: classes larger than the transport pass sorts itself go
 /// through the global radix sort.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LargePlan {
     /// Elements the large-class buffers hold (0: the kernel makes no large class).
     pub capacity: u32,
+    /// Elements of large classes expected per iteration.
+    pub expected: f64,
     /// Bits of a segment start (the last sort's key).
     pub seg_bits: u32,
     /// Bits of a point index (the first sort's key).
@@ -36,8 +38,8 @@ impl LargePlan {
         local_max: u32,
     ) -> Self {
         let max_class = taps as u64 * tile.spp as u64;
+        let mut expected = 0.0;
         let capacity = if max_class > local_max as u64 {
-            let mut expected = 0.0;
             for (l, &q) in thresholds.iter().enumerate() {
                 let next = thresholds.get(l + 1).copied().unwrap_or(0);
                 let p = (q as f64 - next as f64) / 4_294_967_296.0; // P(len = l + 1)
@@ -53,6 +55,7 @@ impl LargePlan {
         };
         Self {
             capacity,
+            expected: expected * slices as f64,
             seg_bits: 32 - capacity.leading_zeros(),
             point_bits: (32 - (tile.points() as u32).saturating_sub(1).leading_zeros()).max(1),
         }

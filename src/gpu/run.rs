@@ -130,6 +130,25 @@ impl VulkanRun {
         &self.profile
     }
 
+    /// The least bytes each pass must move per iteration, a model (transport,
+    /// large-class stage, update): the transport reads every coordinate each
+    /// class member projects and adds its displacement into an accumulator (4
+    /// bytes read, one 8-byte fixed-point or 4-byte float atomic add, per hit);
+    /// the large-class stage's three sorts read and write each expected element's
+    /// key and payload once per pass, and its two gathers once each; the update
+    /// reads and clears each accumulator and reads and writes each coordinate and
+    /// its optimizer state.
+    pub fn pass_bytes(&self) -> (f64, f64, f64) {
+        let values = self.tile.values() as f64;
+        let acc = if self.float_acc { 4.0 } else { 8.0 };
+        let transport = self.hits_per_value * values * (4.0 + acc);
+        let passes = (self.large.point_bits.div_ceil(8) + 4 + self.large.seg_bits.div_ceil(8)) as f64;
+        let large = self.large.expected * 16.0 * (passes + 2.0);
+        let state = if matches!(self.settings.rule, StepRule::Adam { .. }) { 16.0 } else { 8.0 };
+        let update = values * (2.0 * acc + 8.0 + state);
+        (transport, large, update)
+    }
+
     /// Records the transport pass of one iteration (and the reset of the
     /// large-class counters).
     fn record_transport(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
@@ -461,8 +480,14 @@ impl Backend for VulkanRun {
     }
 
     fn report(&self) -> Report {
+        let (transport_bytes, large_bytes, update_bytes) = self.pass_bytes();
         Report {
-            profile: self.options.profile.then(|| self.profile.clone()),
+            profile: self.options.profile.then(|| Profile {
+                transport_bytes,
+                large_bytes,
+                update_bytes,
+                ..self.profile.clone()
+            }),
             skipped_large_classes: self.overflowed,
             validation_messages: self.ctx.validation_messages(),
         }

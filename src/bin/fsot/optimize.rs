@@ -200,6 +200,21 @@ fn backend_report(report: &Report) -> Result<()> {
             per(p.large_ns),
             per(p.update_ns)
         );
+        // The least bytes each pass must move, and the rate its time gives.
+        let rate = |bytes: f64, ns: f64| {
+            let ms = per(ns);
+            if ms > 0.0 {
+                format!("{:.2} MB, {:.1} GB/s", bytes * 1e-6, bytes / (ms * 1e-3) * 1e-9)
+            } else {
+                format!("{:.2} MB", bytes * 1e-6)
+            }
+        };
+        println!(
+            "  least bytes per iteration (a model): transport {}; large classes {}; update {}",
+            rate(p.transport_bytes, p.transport_ns),
+            rate(p.large_bytes, p.large_ns),
+            rate(p.update_bytes, p.update_ns)
+        );
     }
     let messages = &report.validation_messages;
     if !messages.is_empty() {
