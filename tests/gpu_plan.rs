@@ -62,3 +62,50 @@ fn runs_on_different_devices_are_not_stepped_together() {
     assert!(err.to_string().contains("share one device"), "{err}");
     assert_eq!((x.iteration(), y.iteration()), (0, 0), "nothing ran");
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
+    use fsot::backend::BackendChoice;
+    use fsot::plan::{CostModel, Plan, PlanEvent};
+    use fsot::run::{CancelFlag, Outcome, RunOptions};
+    use fsot::scene::Scene;
+    let Some(ctx) = common::gpu_context() else { return };
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
+    let scene = Scene::parse(text, "together").unwrap();
+    let plan = Plan::new(&scene, &CostModel { seconds_per_point: 1e-6, backend: "test".into() }).unwrap();
+    let options = RunOptions {
+        backend: BackendChoice::Vulkan,
+        context: Some(ctx.clone()),
+        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        ..RunOptions::default()
+    };
+    let straight = tempfile::tempdir().unwrap();
+    plan.execute(straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
+
+    // Cancelled as mask b passes iteration 40: both were in flight together.
+    let dir = tempfile::tempdir().unwrap();
+    let cancel = CancelFlag::new();
+    let mut seen = [0u32; 2];
+    let outcome = plan
+        .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
+            if let PlanEvent::Run { index, event: fsot::run::Event::Progress { iteration, .. } } = e {
+                seen[index] = iteration;
+                if index == 1 && iteration >= 40 {
+                    cancel.cancel();
+                }
+            }
+        })
+        .unwrap();
+    assert!(matches!(outcome, Outcome::Cancelled { .. }), "{outcome:?}");
+    assert!(seen[0] >= 40, "mask a advanced beside b: {seen:?}");
+    assert!(!dir.path().join("plan.json").exists());
+    plan.execute(dir.path(), &options, 10, true, &CancelFlag::new(), &mut |_| {}).unwrap();
+    for name in ["a.exr", "b.exr"] {
+        let x = fsot::io::exr::read(&dir.path().join(name)).unwrap();
+        let y = fsot::io::exr::read(&straight.path().join(name)).unwrap();
+        assert!(x.samples.iter().zip(&y.samples).all(|(p, q)| p.to_bits() == q.to_bits()), "{name} differs");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
