@@ -54,6 +54,29 @@ uvec4 same_digit(uint digit, bool valid) {
 }
 
 
+// Exclusive scan of the 256 digit counts in s_local, by the first subgroup; with
+// `dest`, each digit's start is also taken off s_dest (so s_dest + staged index
+// is the output address). A barrier must follow.
+void scan_local(bool dest) {
+    if (gl_SubgroupID == 0u) {
+        uint per = (256u + gl_SubgroupSize - 1u) / gl_SubgroupSize;
+        uint first = gl_SubgroupInvocationID * per;
+        uint sum = 0u;
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) { sum += s_local[first + j]; }
+        }
+        uint run = subgroupExclusiveAdd(sum);
+        for (uint j = 0u; j < per; ++j) {
+            if (first + j < 256u) {
+                uint c = s_local[first + j];
+                s_local[first + j] = run;
+                if (dest) { s_dest[first + j] -= run; }
+                run += c;
+            }
+        }
+    }
+}
+
 // Slot j = round x KEYS + k of this invocation: the index of its element.
 uint place_index(uint base, uint j) {
     return base + (j / KEYS) * gl_WorkGroupSize.x * KEYS + gl_SubgroupID * gl_SubgroupSize * KEYS
@@ -74,24 +97,7 @@ void place_block(uint base, uint key[ITEMS], uint val[ITEMS]) {
         s_round[d] = 0u;
     }
     barrier();
-    // Exclusive scan of the block's digit counts, by the first subgroup.
-    if (sg == 0u) {
-        uint per = (256u + sgsize - 1u) / sgsize;
-        uint first = lane * per;
-        uint sum = 0u;
-        for (uint j = 0u; j < per; ++j) {
-            if (first + j < 256u) { sum += s_local[first + j]; }
-        }
-        uint run = subgroupExclusiveAdd(sum);
-        for (uint j = 0u; j < per; ++j) {
-            if (first + j < 256u) {
-                uint c = s_local[first + j];
-                s_local[first + j] = run;
-                s_dest[first + j] -= run;
-                run += c;
-            }
-        }
-    }
+    scan_local(true);
     barrier();
     [[unroll]] for (uint r = 0u; r < ITEMS / KEYS; ++r) {
         // Phase A: fold the previous round into the counts; clear the counters.

@@ -16,29 +16,15 @@ shared uint s_next[256]; // where the next block's first digit d goes
 void main() {
     uint tid = gl_LocalInvocationID.x;
     uint wg = gl_WorkGroupSize.x;
-    for (uint d = tid; d < 256u; d += wg) { s_next[d] = 0u; }
+    for (uint d = tid; d < 256u; d += wg) { s_local[d] = 0u; }
     barrier();
     for (uint i = tid; i < count; i += wg) {
-        atomicAdd(s_next[(keys_in[i] >> pc.shift) & 255u], 1u);
+        atomicAdd(s_local[(keys_in[i] >> pc.shift) & 255u], 1u);
     }
     barrier();
-    // Exclusive scan of the 256 counts, by the first subgroup.
-    if (gl_SubgroupID == 0u) {
-        uint per = (256u + gl_SubgroupSize - 1u) / gl_SubgroupSize;
-        uint first = gl_SubgroupInvocationID * per;
-        uint sum = 0u;
-        for (uint j = 0u; j < per; ++j) {
-            if (first + j < 256u) { sum += s_next[first + j]; }
-        }
-        uint run = subgroupExclusiveAdd(sum);
-        for (uint j = 0u; j < per; ++j) {
-            if (first + j < 256u) {
-                uint c = s_next[first + j];
-                s_next[first + j] = run;
-                run += c;
-            }
-        }
-    }
+    scan_local(false);
+    barrier();
+    for (uint d = tid; d < 256u; d += wg) { s_next[d] = s_local[d]; }
     barrier();
     for (uint base = 0u; base < count; base += block_size()) {
         uint key[ITEMS];

@@ -150,13 +150,30 @@ impl VulkanRun {
     }
 
     /// Records the transport pass of one iteration (and the reset of the
-    /// large-class counters).
+    /// large-class counters), with the barriers around it.
     fn record_transport(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
-        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, std::mem::size_of::<LargeMetaHead>() as u64);
+        self.record_reset_large(cmd);
         barrier(&self.ctx, cmd);
+        self.record_transport_pass(cmd, push);
+        barrier(&self.ctx, cmd);
+    }
+
+    /// Zeroes the large-class counters (a barrier must follow).
+    fn record_reset_large(&self, cmd: vk::CommandBuffer) {
+        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, std::mem::size_of::<LargeMetaHead>() as u64);
+    }
+
+    /// The transport dispatch alone (barriers are the caller's).
+    fn record_transport_pass(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
         let groups = two_d(self.shape.groups(self.slices));
         self.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
-        barrier(&self.ctx, cmd);
+    }
+
+    /// The update dispatch of iteration `iteration` alone (barriers are the caller's).
+    fn record_update_pass(&self, cmd: vk::CommandBuffer, iteration: u32) {
+        let update = self.update_push(iteration);
+        let groups = two_d((self.tile.values() as u32).div_ceil(256));
+        self.pipelines.update.dispatch(cmd, 0, groups, bytemuck::bytes_of(&update));
     }
 
     /// Records the large-class stage, when the kernel can make classes too large
@@ -271,21 +288,24 @@ impl VulkanRun {
                     t.reset(cmd);
                 }
                 barrier(&ctx, cmd);
+                // The runs still stepping at iteration k of the batch, with their pushes
+                // (one list, reused).
+                let mut active: Vec<(&VulkanRun, TransportPush)> = Vec::with_capacity(runs.len());
                 for k in 0..most {
-                    let active: Vec<(&VulkanRun, TransportPush)> = runs
-                        .iter()
-                        .zip(&counts)
-                        .filter(|(_, &c)| k < c)
-                        .map(|(r, _)| (*r, r.transport_push(r.iteration + k, k)))
-                        .collect();
+                    active.clear();
+                    active.extend(
+                        runs.iter()
+                            .zip(&counts)
+                            .filter(|(_, &c)| k < c)
+                            .map(|(r, _)| (*r, r.transport_push(r.iteration + k, k))),
+                    );
                     stamp(cmd, 4 * k);
                     for (r, _) in &active {
-                        zero(&ctx, cmd, &r.buffers.large_meta, 0, head_bytes);
+                        r.record_reset_large(cmd);
                     }
                     barrier(&ctx, cmd);
                     for (r, push) in &active {
-                        let groups = two_d(r.shape.groups(r.slices));
-                        r.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
+                        r.record_transport_pass(cmd, push);
                     }
                     barrier(&ctx, cmd);
                     stamp(cmd, 4 * k + 1);
@@ -294,9 +314,7 @@ impl VulkanRun {
                     }
                     stamp(cmd, 4 * k + 2);
                     for (r, _) in &active {
-                        let update = r.update_push(r.iteration + k);
-                        let groups = two_d((r.tile.values() as u32).div_ceil(256));
-                        r.pipelines.update.dispatch(cmd, 0, groups, bytemuck::bytes_of(&update));
+                        r.record_update_pass(cmd, r.iteration + k);
                     }
                     barrier(&ctx, cmd);
                     stamp(cmd, 4 * k + 3);
