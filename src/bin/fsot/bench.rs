@@ -36,12 +36,20 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             );
             println!("  {}", bandwidth_line(&b));
             println!("  passes: {} ({} dispatches)", b.passes, b.dispatches);
-            if b.dispatches < 16 {
-                let blocks = fsot::bench::bench_sort(&ctx, n, repeats, SortPath::Blocks)?;
+            // The other small-sort path on the same pairs, for comparison.
+            let other = match b.dispatches {
+                16 if n <= fsot::vk::sort::TAIL_MAX_BLOCKS * b.block => Some(SortPath::Tail),
+                16 => None,
+                _ => Some(SortPath::Blocks),
+            };
+            if let Some(path) = other {
+                let o = fsot::bench::bench_sort(&ctx, n, repeats, path)?;
                 println!(
-                    "  the four block passes on the same pairs (16 dispatches): {:.3} ms = {:.3} G pairs/s",
-                    blocks.gpu_seconds * 1e3,
-                    blocks.gpu_pairs_per_second() * 1e-9
+                    "  {} on the same pairs ({} dispatches): {:.3} ms = {:.3} G pairs/s",
+                    o.passes,
+                    o.dispatches,
+                    o.gpu_seconds * 1e3,
+                    o.gpu_pairs_per_second() * 1e-9
                 );
             }
             println!(
