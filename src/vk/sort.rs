@@ -74,8 +74,8 @@ pub const TAIL_MAX_BLOCKS: u32 = 64;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SortPath {
     /// One workgroup per pass for a count the host knows fits one block; the
-    /// histogram's tail scan up to `TAIL_MAX_BLOCKS` blocks (on GPUs); the four
-    /// block passes beyond.
+    /// histogram's tail scan up to `TAIL_MAX_BLOCKS` blocks; the four block
+    /// passes beyond.
     #[default]
     Auto,
     /// Histogram, two scan dispatches and scatter over blocks, whatever the count.
@@ -324,16 +324,9 @@ impl RadixSort {
 
     /// Does a sort of `known` pairs (None: up to the capacity) scan its
     /// histogram in the histogram's last workgroup?
-    /// On a CPU implementation `Auto` keeps the block passes: there a dispatch
-    /// costs little and the tail scan runs on one core (lavapipe, 128k pairs:
-    /// 37.6 ms against 29.5, `bench/results/issue16-sort-small.txt`).
     pub fn tail_scan(&self, known: Option<u32>) -> bool {
         let blocks = known.unwrap_or(self.capacity).div_ceil(self.shape.block).max(1);
-        let wanted = match self.path {
-            SortPath::Tail => true,
-            SortPath::Auto => !self.ctx.info().is_cpu(),
-            SortPath::Blocks | SortPath::Single => false,
-        };
+        let wanted = matches!(self.path, SortPath::Auto | SortPath::Tail);
         wanted && blocks <= TAIL_MAX_BLOCKS
     }
 
