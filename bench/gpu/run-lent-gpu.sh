@@ -38,7 +38,7 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   done
   step $B/fsot bench sort --n 4194304 --repeats 30
   # Issue 16: the fixed cost of small sorts (one workgroup per pass at one block,
-  # the histogram's tail scan up to 64 blocks, against the four block passes).
+  # the histogram's tail scan up to 32 blocks, against the four block passes).
   for n in 2048 16384 65536 131072; do step $B/fsot bench sort --n $n --repeats 50; done
   step $B/fsot bench sort --n 33554432 --repeats 10
   step $B/fsot bench scatter --n 1048576 --repeats 30

@@ -67,8 +67,10 @@ const ARG_BLOCKS: u64 = 0;
 const ARG_CHUNKS: u64 = 16;
 
 /// Most blocks whose histogram the last histogram workgroup scans itself
-/// (256 x 64 entries, eight scan chunks of 2048).
-pub const TAIL_MAX_BLOCKS: u32 = 64;
+/// (256 x 32 entries, four scan chunks of 2048: 65536 pairs in 2048-pair blocks).
+/// On lavapipe the tail scan won at 32 blocks (64k pairs) in three runs of four
+/// and lost at 64 in all four (`bench/results/issue16-sort-small.txt`).
+pub const TAIL_MAX_BLOCKS: u32 = 32;
 
 /// Which passes a sort records.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
