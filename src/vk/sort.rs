@@ -68,8 +68,10 @@ const ARG_CHUNKS: u64 = 16;
 
 /// Most blocks whose histogram the last histogram workgroup scans itself
 /// (256 x 32 entries, four scan chunks of 2048: 65536 pairs in 2048-pair blocks).
-/// On lavapipe the tail scan won at 32 blocks (64k pairs) in three runs of four
-/// and lost at 64 in all four (`bench/results/issue16-sort-small.txt`).
+/// The issue's small sort (64k pairs) is within it, and the one workgroup's scan
+/// stays at four chunks. Lavapipe cannot decide the limit: its runs spread by
+/// half (the block passes took 29.5 to 45.9 ms at 128k pairs); there the tail
+/// scan won at 32 blocks in three runs of five and lost at 64 in all four.
 pub const TAIL_MAX_BLOCKS: u32 = 32;
 
 /// Which passes a sort records.
