@@ -5,6 +5,7 @@
 use crate::error::Result;
 use crate::mask::Mask;
 use crate::settings::RunState;
+use crate::step_rule::{Plateau, PlateauState};
 
 /// Where a run may go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -93,6 +94,23 @@ pub trait Backend: Send {
     /// schedule (`step_rule::Plateau`); None: the cosine schedule over the run's
     /// iterations.
     fn set_scale(&mut self, scale: Option<f32>);
+    /// Takes over an end-agnostic schedule's stopping rule, standing at `state`
+    /// (with `target`, the objective that ends the run, if any): the backend then
+    /// sets its own step scale and ends the run itself (Vulkan: on the device).
+    /// False where it cannot; the caller then evaluates the rule (`set_scale`).
+    fn adopt_plateau(
+        &mut self,
+        _rule: &Plateau,
+        _state: &PlateauState,
+        _target: Option<f64>,
+    ) -> Result<bool> {
+        Ok(false)
+    }
+    /// The adopted rule's state after the last step, and whether it ended the
+    /// run. None unless adopted.
+    fn plateau(&self) -> Option<(PlateauState, bool)> {
+        None
+    }
     fn report(&self) -> Report;
     /// The Vulkan run behind this backend, when it is one (runs on one device
     /// can step together: `VulkanRun::step_together`).

@@ -112,6 +112,9 @@ pub struct Run {
     plateau: Option<(Plateau, PlateauState)>,
     /// The stopping rule ended the run.
     stopped: bool,
+    /// The backend evaluates the stopping rule itself (Vulkan, on the device);
+    /// otherwise this run does, once per window.
+    rule_on_backend: bool,
     /// Seconds spent stepping this run (a step shared with other runs counts in
     /// full for each).
     busy: f64,
@@ -134,7 +137,7 @@ impl Run {
         let resumed_from = saved.map(|s| s.iteration);
         let every = options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
         let next_checkpoint = backend.iteration().saturating_add(every);
-        Ok(Self {
+        let mut run = Self {
             tile,
             settings,
             init: init.cloned(),
@@ -146,8 +149,30 @@ impl Run {
             next_checkpoint,
             plateau,
             stopped: false,
+            rule_on_backend: false,
             busy: 0.0,
-        })
+        };
+        run.hand_over_rule()?;
+        Ok(run)
+    }
+
+    /// Hands the stopping rule, where it stands, to a backend that evaluates it
+    /// itself (on the GPU); otherwise the run keeps it.
+    fn hand_over_rule(&mut self) -> Result<()> {
+        let target = match self.settings.until {
+            Until::Objective(t) => Some(t),
+            _ => None,
+        };
+        self.rule_on_backend = match &self.plateau {
+            Some((rule, state)) => self.backend.adopt_plateau(rule, state, target)?,
+            None => false,
+        };
+        Ok(())
+    }
+
+    /// The stopping rule is evaluated by the backend (on the GPU), not by the host.
+    pub fn rule_on_device(&self) -> bool {
+        self.rule_on_backend
     }
 
     /// The backend in words, and why it was chosen when not the one asked for.
@@ -232,10 +257,15 @@ impl Run {
             Some(_) => to.min(self.next_checkpoint),
             None => to,
         };
-        if let Some((rule, state)) = &self.plateau {
-            // Batches end at windows' ends, where the schedule decides.
-            stop = stop.min(self.iteration() + rule.window.max(1) - state.count);
-            self.backend.set_scale(Some(state.scale));
+        match &self.plateau {
+            // The backend decides where it stands and ends the run itself.
+            Some(_) if self.rule_on_backend => {}
+            Some((rule, state)) => {
+                // Batches end at windows' ends, where the schedule decides.
+                stop = stop.min(self.iteration() + rule.window.max(1) - state.count);
+                self.backend.set_scale(Some(state.scale));
+            }
+            None => {}
         }
         stop.saturating_sub(self.iteration()).max(1)
     }
@@ -243,7 +273,12 @@ impl Run {
     /// After a step that gave `costs`: the stopping rule, progress, and the
     /// checkpoint when one is due.
     fn stepped(&mut self, costs: &[f64], on: &mut dyn FnMut(Event)) -> Result<()> {
-        if let Some((rule, state)) = &mut self.plateau {
+        if let (true, Some((_, state))) = (self.rule_on_backend, &mut self.plateau) {
+            if let Some((device, stop)) = self.backend.plateau() {
+                *state = device;
+                self.stopped |= stop;
+            }
+        } else if let Some((rule, state)) = &mut self.plateau {
             for &c in costs {
                 let window_end = state.count + 1 == rule.window.max(1);
                 self.stopped |= state.observe(rule, c);
@@ -413,6 +448,7 @@ impl Run {
         }
         self.plateau = schedule(&self.settings, saved.as_ref());
         self.backend = Box::new(cpu);
+        self.hand_over_rule()?;
         self.note = self.backend.describe();
         let from = self.iteration();
         let every = self.options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);

@@ -6,7 +6,8 @@
 use std::collections::HashMap;
 
 use fsot::gpu::layout::{
-    self, HashPush, LargeMetaHead, LargeSegment, ScatterPush, TransportPush, UpdatePush,
+    self, HashPush, LargeMetaHead, LargeSegment, PlateauPush, RuleState, ScatterPush, TransportPush,
+    UpdatePush,
 };
 use fsot::gpu::swap::layout::{self as swap, SwapOffset, SwapProposal, SwapPush, SwapStats};
 use fsot::vk::sort::{self, RadixPush};
@@ -25,7 +26,9 @@ type Mirror = (&'static str, usize, Vec<(&'static str, usize)>);
 fn mirrors() -> Vec<Mirror> {
     vec![
         fields!(TransportPush; slice_key, iteration, width, height, frames, spp, dims, taps, slices, cost_slot, large_capacity, pad),
-        fields!(UpdatePush; values, rule, step_t, scale, inv_hits, p0, p1, p2, p3, bias1, bias2, pad),
+        fields!(UpdatePush; values, rule, step_t, scale, inv_hits, p0, p1, p2, p3, bias1, bias2, scheduled),
+        fields!(PlateauPush; slot, iteration),
+        fields!(RuleState; previous, sum, decay_below, stop_below, target, scale, factor, floor_scale, count, window, has_previous, has_target, stopped, stop_iteration, pad),
         fields!(ScatterPush; count),
         fields!(HashPush; key, count),
         fields!(LargeSegment; slice, first, size, pad),
@@ -181,7 +184,7 @@ fn check_family(
             }
         }
         // Structs inside buffers.
-        for name in ["LargeSegment", "SwapOffset", "SwapProposal", "SwapStats"] {
+        for name in ["LargeSegment", "RuleState", "SwapOffset", "SwapProposal", "SwapStats"] {
             if let Some(id) = r.struct_named(name) {
                 let m = mirrors.iter().find(|m| m.0 == name).unwrap();
                 let want: Vec<(String, u32)> = m.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();

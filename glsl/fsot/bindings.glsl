@@ -32,7 +32,8 @@
 #define FSOT_BINDING_SCATTER_TARGETS 15
 #define FSOT_BINDING_SCATTER_VALUES 16
 #define FSOT_BINDING_HASH_VALUES 17
-#define FSOT_BINDINGS 18
+#define FSOT_BINDING_SCHEDULE 18
+#define FSOT_BINDINGS 19
 
 // Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
@@ -68,6 +69,33 @@ struct UpdatePush {
     float p3;         // Adam: eps
     float bias1;      // Adam: 1 - beta1^t
     float bias2;      // Adam: 1 - beta2^t
+    uint scheduled;   // 1: the step scale is the stopping rule's (schedule.scale), not `scale`
+};
+
+// The stopping rule's pass (plateau.comp): the iteration just done and its cost slot.
+struct PlateauPush {
+    uint slot;
+    uint iteration;
+};
+
+// The stopping rule on the device (src/step_rule.rs: Plateau and PlateauState,
+// and Until::Objective), evaluated by plateau.comp. Its f64 values are kept as
+// their bits (uvec2), so that passes compiled without shaderFloat64 can bind it.
+struct RuleState {
+    uvec2 previous;     // the last complete window's mean objective (when has_previous)
+    uvec2 sum;          // the current window's objectives so far
+    uvec2 decay_below;  // a window gaining less than this halves the step scale...
+    uvec2 stop_below;   // ... or, with the scale at its floor, gaining less than this stops
+    uvec2 target;       // stop at a window whose mean is at most this (when has_target)
+    float scale;        // the step scale the update pass applies
+    float factor;       // what the scale is multiplied by when a window does not pay
+    float floor_scale;  // the scale's floor (FINAL_FRACTION)
+    uint count;         // objectives in the current window
+    uint window;        // iterations per window
+    uint has_previous;
+    uint has_target;
+    uint stopped;       // 1 once the rule ended the run: every pass then does nothing
+    uint stop_iteration; // iterations done when it did
     uint pad;
 };
 
@@ -128,5 +156,6 @@ layout(std430, set = 0, binding = FSOT_BINDING_LARGE_ARGS) writeonly buffer Larg
 layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_TARGETS) readonly buffer ScatterTargets { uint scatter_targets[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_VALUES) readonly buffer ScatterValues { float scatter_values[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_HASH_VALUES) writeonly buffer HashValues { uint hash_values[]; };
+layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleState schedule; };
 
 #endif

@@ -141,6 +141,9 @@ void process_slice(uint slice) {
 }
 
 void main() {
+    if (schedule.stopped != 0u) {
+        return; // the stopping rule ended the run (the same for every invocation)
+    }
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     for (uint k = 0u; k < SLICES_PER_GROUP; ++k) {
         uint slice = group * SLICES_PER_GROUP + k;

@@ -72,8 +72,8 @@ float send(FsotSlice s, uint i, float target) {
 
 void main() {
     uint slice = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
-    if (slice >= pc.slices) {
-        return;
+    if (slice >= pc.slices || schedule.stopped != 0u) {
+        return; // past the slices, or the stopping rule ended the run
     }
     FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);

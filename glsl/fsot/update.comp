@@ -1,7 +1,8 @@
 #version 450
 // The update pass, one invocation per coordinate: read and reset its accumulated
 // displacement, apply the step rule (src/step_rule.rs: step_value), wrap into
-// [0, 1).
+// [0, 1). The step scale is the push constant's (the cosine schedule, or the
+// host's stopping rule) or the device's stopping rule's (plateau.comp).
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 
@@ -15,9 +16,10 @@ float wrap01(float x) {
 
 void main() {
     uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
-    if (i >= pc.values) {
-        return;
+    if (i >= pc.values || schedule.stopped != 0u) {
+        return; // past the values, or the stopping rule ended the run
     }
+    float scale = pc.scheduled != 0u ? schedule.scale : pc.scale;
 #ifdef FSOT_FLOAT_ATOMICS
     float g = acc[i] * pc.inv_hits;
     acc[i] = 0.0;
@@ -29,7 +31,7 @@ void main() {
     if (pc.rule == 0u) {
         float m = pc.p1 * first[i] + (1.0 - pc.p1) * g;
         first[i] = m;
-        samples[i] = wrap01(x + pc.p0 * pc.scale * m);
+        samples[i] = wrap01(x + pc.p0 * scale * m);
     } else {
         float m = pc.p1 * first[i] + (1.0 - pc.p1) * g;
         float v = pc.p2 * second[i] + (1.0 - pc.p2) * g * g;
@@ -37,6 +39,6 @@ void main() {
         second[i] = v;
         float mh = m / pc.bias1;
         float vh = v / pc.bias2;
-        samples[i] = wrap01(x + pc.p0 * pc.scale * mh / (sqrt(vh) + pc.p3));
+        samples[i] = wrap01(x + pc.p0 * scale * mh / (sqrt(vh) + pc.p3));
     }
 }

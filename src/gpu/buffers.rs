@@ -2,7 +2,7 @@
 //! from the tile, the kernel and the device, with the large-class stage's
 //! capacity.
 
-use super::layout::{binding, CostSlot, LargeMetaHead, LargeSegment};
+use super::layout::{binding, CostSlot, LargeMetaHead, LargeSegment, RuleState};
 use super::BATCH;
 use crate::error::{Error, Result};
 use crate::kernel::Kernel;
@@ -76,6 +76,8 @@ pub struct RunBuffers {
     pub large_seg: Buffer,
     pub large_pkey: Buffer,
     pub large_args: Buffer,
+    /// The stopping rule's state, when the device evaluates it (`RuleState`).
+    pub schedule: Buffer,
     /// Bound as the large keys and payloads when there is no sort (never written).
     pub placeholders: Option<[Buffer; 2]>,
     /// Host-visible: iteration costs, counters and state come back through it.
@@ -129,8 +131,12 @@ impl RunBuffers {
             0 => Some([device(16, "no-large-keys")?, device(16, "no-large-vals")?]),
             _ => None,
         };
-        // Room for two state vectors (each rounded up to 16 bytes) or a batch's costs and counters.
-        let readback_len = (values * 8 + 32).max(BATCH as u64 * 16 + 16);
+        // Room for two state vectors (each rounded up to 16 bytes) or a batch's
+        // costs, counters and the stopping rule's state.
+        let batch_len = BATCH as u64 * std::mem::size_of::<CostSlot>() as u64
+            + head
+            + std::mem::size_of::<RuleState>() as u64;
+        let readback_len = (values * 8 + 32).max(batch_len);
         let me = Self {
             samples: samples_buf,
             first,
@@ -143,6 +149,7 @@ impl RunBuffers {
             large_seg: device(large_len, "large-seg")?,
             large_pkey: device(large_len, "large-projection-keys")?,
             large_args: device(32, "large-indirect-args")?,
+            schedule: device(std::mem::size_of::<RuleState>() as u64, "stopping-rule")?,
             placeholders,
             readback: Buffer::new(ctx, readback_len, Location::Readback, "readback")?,
             taps,
@@ -150,7 +157,7 @@ impl RunBuffers {
         let uploads =
             [(&me.samples, bytemuck::cast_slice(samples)), (&me.taps, bytemuck::cast_slice(&table))];
         upload_batch(ctx, &uploads, |cmd| {
-            for b in [&me.first, &me.second, &me.acc, &me.costs, &me.large_meta] {
+            for b in [&me.first, &me.second, &me.acc, &me.costs, &me.large_meta, &me.schedule] {
                 zero(ctx, cmd, b, 0, ash::vk::WHOLE_SIZE);
             }
             barrier(ctx, cmd);
@@ -189,6 +196,7 @@ impl RunBuffers {
             (binding::FIRST, &self.first),
             (binding::SECOND, &self.second),
             (binding::LARGE_ARGS, &self.large_args),
+            (binding::SCHEDULE, &self.schedule),
         ])
     }
 }

@@ -24,11 +24,12 @@ pub mod binding {
     pub const SCATTER_TARGETS: u32 = 15;
     pub const SCATTER_VALUES: u32 = 16;
     pub const HASH_VALUES: u32 = 17;
+    pub const SCHEDULE: u32 = 18;
     /// Bindings in the layout (`FSOT_BINDINGS`).
-    pub const BINDINGS: u32 = 18;
+    pub const BINDINGS: u32 = 19;
 
     /// Every binding with the name of its block in GLSL.
-    pub const BLOCKS: [(&str, u32); 18] = [
+    pub const BLOCKS: [(&str, u32); 19] = [
         ("Samples", SAMPLES),
         ("Taps", TAPS),
         ("Acc", ACC),
@@ -47,6 +48,7 @@ pub mod binding {
         ("ScatterTargets", SCATTER_TARGETS),
         ("ScatterValues", SCATTER_VALUES),
         ("HashValues", HASH_VALUES),
+        ("Schedule", SCHEDULE),
     ];
 }
 
@@ -86,6 +88,38 @@ pub struct UpdatePush {
     pub p3: f32,
     pub bias1: f32,
     pub bias2: f32,
+    /// 1: the step scale is the device's stopping rule's (`Schedule::scale`).
+    pub scheduled: u32,
+}
+
+/// `PlateauPush`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct PlateauPush {
+    pub slot: u32,
+    pub iteration: u32,
+}
+
+/// `RuleState`: the stopping rule on the device (`step_rule::Plateau` and
+/// `PlateauState`, and `Until::Objective`'s target). The f64 members are `uvec2`
+/// bits in GLSL.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct RuleState {
+    pub previous: f64,
+    pub sum: f64,
+    pub decay_below: f64,
+    pub stop_below: f64,
+    pub target: f64,
+    pub scale: f32,
+    pub factor: f32,
+    pub floor_scale: f32,
+    pub count: u32,
+    pub window: u32,
+    pub has_previous: u32,
+    pub has_target: u32,
+    pub stopped: u32,
+    pub stop_iteration: u32,
     pub pad: u32,
 }
 

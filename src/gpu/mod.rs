@@ -1,12 +1,13 @@
 //! The fsot optimizer's Vulkan backend, built on the generic layer in `vk/`:
 //! the binding layout and its Rust mirror (`layout`), the transport's launch shape
 //! (`shape`), the buffer plan (`buffers`), the pipelines (`pipelines`) and the run
-//! (`run`, `VulkanRun`, one implementation of `backend::Backend`); and the peers'
-//! swap search on Vulkan (`swap`).
+//! (`run`, `VulkanRun`, one implementation of `backend::Backend`), the stopping
+//! rule on the device (`rule`); and the peers' swap search on Vulkan (`swap`).
 
 pub mod buffers;
 pub mod layout;
 pub mod pipelines;
+pub mod rule;
 pub mod run;
 pub mod shape;
 pub mod swap;
@@ -45,4 +46,7 @@ pub struct VulkanOptions {
     /// Force the workgroup transport with (invocations, slices per workgroup):
     /// for tuning (the command line reads it from `FSOT_TRANSPORT=WG,SPG`).
     pub transport_shape: Option<(u32, u32)>,
+    /// Leave a stopping rule to the host (read back and decided once per
+    /// window) even where the device could evaluate it: to compare.
+    pub host_stopping_rule: bool,
 }

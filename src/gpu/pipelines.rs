@@ -29,6 +29,8 @@ pub struct RunPipelines {
     pub update: ComputePipeline,
     /// The large-class stage, when the kernel makes large classes.
     pub large: Option<LargePipelines>,
+    /// The stopping rule's pass, on devices with shaderFloat64.
+    pub plateau: Option<ComputePipeline>,
 }
 
 pub struct LargePipelines {
@@ -119,6 +121,7 @@ impl RunPipelines {
             }
             None => None,
         };
-        Ok(Self { transport, update, large })
+        let plateau = super::rule::pipeline(ctx)?.map(|p| bound(p, 0, None)).transpose()?;
+        Ok(Self { transport, update, large, plateau })
     }
 }

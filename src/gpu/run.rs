@@ -12,7 +12,8 @@ use ash::vk;
 
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
-    CostSlot, LargeMetaHead, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE,
+    CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS,
+    COST_SCALE,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
@@ -26,7 +27,7 @@ use crate::problem::Tile;
 use crate::rng::seed_key;
 use crate::settings::{initial_samples, run_mask, slices_and_hits, RunState, Settings};
 use crate::slice::{level_thresholds, slice_key};
-use crate::step_rule::{schedule, StepRule};
+use crate::step_rule::{schedule, Plateau, PlateauState, StepRule};
 use crate::vk::buffer::{download_batch, upload_batch};
 use crate::vk::commands::{barrier, copy, zero};
 use crate::vk::{Buffer, Context, RadixSort, Timer};
@@ -46,6 +47,9 @@ pub struct VulkanRun {
     overflowed: u64,
     /// A step scale set by the caller; None: the cosine schedule.
     scale: Option<f32>,
+    /// The stopping rule the device evaluates (`adopt_plateau`), as of the
+    /// last batch read back.
+    rule: Option<RuleState>,
     // Pipelines and the sort before the buffers they are bound to: dropped first.
     pipelines: RunPipelines,
     sort: Option<RadixSort>,
@@ -104,6 +108,7 @@ impl VulkanRun {
             profile: Profile::default(),
             overflowed: 0,
             scale: None,
+            rule: None,
             pipelines,
             sort,
             timer,
@@ -197,6 +202,44 @@ impl VulkanRun {
         barrier(&self.ctx, cmd);
     }
 
+    /// The stopping rule's pass after the iteration in cost slot `slot` of the
+    /// batch, when the device evaluates the rule (a barrier must precede it,
+    /// after that iteration's update, and follow it).
+    fn record_rule(&self, cmd: vk::CommandBuffer, slot: u32) {
+        if let (Some(pass), Some(_)) = (&self.pipelines.plateau, &self.rule) {
+            let push = PlateauPush { slot, iteration: self.iteration + slot };
+            pass.dispatch(cmd, 0, [1, 1, 1], bytemuck::bytes_of(&push));
+        }
+    }
+
+    /// Hands the stopping rule `rule`, standing at `state` (and `target`, the
+    /// objective that ends the run, if any) to the device: from the next batch
+    /// a pass after each iteration evaluates it in f64 (`glsl/fsot/plateau.comp`),
+    /// sets the update's step scale and ends the run, with no decision left to
+    /// the host, so a batch need not end at a window's end. False (nothing
+    /// changed) on a device without shaderFloat64, or with
+    /// `VulkanOptions::host_stopping_rule`.
+    pub fn adopt_plateau(
+        &mut self,
+        rule: &Plateau,
+        state: &PlateauState,
+        target: Option<f64>,
+    ) -> Result<bool> {
+        if self.pipelines.plateau.is_none() || self.options.host_stopping_rule {
+            return Ok(false);
+        }
+        let device = RuleState::new(rule, state, target);
+        upload_batch(&self.ctx, &[(&self.buffers.schedule, bytemuck::bytes_of(&device))], |_| {})?;
+        self.rule = Some(device);
+        Ok(true)
+    }
+
+    /// The device's stopping rule as of the last batch: where it stands, and
+    /// whether it ended the run. None unless adopted.
+    pub fn plateau(&self) -> Option<(PlateauState, bool)> {
+        self.rule.map(|r| (r.plateau_state(), r.stopped()))
+    }
+
     fn transport_push(&self, iteration: u32, slot: u32) -> TransportPush {
         TransportPush {
             slice_key: slice_key(seed_key(self.settings.seed)),
@@ -221,6 +264,7 @@ impl VulkanRun {
             step_t: t,
             scale: self.scale.unwrap_or_else(|| schedule(iteration, self.settings.iterations)),
             inv_hits: (1.0 / self.hits_per_value) as f32,
+            scheduled: self.rule.is_some() as u32,
             ..Default::default()
         };
         match self.settings.rule {
@@ -272,6 +316,7 @@ impl VulkanRun {
         let alone = runs.len() == 1;
         let cost_bytes = BATCH as u64 * std::mem::size_of::<CostSlot>() as u64;
         let head_bytes = std::mem::size_of::<LargeMetaHead>() as u64;
+        let rule_bytes = std::mem::size_of::<RuleState>() as u64;
         {
             let runs: Vec<&VulkanRun> = runs.iter().map(|r| &**r).collect();
             let timer = runs[0].timer.as_ref().filter(|_| alone);
@@ -303,6 +348,13 @@ impl VulkanRun {
                     for (r, _) in &active {
                         r.record_reset_large(cmd);
                     }
+                    // The stopping rule of the iteration before (its costs are
+                    // complete; the update that read the scale is done).
+                    for (r, &c) in runs.iter().zip(&counts) {
+                        if k >= 1 && k <= c {
+                            r.record_rule(cmd, k - 1);
+                        }
+                    }
                     barrier(&ctx, cmd);
                     for (r, push) in &active {
                         r.record_transport_pass(cmd, push);
@@ -319,9 +371,17 @@ impl VulkanRun {
                     barrier(&ctx, cmd);
                     stamp(cmd, 4 * k + 3);
                 }
+                for (r, &c) in runs.iter().zip(&counts) {
+                    if c == most {
+                        r.record_rule(cmd, most - 1);
+                    }
+                }
+                barrier(&ctx, cmd);
                 for r in &runs {
-                    copy(&ctx, cmd, &r.buffers.costs, &r.buffers.readback, cost_bytes, 0);
-                    copy(&ctx, cmd, &r.buffers.large_meta, &r.buffers.readback, head_bytes, cost_bytes);
+                    let b = &r.buffers;
+                    copy(&ctx, cmd, &b.costs, &b.readback, cost_bytes, 0);
+                    copy(&ctx, cmd, &b.large_meta, &b.readback, head_bytes, cost_bytes);
+                    copy(&ctx, cmd, &b.schedule, &b.readback, rule_bytes, cost_bytes + head_bytes);
                 }
                 barrier(&ctx, cmd);
             })?;
@@ -333,10 +393,21 @@ impl VulkanRun {
     /// large classes and timestamps read back.
     fn finish_batch(&mut self, count: u32, timed: bool) -> Result<Vec<f64>> {
         let cost_bytes = BATCH as usize * std::mem::size_of::<CostSlot>();
-        let raw: Vec<u8> = self.buffers.readback.read(cost_bytes + std::mem::size_of::<LargeMetaHead>())?;
+        let head_bytes = std::mem::size_of::<LargeMetaHead>();
+        let raw: Vec<u8> =
+            self.buffers.readback.read(cost_bytes + head_bytes + std::mem::size_of::<RuleState>())?;
         let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes]);
-        let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes..]);
+        let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes..cost_bytes + head_bytes]);
         self.overflowed += head.large_overflow as u64;
+        let mut count = count;
+        if self.rule.is_some() {
+            let rule: RuleState = bytemuck::pod_read_unaligned(&raw[cost_bytes + head_bytes..]);
+            if rule.stopped() {
+                // The iterations past the rule's end did nothing.
+                count = count.min(rule.stop_iteration.saturating_sub(self.iteration));
+            }
+            self.rule = Some(rule);
+        }
         let costs = slots[..count as usize]
             .iter()
             .map(|s| if s.count > 0 { s.squared as f64 / COST_SCALE / s.count as f64 } else { 0.0 })
@@ -488,6 +559,14 @@ impl Backend for VulkanRun {
 
     fn set_scale(&mut self, scale: Option<f32>) {
         self.scale = scale;
+    }
+
+    fn adopt_plateau(&mut self, rule: &Plateau, state: &PlateauState, target: Option<f64>) -> Result<bool> {
+        VulkanRun::adopt_plateau(self, rule, state, target)
+    }
+
+    fn plateau(&self) -> Option<(PlateauState, bool)> {
+        VulkanRun::plateau(self)
     }
 
     fn as_vulkan(&self) -> Option<&VulkanRun> {

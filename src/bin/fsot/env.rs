@@ -21,6 +21,12 @@ pub(crate) fn float_pair_targets() -> bool {
     std::env::var("FSOT_FLOAT_PAIRS").map(|v| v == "1").unwrap_or(false)
 }
 
+/// `FSOT_HOST_RULE=1`: a stopping rule evaluated by the host once per window
+/// even where the device could evaluate it (to compare the two).
+pub(crate) fn host_stopping_rule() -> bool {
+    std::env::var("FSOT_HOST_RULE").map(|v| v == "1").unwrap_or(false)
+}
+
 /// `FSOT_TRANSPORT=WG,SPG`: the workgroup transport forced to that shape (tuning).
 pub(crate) fn transport_shape() -> Option<(u32, u32)> {
     let v = std::env::var("FSOT_TRANSPORT").ok()?;

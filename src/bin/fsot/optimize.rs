@@ -159,6 +159,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         transport: None,
         transport_shape: env::transport_shape(),
         float_pair_targets: env::float_pair_targets(),
+        host_stopping_rule: env::host_stopping_rule(),
     };
     Ok(RunOptions {
         backend,
