@@ -3,7 +3,10 @@
 # the two problems issue 16 names (32x32x16 and 64x64x16, d = 2, taa, all cores):
 # three alternating runs of each binary per problem, the median, and whether the
 # two binaries' masks are bit-identical (examples/same_samples.rs).
-# Usage: [OLD_BIN=path] bench/cpu-old-new.sh OLD_REV OUT_FILE   (else OLD_REV is built in a worktree)
+# BACKEND=vulkan times the Vulkan path instead (deterministic mode, so that the
+# masks can be compared bit for bit; lavapipe unless VK_DRIVER_FILES says otherwise).
+# Usage: [OLD_BIN=path] [BACKEND=cpu|vulkan] bench/cpu-old-new.sh OLD_REV OUT_FILE
+#        (without OLD_BIN, OLD_REV is built in a worktree)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 old_rev=${1:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
@@ -19,9 +22,16 @@ if [ -z "$old" ]; then
 fi
 cargo build --release --quiet --bin fsot --example same_samples
 new=target/release/fsot
+backend=${BACKEND:-cpu}
+flags=(--backend "$backend")
+if [ "$backend" = vulkan ]; then
+  flags+=(--deterministic)
+  export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+  export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+fi
 head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
-  echo "# bench/cpu-old-new.sh: $head"
+  echo "# BACKEND=$backend bench/cpu-old-new.sh: $head"
   echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | objective old / new | masks"
   echo "---|---|---|---|---|---|---"
   for problem in 32x32x16:1000 64x64x16:300; do
@@ -32,7 +42,7 @@ head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)
       for bin in old new; do
         exe=$old
         [ "$bin" = new ] && exe=$new
-        line=$("$exe" optimize --backend cpu --size "$size" --dims 2 --kernel taa --seed 7 \
+        line=$("$exe" optimize "${flags[@]}" --size "$size" --dims 2 --kernel taa --seed 7 \
           --iterations "$its" --out "$work/$bin-$size.exr" 2>&1 | grep "iterations in")
         echo "$line" | grep -o "iterations in [0-9.]* s" | awk '{print $3}' >> "$work/$bin.times"
         echo "$line" | grep -o -- "-> [0-9.e-]*" | awk '{print $2}' > "$work/$bin.objective"

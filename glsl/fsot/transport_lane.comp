@@ -20,22 +20,20 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 
-// Private arrays: each member as (projection's sortable key, point) packed in
-// 64 bits (one private-memory access where two would be: each is a loop over
-// the lanes on a SIMD driver), in class order and in sorted order; one counter
-// per bucket.
+// Private arrays: the members in class order, each as its projection and
+// point packed in 64 bits (one private-memory access where two would be: on a
+// SIMD driver each is a loop over the lanes); one counter per bucket; the
+// members in sorted order.
 uint64_t member[FSOT_LANE_MAX];
 uint bucket_start[FSOT_LANE_MAX];
-uint64_t sorted[FSOT_LANE_MAX];
+float sorted_key[FSOT_LANE_MAX];
+uint sorted_point[FSOT_LANE_MAX];
 
-// A member packed so that unsigned order is fsot_before's order (the key's
-// order, then the point's); -0 is taken as +0, as fsot_before compares them.
 uint64_t pack_member(float key, uint point) {
-    float k = key == 0.0 ? 0.0 : key;
-    return (uint64_t(fsot_float_key(k)) << 32) | uint64_t(point);
+    return (uint64_t(floatBitsToUint(key)) << 32) | uint64_t(point);
 }
 float member_key(uint64_t m) {
-    return fsot_key_float(uint(m >> 32));
+    return uintBitsToFloat(uint(m >> 32));
 }
 uint member_point(uint64_t m) {
     return uint(m);
@@ -48,17 +46,20 @@ uint lane_bucket(float key_value, float offset, float scale, uint n) {
     return min(uint(max(key_value - offset, 0.0) * scale), n - 1u);
 }
 
-// Heap sort of `sorted` in place: the fallback when keys pile into few buckets.
+// Heap sort of sorted_key/sorted_point in place: the fallback when keys pile
+// into few buckets.
 void sift_down(uint root, uint end) {
     while (2u * root + 1u < end) {
         uint child = 2u * root + 1u;
-        if (child + 1u < end && sorted[child] < sorted[child + 1u]) {
+        if (child + 1u < end
+            && fsot_before(sorted_key[child], sorted_point[child], sorted_key[child + 1u], sorted_point[child + 1u])) {
             child += 1u;
         }
-        if (sorted[root] >= sorted[child]) {
+        if (!fsot_before(sorted_key[root], sorted_point[root], sorted_key[child], sorted_point[child])) {
             return;
         }
-        uint64_t t = sorted[root]; sorted[root] = sorted[child]; sorted[child] = t;
+        float tk = sorted_key[root]; sorted_key[root] = sorted_key[child]; sorted_key[child] = tk;
+        uint tv = sorted_point[root]; sorted_point[root] = sorted_point[child]; sorted_point[child] = tv;
         root = child;
     }
 }
@@ -68,16 +69,16 @@ void heap_sort(uint n) {
         sift_down(i - 1u, n);
     }
     for (uint end = n - 1u; end > 0u; --end) {
-        uint64_t t = sorted[0]; sorted[0] = sorted[end]; sorted[end] = t;
+        float tk = sorted_key[0]; sorted_key[0] = sorted_key[end]; sorted_key[end] = tk;
+        uint tv = sorted_point[0]; sorted_point[0] = sorted_point[end]; sorted_point[end] = tv;
         sift_down(0u, end);
     }
 }
 
 // Sends the member of rank i towards `target`; its squared distance.
 float send(FsotSlice s, uint i, float target) {
-    uint64_t m = sorted[i];
-    float delta = target - member_key(m);
-    fsot_add_displacement(member_point(m), pc.dims, delta, s.theta);
+    float delta = target - sorted_key[i];
+    fsot_add_displacement(sorted_point[i], pc.dims, delta, s.theta);
     return delta * delta;
 }
 
@@ -128,29 +129,35 @@ void main() {
         uint b = lane_bucket(member_key(m), low, scale, n);
         uint at = bucket_start[b];
         bucket_start[b] = at + 1u;
-        sorted[at] = m;
+        sorted_key[at] = member_key(m);
+        sorted_point[at] = member_point(m);
     }
-    // Insertion sort: each member moves past the larger ones of its own
-    // bucket, so at most `pairs` moves in all. Where keys pile into few buckets
+    // Insertion sort: each key moves past the larger keys of its own bucket,
+    // so at most `pairs` moves in all. Where keys pile into few buckets
     // (degenerate samples), a heap sort instead: O(n log n) whatever the keys,
     // so no class pushes an invocation past the driver's loop budget.
     if (pairs <= FSOT_INSERTION_BUDGET * n) {
-        // The largest member so far stays in a register: most are already in
+        // The largest key so far stays in registers: most keys are already in
         // place (a different bucket from their predecessor), so they cost one
         // comparison and no private-memory traffic.
-        uint64_t last = sorted[0];
+        float last_key = sorted_key[0];
+        uint last_point = sorted_point[0];
         for (uint i = 1u; i < n; ++i) {
-            uint64_t m = sorted[i];
-            if (m >= last) {
-                last = m;
+            float k = sorted_key[i];
+            uint v = sorted_point[i];
+            if (!fsot_before(k, v, last_key, last_point)) {
+                last_key = k;
+                last_point = v;
                 continue;
             }
             uint j = i;
             do {
-                sorted[j] = sorted[j - 1u];
+                sorted_key[j] = sorted_key[j - 1u];
+                sorted_point[j] = sorted_point[j - 1u];
                 --j;
-            } while (j > 0u && m < sorted[j - 1u]);
-            sorted[j] = m;
+            } while (j > 0u && fsot_before(k, v, sorted_key[j - 1u], sorted_point[j - 1u]));
+            sorted_key[j] = k;
+            sorted_point[j] = v;
         }
     } else {
         heap_sort(n);
