@@ -228,3 +228,19 @@ fn the_device_pass_takes_the_host_rules_decisions_slot_by_slot() {
     assert_device_follows_host(&ctx, &one, floor, Some(1e-9), &wandering(3, 40, 0.004));
     common::assert_no_validation_messages(&ctx);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_device_without_f64_leaves_the_rule_to_the_host_and_ends_at_the_same_iteration() {
+    let Some(ctx) = common::gpu_context() else { return };
+    // The same device wrapped as a host that did not enable shaderFloat64.
+    let guest = Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
+    let mut run = Run::start(tile(), settings(Until::Plateau(QUICK)), None, options(&guest, false)).unwrap();
+    assert!(!run.rule_on_device(), "without shaderFloat64 the host evaluates the rule");
+    run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    let on_device = run_to_end(&ctx, Until::Plateau(QUICK), false).state().unwrap();
+    let (g, d) = (run.state().unwrap(), on_device);
+    assert_eq!(g.iteration, d.iteration, "where the run ended");
+    assert_eq!(g.samples, d.samples);
+    common::assert_no_validation_messages(&ctx);
+}
