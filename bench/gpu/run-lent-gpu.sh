@@ -49,6 +49,12 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   step $B/fsot optimize --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile --out "$OUT/h100-128x128x30-ptaa-det.exr"
   step $B/fsot optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile --out "$OUT/h100-32x32x16-taa.exr"
   step $B/fsot score --kernel taa "$OUT/h100-32x32x16-taa.exr"
+  # Issue 16: the transport's launch shape at the paper's tile (invocations,
+  # slices per workgroup; the default first), 200 iterations each, for tuning.
+  for shape in default 32,1 32,4 64,2 128,1 256,1; do
+    if [ "$shape" = default ]; then env=(); else env=(FSOT_TRANSPORT=$shape); fi
+    step env "${env[@]}" $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --iterations 200 --profile --out "$OUT/shape-$shape.exr"
+  done
   # Issue 16: the paper's tile at 256x256x64, and d = 4 and 8 (f64 targets) on
   # the GPU beside the CPU path at 64x64x16.
   step $B/fsot optimize --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile --out "$OUT/gpu-256x256x64-ptaa.exr"
