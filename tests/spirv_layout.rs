@@ -32,7 +32,7 @@ fn mirrors() -> Vec<Mirror> {
         fields!(ScatterPush; count),
         fields!(HashPush; key, count),
         fields!(LargeSegment; slice, first, size, pad),
-        fields!(RadixPush; shift, blocks, chunks, pad),
+        fields!(RadixPush; shift, blocks, chunks, passes),
         fields!(SwapPush; width, height, frames, offsets, term, inv_sigma2, temperature, pass_key, first, count, batch, retry, last),
         fields!(SwapOffset; dx, dy, dt, weight),
         fields!(SwapProposal; p, q, delta, state),

@@ -6,7 +6,8 @@
 //
 // An LSD sort of 32-bit keys with 32-bit payloads, 8 bits per pass,
 // reduce-then-scan (no cross-workgroup waiting, so it is correct on drivers
-// without forward progress between workgroups, lavapipe included). A block is
+// without forward progress between workgroups, lavapipe included), or, asked
+// for on GPUs, decoupled look-back (radix_digits.comp, radix_onesweep.comp). A block is
 // WG x ITEMS consecutive elements; block b's count of digit d lives at
 // hist[d * blocks + b], so one exclusive scan of hist gives every (digit, block)
 // its first output position. The element count is the first word of a buffer, so
@@ -22,13 +23,14 @@
 #define SORT_BINDING_HIST 5
 #define SORT_BINDING_PARTIALS 6
 #define SORT_BINDING_ARGS 7
-#define SORT_BINDINGS 8
+#define SORT_BINDING_LOOK_BACK 8
+#define SORT_BINDINGS 9
 
 struct RadixPush {
     uint shift;   // bit offset of this pass's digit
     uint blocks;  // blocks in the dispatch (hist has 256 x blocks entries); 0: from count
     uint chunks;  // scan chunks (workgroups of scan_reduce / scan_apply); 0: from count
-    uint pad;
+    uint passes;  // the look-back path's digit count pass: digits counted (1 to 4)
 };
 
 layout(std430, set = 0, binding = SORT_BINDING_COUNT) readonly buffer SortCount { uint count; };
@@ -49,5 +51,20 @@ layout(std430, set = 0, binding = SORT_BINDING_PARTIALS) buffer Partials { uint 
 // (partials[0] is the TAIL histogram's count of finished workgroups, zeroed by the
 // host before a sort and by the scanning workgroup after each pass.)
 layout(std430, set = 0, binding = SORT_BINDING_ARGS) writeonly buffer SortArgs { uvec4 sort_args[]; };
+// The look-back path (radix_digits.comp, radix_onesweep.comp; for devices that
+// let a workgroup wait on one that started before it): per pass, a ticket counter
+// (workgroups take block indices in the order they start) and the count of each
+// digit over all pairs; per block and digit, a status word: 0 (not yet), or a
+// flag in the top two bits (LB_AGGREGATE: the block's own count; LB_PREFIX: the
+// count in every block up to and including this one) over a 30-bit count.
+// Zeroed by the host: the whole buffer before a sort, the status before each pass.
+layout(std430, set = 0, binding = SORT_BINDING_LOOK_BACK) buffer LookBack {
+    uint lb_ticket[4];
+    uint lb_digits[4 * 256];
+    uint lb_status[];
+};
+#define LB_AGGREGATE 0x40000000u
+#define LB_PREFIX 0x80000000u
+#define LB_COUNT 0x3fffffffu
 
 #endif

@@ -131,14 +131,18 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
         cpu_threads: rayon::current_num_threads(),
         stages_ms,
         block: sort.shape().block,
-        passes: if sort.single_pass(Some(n)) {
+        passes: if sort.path == SortPath::LookBack {
+            "digit counts, then one look-back pass each"
+        } else if sort.single_pass(Some(n)) {
             "one workgroup per pass"
         } else if sort.tail_scan(Some(n)) {
             "histogram with its tail scan, scatter"
         } else {
             "histogram, two scan dispatches, scatter"
         },
-        dispatches: if sort.single_pass(Some(n)) {
+        dispatches: if sort.path == SortPath::LookBack {
+            5
+        } else if sort.single_pass(Some(n)) {
             4
         } else if sort.tail_scan(Some(n)) {
             8

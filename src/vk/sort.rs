@@ -9,7 +9,12 @@
 //! the histogram itself (`radix_histogram.comp`'s `TAIL` variant: it waits on
 //! no one, it only counts who is done), two dispatches per pass instead of four;
 //! a count the host knows fits one block takes one dispatch per pass
-//! (`radix_small.comp`: the whole pass in one workgroup). Equal keys keep their input order (stable), so a sort by several
+//! (`radix_small.comp`: the whole pass in one workgroup). A decoupled look-back
+//! path (`SortPath::LookBack`: one read of the keys for every pass's digit counts,
+//! then one dispatch per pass, five in all for 32-bit keys, against sixteen) is
+//! there for GPUs, where a started workgroup goes on running while another waits
+//! on it; it is chosen only when asked until a GPU has measured it (`fsot bench
+//! sort` times it there). Equal keys keep their input order (stable), so a sort by several
 //! keys is a sequence of sorts, least significant first. The element count is
 //! set by the host (`SortCount::Host`) or read on the GPU from the first word of
 //! a buffer a producer pass writes (`SortCount::Device`): then the sort sizes its
@@ -36,11 +41,12 @@ pub mod binding {
     pub const HIST: u32 = 5;
     pub const PARTIALS: u32 = 6;
     pub const ARGS: u32 = 7;
+    pub const LOOK_BACK: u32 = 8;
     /// Bindings in the layout.
-    pub const BINDINGS: u32 = 8;
+    pub const BINDINGS: u32 = 9;
 
     /// Every binding with the name of its block in GLSL.
-    pub const BLOCKS: [(&str, u32); 8] = [
+    pub const BLOCKS: [(&str, u32); 9] = [
         ("SortCount", COUNT),
         ("KeysIn", KEYS_IN),
         ("ValsIn", VALS_IN),
@@ -49,6 +55,7 @@ pub mod binding {
         ("Hist", HIST),
         ("Partials", PARTIALS),
         ("SortArgs", ARGS),
+        ("LookBack", LOOK_BACK),
     ];
 }
 
@@ -59,7 +66,7 @@ pub struct RadixPush {
     pub shift: u32,
     pub blocks: u32,
     pub chunks: u32,
-    pub pad: u32,
+    pub passes: u32,
 }
 
 /// Offsets of the indirect dispatches `radix_args.comp` writes.
@@ -90,7 +97,20 @@ pub enum SortPath {
     /// One workgroup per pass whenever the host knows the count (for tests and
     /// benchmarks: it takes any count, slowly past a few hundred thousand).
     Single,
+    /// Decoupled look-back: one read of the keys counts every pass's digits
+    /// (`radix_digits.comp`), then one dispatch per pass (`radix_onesweep.comp`),
+    /// in which a workgroup waits on the blocks that started before it. Only for
+    /// devices on which a started workgroup goes on running while another waits
+    /// (GPUs; not lavapipe with several threads: `../shared/notes`). Never chosen
+    /// by `Auto` until a GPU has measured it against the block passes (`fsot
+    /// bench sort` times it on GPUs); tested on lavapipe with one thread
+    /// (`tests/gpu_sort_look_back.rs`).
+    LookBack,
 }
+
+/// Bytes before the look-back status words in the `LookBack` buffer: four
+/// tickets and four passes' 256 digit counts.
+const LOOK_BACK_HEAD: u64 = 16 + 4 * 256 * 4;
 
 /// Where the element count comes from.
 #[derive(Clone, Copy)]
@@ -160,11 +180,14 @@ pub struct RadixSort {
     scatter: ComputePipeline,
     histogram_tail: ComputePipeline,
     single: ComputePipeline,
+    digits: ComputePipeline,
+    onesweep: ComputePipeline,
     /// With a device count: the pass that sizes the dispatches, and its output.
     args: Option<(ComputePipeline, Buffer)>,
     // Used through the descriptor sets; dropped after the pipelines.
     _hist: Buffer,
     partials: Buffer,
+    look_back: Buffer,
     ctx: Context,
 }
 
@@ -211,6 +234,8 @@ impl RadixSort {
         let (keys, vals) = (pair("sort-keys")?, pair("sort-vals")?);
         let hist = Buffer::new(ctx, 256 * blocks as u64 * 4, Location::Device, "sort-hist")?;
         let partials = Buffer::new(ctx, chunks as u64 * 4, Location::Device, "sort-partials")?;
+        let look_back_bytes = LOOK_BACK_HEAD + 256 * blocks as u64 * 4;
+        let look_back = Buffer::new(ctx, look_back_bytes, Location::Device, "sort-look-back")?;
         let spec = [shape.workgroup, shape.items, shape.subgroups, shape.block];
         let pass = |spirv: &[u8]| {
             ComputePipeline::new(
@@ -234,6 +259,7 @@ impl RadixSort {
             pass(shaders::RADIX_HISTOGRAM_TAIL)?,
             pass(shaders::RADIX_SMALL)?,
         );
+        let (digits, onesweep) = (pass(shaders::RADIX_DIGITS)?, pass(shaders::RADIX_ONESWEEP)?);
         let count_buffer: &Buffer = match (count, &host_count) {
             (SortCount::Device(c), _) => c,
             (SortCount::Host, Some(own)) => own,
@@ -267,8 +293,18 @@ impl RadixSort {
                 (binding::VALS_OUT, &vals[1 - s]),
                 (binding::HIST, &hist),
                 (binding::PARTIALS, &partials),
+                (binding::LOOK_BACK, &look_back),
             ];
-            for p in [&histogram, &scan_reduce, &scan_apply, &scatter, &histogram_tail, &single] {
+            for p in [
+                &histogram,
+                &scan_reduce,
+                &scan_apply,
+                &scatter,
+                &histogram_tail,
+                &single,
+                &digits,
+                &onesweep,
+            ] {
                 p.bind(s, &set)?;
             }
         }
@@ -286,9 +322,12 @@ impl RadixSort {
             scatter,
             histogram_tail,
             single,
+            digits,
+            onesweep,
             args,
             _hist: hist,
             partials,
+            look_back,
             ctx: ctx.clone(),
         })
     }
@@ -350,7 +389,7 @@ impl RadixSort {
         if self.single_pass(known) {
             stamp(0);
             for pass in 0..passes {
-                let push = RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, pad: 0 };
+                let push = RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, passes: 0 };
                 (1..4).for_each(|i| stamp(i + 4 * pass));
                 self.single.dispatch(cmd, (pass % 2) as usize, [1, 1, 1], bytemuck::bytes_of(&push));
                 barrier(&self.ctx, cmd);
@@ -373,6 +412,10 @@ impl RadixSort {
             None => self.blocks,
         };
         let chunks = (256 * blocks).div_ceil(self.shape.block);
+        if self.path == SortPath::LookBack {
+            self.record_look_back(cmd, passes, blocks, indirect, &stamp);
+            return;
+        }
         let tail = self.tail_scan(known);
         if tail {
             // The finished-workgroup count starts at zero.
@@ -384,8 +427,8 @@ impl RadixSort {
             let src = (pass % 2) as usize;
             let push = match indirect {
                 // 0: the shaders derive both from the count, as radix_args does.
-                Some(_) => RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, pad: 0 },
-                None => RadixPush { shift: 8 * pass, blocks, chunks, pad: 0 },
+                Some(_) => RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, passes: 0 },
+                None => RadixPush { shift: 8 * pass, blocks, chunks, passes: 0 },
             };
             let p = bytemuck::bytes_of(&push);
             let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| match indirect {
@@ -408,6 +451,44 @@ impl RadixSort {
                 stamp(3 + 4 * pass);
             }
             run(&self.scatter, blocks, ARG_BLOCKS);
+            barrier(&self.ctx, cmd);
+            stamp(4 + 4 * pass);
+        }
+        self.finish_odd(cmd, passes);
+    }
+
+    /// The look-back path (`SortPath::LookBack`): the digit counts of every pass
+    /// in one dispatch, then one dispatch per pass; stamps as `record_timed`
+    /// (a pass's time counts as scatter).
+    fn record_look_back(
+        &self,
+        cmd: vk::CommandBuffer,
+        passes: u32,
+        blocks: u32,
+        indirect: Option<&Buffer>,
+        stamp: &dyn Fn(u32),
+    ) {
+        let push = |shift: u32| match indirect {
+            // 0: the shaders derive the blocks from the count, as radix_args does.
+            Some(_) => RadixPush { shift, blocks: 0, chunks: 0, passes },
+            None => RadixPush { shift, blocks, chunks: 0, passes },
+        };
+        let run = |pipeline: &ComputePipeline, set: usize, push: &RadixPush| match indirect {
+            Some(args) => pipeline.dispatch_indirect(cmd, set, args, ARG_BLOCKS, bytemuck::bytes_of(push)),
+            None => pipeline.dispatch(cmd, set, [blocks, 1, 1], bytemuck::bytes_of(push)),
+        };
+        zero(&self.ctx, cmd, &self.look_back, 0, vk::WHOLE_SIZE);
+        barrier(&self.ctx, cmd);
+        stamp(0);
+        run(&self.digits, 0, &push(0));
+        barrier(&self.ctx, cmd);
+        for pass in 0..passes {
+            if pass > 0 {
+                zero(&self.ctx, cmd, &self.look_back, LOOK_BACK_HEAD, vk::WHOLE_SIZE);
+                barrier(&self.ctx, cmd);
+            }
+            (1..4).for_each(|i| stamp(i + 4 * pass));
+            run(&self.onesweep, (pass % 2) as usize, &push(8 * pass));
             barrier(&self.ctx, cmd);
             stamp(4 + 4 * pass);
         }

@@ -42,7 +42,10 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
                 16 => None,
                 _ => Some(SortPath::Blocks),
             };
-            if let Some(path) = other {
+            // The decoupled look-back path, on GPUs only (a CPU implementation
+            // need not let a workgroup run while another waits on it).
+            let look_back = (!ctx.info().is_cpu()).then_some(SortPath::LookBack);
+            for path in other.into_iter().chain(look_back) {
                 let o = fsot::bench::bench_sort(&ctx, n, repeats, path)?;
                 println!(
                     "  {} on the same pairs ({} dispatches): {:.3} ms = {:.3} G pairs/s",
