@@ -40,17 +40,9 @@ void main() {
     }
     uint key[ITEMS];
     uint val[ITEMS];
-    [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
-        uint i = place_index(base, j);
-        key[j] = i < count ? keys_in[i] : 0u;
-        val[j] = i < count ? vals_in[i] : 0u;
-    }
+    load_block(base, key, val);
     barrier();
-    [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
-        if (place_index(base, j) < count) {
-            atomicAdd(s_local[(key[j] >> pc.shift) & 255u], 1u);
-        }
-    }
+    count_block(base, key);
     barrier();
     for (uint d = tid; d < 256u; d += wg) {
         uint own = s_local[d];

@@ -83,6 +83,26 @@ uint place_index(uint base, uint j) {
         + (j % KEYS) * gl_SubgroupSize + gl_SubgroupInvocationID;
 }
 
+// Loads the block starting at `base` into this invocation's slots, in one
+// burst (zeros past the count).
+void load_block(uint base, out uint key[ITEMS], out uint val[ITEMS]) {
+    [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
+        uint i = place_index(base, j);
+        key[j] = i < count ? keys_in[i] : 0u;
+        val[j] = i < count ? vals_in[i] : 0u;
+    }
+}
+
+// Adds the block's digit counts (its keys in this invocation's slots) into
+// s_local, which the caller zeroed; a barrier must follow.
+void count_block(uint base, uint key[ITEMS]) {
+    [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
+        if (place_index(base, j) < count) {
+            atomicAdd(s_local[(key[j] >> pc.shift) & 255u], 1u);
+        }
+    }
+}
+
 // Places the block starting at `base` (its pairs in this invocation's slots)
 // where s_dest and s_local say. Called by the whole workgroup.
 void place_block(uint base, uint key[ITEMS], uint val[ITEMS]) {

@@ -23,11 +23,7 @@ void main() {
     // The block's pairs, loaded first in one burst.
     uint key[ITEMS];
     uint val[ITEMS];
-    [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
-        uint i = place_index(base, j);
-        key[j] = i < count ? keys_in[i] : 0u;
-        val[j] = i < count ? vals_in[i] : 0u;
-    }
+    load_block(base, key, val);
     // The block's count of digit d is the next scanned entry minus this one
     // (entries are digit-major; the one after the last is the total).
     for (uint d = tid; d < 256u; d += gl_WorkGroupSize.x) {

@@ -29,18 +29,10 @@ void main() {
     for (uint base = 0u; base < count; base += block_size()) {
         uint key[ITEMS];
         uint val[ITEMS];
-        [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
-            uint i = place_index(base, j);
-            key[j] = i < count ? keys_in[i] : 0u;
-            val[j] = i < count ? vals_in[i] : 0u;
-        }
+        load_block(base, key, val);
         for (uint d = tid; d < 256u; d += wg) { s_local[d] = 0u; }
         barrier();
-        [[unroll]] for (uint j = 0u; j < ITEMS; ++j) {
-            if (place_index(base, j) < count) {
-                atomicAdd(s_local[(key[j] >> pc.shift) & 255u], 1u);
-            }
-        }
+        count_block(base, key);
         barrier();
         for (uint d = tid; d < 256u; d += wg) {
             s_dest[d] = s_next[d];
