@@ -212,34 +212,6 @@ impl VulkanRun {
         }
     }
 
-    /// Hands the stopping rule `rule`, standing at `state` (and `target`, the
-    /// objective that ends the run, if any) to the device: from the next batch
-    /// a pass after each iteration evaluates it in f64 (`glsl/fsot/plateau.comp`),
-    /// sets the update's step scale and ends the run, with no decision left to
-    /// the host, so a batch need not end at a window's end. False (nothing
-    /// changed) on a device without shaderFloat64, or with
-    /// `VulkanOptions::host_stopping_rule`.
-    pub fn adopt_plateau(
-        &mut self,
-        rule: &Plateau,
-        state: &PlateauState,
-        target: Option<f64>,
-    ) -> Result<bool> {
-        if self.pipelines.plateau.is_none() || self.options.host_stopping_rule {
-            return Ok(false);
-        }
-        let device = RuleState::new(rule, state, target);
-        upload_batch(&self.ctx, &[(&self.buffers.schedule, bytemuck::bytes_of(&device))], |_| {})?;
-        self.rule = Some(device);
-        Ok(true)
-    }
-
-    /// The device's stopping rule as of the last batch: where it stands, and
-    /// whether it ended the run. None unless adopted.
-    pub fn plateau(&self) -> Option<(PlateauState, bool)> {
-        self.rule.map(|r| (r.plateau_state(), r.stopped()))
-    }
-
     fn transport_push(&self, iteration: u32, slot: u32) -> TransportPush {
         TransportPush {
             slice_key: slice_key(seed_key(self.settings.seed)),
@@ -561,12 +533,24 @@ impl Backend for VulkanRun {
         self.scale = scale;
     }
 
+    /// From the next batch a pass after each iteration evaluates the rule in
+    /// f64 (`glsl/fsot/plateau.comp`), sets the update's step scale and ends the
+    /// run, with no decision left to the host, so a batch need not end at a
+    /// window's end. False (nothing changed) on a device without shaderFloat64,
+    /// or with `VulkanOptions::host_stopping_rule`.
     fn adopt_plateau(&mut self, rule: &Plateau, state: &PlateauState, target: Option<f64>) -> Result<bool> {
-        VulkanRun::adopt_plateau(self, rule, state, target)
+        if self.pipelines.plateau.is_none() || self.options.host_stopping_rule {
+            return Ok(false);
+        }
+        let device = RuleState::new(rule, state, target);
+        upload_batch(&self.ctx, &[(&self.buffers.schedule, bytemuck::bytes_of(&device))], |_| {})?;
+        self.rule = Some(device);
+        Ok(true)
     }
 
+    /// The device's rule as of the last batch read back.
     fn plateau(&self) -> Option<(PlateauState, bool)> {
-        VulkanRun::plateau(self)
+        self.rule.map(|r| (r.plateau_state(), r.stopped()))
     }
 
     fn as_vulkan(&self) -> Option<&VulkanRun> {

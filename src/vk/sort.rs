@@ -425,15 +425,9 @@ impl RadixSort {
         stamp(0);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
-            let push = match indirect {
-                // 0: the shaders derive both from the count, as radix_args does.
-                Some(_) => RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, passes: 0 },
-                None => RadixPush { shift: 8 * pass, blocks, chunks, passes: 0 },
-            };
-            let p = bytemuck::bytes_of(&push);
-            let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| match indirect {
-                Some(args) => pipeline.dispatch_indirect(cmd, src, args, arg, p),
-                None => pipeline.dispatch(cmd, src, [groups, 1, 1], p),
+            let push = RadixPush { shift: 8 * pass, blocks, chunks, passes: 0 };
+            let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| {
+                launch(cmd, pipeline, src, indirect, arg, groups, push)
             };
             if tail {
                 run(&self.histogram_tail, blocks, ARG_BLOCKS);
@@ -468,19 +462,14 @@ impl RadixSort {
         indirect: Option<&Buffer>,
         stamp: &dyn Fn(u32),
     ) {
-        let push = |shift: u32| match indirect {
-            // 0: the shaders derive the blocks from the count, as radix_args does.
-            Some(_) => RadixPush { shift, blocks: 0, chunks: 0, passes },
-            None => RadixPush { shift, blocks, chunks: 0, passes },
-        };
-        let run = |pipeline: &ComputePipeline, set: usize, push: &RadixPush| match indirect {
-            Some(args) => pipeline.dispatch_indirect(cmd, set, args, ARG_BLOCKS, bytemuck::bytes_of(push)),
-            None => pipeline.dispatch(cmd, set, [blocks, 1, 1], bytemuck::bytes_of(push)),
+        let run = |pipeline: &ComputePipeline, set: usize, shift: u32| {
+            let push = RadixPush { shift, blocks, chunks: 0, passes };
+            launch(cmd, pipeline, set, indirect, ARG_BLOCKS, blocks, push)
         };
         zero(&self.ctx, cmd, &self.look_back, 0, vk::WHOLE_SIZE);
         barrier(&self.ctx, cmd);
         stamp(0);
-        run(&self.digits, 0, &push(0));
+        run(&self.digits, 0, 0);
         barrier(&self.ctx, cmd);
         for pass in 0..passes {
             if pass > 0 {
@@ -488,7 +477,7 @@ impl RadixSort {
                 barrier(&self.ctx, cmd);
             }
             (1..4).for_each(|i| stamp(i + 4 * pass));
-            run(&self.onesweep, (pass % 2) as usize, &push(8 * pass));
+            run(&self.onesweep, (pass % 2) as usize, 8 * pass);
             barrier(&self.ctx, cmd);
             stamp(4 + 4 * pass);
         }
@@ -525,6 +514,28 @@ impl RadixSort {
         self.vals[0].upload(vals)?;
         self.ctx.submit(|cmd| self.record(cmd, bits, Some(n)))?;
         Ok((self.keys[0].download(n as usize)?, self.vals[0].download(n as usize)?))
+    }
+}
+
+/// Records `pipeline` on descriptor set `set` over `groups` workgroups, or,
+/// with `indirect`, over the size the GPU wrote at `arg` (the push's block and
+/// chunk counts then 0: the shaders derive them from the count, as radix_args
+/// does).
+fn launch(
+    cmd: vk::CommandBuffer,
+    pipeline: &ComputePipeline,
+    set: usize,
+    indirect: Option<&Buffer>,
+    arg: u64,
+    groups: u32,
+    push: RadixPush,
+) {
+    match indirect {
+        Some(args) => {
+            let push = RadixPush { blocks: 0, chunks: 0, ..push };
+            pipeline.dispatch_indirect(cmd, set, args, arg, bytemuck::bytes_of(&push))
+        }
+        None => pipeline.dispatch(cmd, set, [groups, 1, 1], bytemuck::bytes_of(&push)),
     }
 }
 
