@@ -33,12 +33,15 @@
 #define FSOT_BINDING_SCATTER_VALUES 16
 #define FSOT_BINDING_HASH_VALUES 17
 #define FSOT_BINDING_SCHEDULE 18
-#define FSOT_BINDINGS 19
+#define FSOT_BINDING_SLICE_ORDER 19
+#define FSOT_BINDINGS 20
 
 // Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
 // Fixed-point scale of the objective's squared distances: 2^32.
 #define FSOT_COST_SCALE 4294967296.0
+// Bins of the per-lane transport's slice order (slice_order.glsl).
+#define FSOT_ORDER_BINS 256u
 
 // One iteration of the transport passes.
 struct TransportPush {
@@ -51,7 +54,7 @@ struct TransportPush {
     uint dims;
     uint taps;           // entries in the kernel table
     uint slices;         // slices this iteration
-    uint cost_slot;      // where this iteration's objective goes
+    uint cost_slot;      // where this iteration's objective goes: its index in the batch
     uint large_capacity; // elements the large-class buffers hold
     uint pad;
 };
@@ -157,5 +160,9 @@ layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_TARGETS) readonly buffer 
 layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_VALUES) readonly buffer ScatterValues { float scatter_values[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_HASH_VALUES) writeonly buffer HashValues { uint hash_values[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleState schedule; };
+// The per-lane transport's slice order for a batch of iterations (slice_order.glsl
+// says where each part lies): per iteration, the slices in each class-size bin,
+// each slice's bin, and the slices in order of decreasing class size.
+layout(std430, set = 0, binding = FSOT_BINDING_SLICE_ORDER) buffer SliceOrder { uint slice_order[]; };
 
 #endif

@@ -4,15 +4,20 @@
 #include "accumulate.glsl"
 #include "rank_targets.glsl"
 
-// Class size (samples) of a slice: taps whose threshold exceeds its level
-// (thresholds decrease), times spp.
-uint fsot_class_size(FsotSlice s) {
+// Class size of a slice in taps: those whose threshold exceeds its level
+// (thresholds decrease).
+uint fsot_class_taps(FsotSlice s) {
     uint lo = 0u, hi = pc.taps;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
         if (taps[mid].w > s.level) { lo = mid + 1u; } else { hi = mid; }
     }
-    return lo * pc.spp;
+    return lo;
+}
+
+// Class size of a slice in samples: its taps times spp.
+uint fsot_class_size(FsotSlice s) {
+    return fsot_class_taps(s) * pc.spp;
 }
 
 // Point index of class member i.

@@ -4,7 +4,9 @@
 // (O(n) expected; ties by point index: the CPU's order), no barriers and no
 // traffic between invocations, which such drivers run as SIMD lanes. Classes
 // larger than FSOT_LANE_MAX go to the large-class path (global radix sort), as in
-// transport.comp; GPUs use that pass instead.
+// transport.comp; GPUs use that pass instead. Invocation r takes the slice of
+// rank r in decreasing class size (slice_order.glsl), so the lanes that run
+// together have classes of about the same size.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
@@ -13,6 +15,7 @@
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "transport_common.glsl"
+#include "slice_order.glsl"
 
 layout(local_size_x_id = 0) in;
 // Largest class sorted in one invocation (set by the host: LANE_MAX); 40 KiB of
@@ -83,10 +86,11 @@ float send(FsotSlice s, uint i, float target) {
 }
 
 void main() {
-    uint slice = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
-    if (slice >= pc.slices || schedule.stopped != 0u) {
+    uint rank = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
+    if (rank >= pc.slices || schedule.stopped != 0u) {
         return; // past the slices, or the stopping rule ended the run
     }
+    uint slice = slice_order[fsot_order_rank_at(pc.cost_slot, rank)];
     FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
     if (n < 2u) {

@@ -78,6 +78,9 @@ pub struct RunBuffers {
     pub large_args: Buffer,
     /// The stopping rule's state, when the device evaluates it (`RuleState`).
     pub schedule: Buffer,
+    /// The per-lane transport's slice order (`SliceOrder`; a placeholder for
+    /// the other transport).
+    pub slice_order: Buffer,
     /// Bound as the large keys and payloads when there is no sort (never written).
     pub placeholders: Option<[Buffer; 2]>,
     /// Host-visible: iteration costs, counters and state come back through it.
@@ -98,6 +101,7 @@ impl RunBuffers {
         float_acc: bool,
         large: &LargePlan,
         local_max: u32,
+        order_words: u64,
     ) -> Result<Self> {
         let info = ctx.info();
         let values = tile.values() as u64;
@@ -150,6 +154,7 @@ impl RunBuffers {
             large_pkey: device(large_len, "large-projection-keys")?,
             large_args: device(32, "large-indirect-args")?,
             schedule: device(std::mem::size_of::<RuleState>() as u64, "stopping-rule")?,
+            slice_order: device(fits("the slice order", order_words.max(4) * 4)?, "slice-order")?,
             placeholders,
             readback: Buffer::new(ctx, readback_len, Location::Readback, "readback")?,
             taps,
@@ -197,6 +202,7 @@ impl RunBuffers {
             (binding::SECOND, &self.second),
             (binding::LARGE_ARGS, &self.large_args),
             (binding::SCHEDULE, &self.schedule),
+            (binding::SLICE_ORDER, &self.slice_order),
         ])
     }
 }

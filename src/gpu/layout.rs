@@ -25,11 +25,12 @@ pub mod binding {
     pub const SCATTER_VALUES: u32 = 16;
     pub const HASH_VALUES: u32 = 17;
     pub const SCHEDULE: u32 = 18;
+    pub const SLICE_ORDER: u32 = 19;
     /// Bindings in the layout (`FSOT_BINDINGS`).
-    pub const BINDINGS: u32 = 19;
+    pub const BINDINGS: u32 = 20;
 
     /// Every binding with the name of its block in GLSL.
-    pub const BLOCKS: [(&str, u32); 19] = [
+    pub const BLOCKS: [(&str, u32); 20] = [
         ("Samples", SAMPLES),
         ("Taps", TAPS),
         ("Acc", ACC),
@@ -49,11 +50,24 @@ pub mod binding {
         ("ScatterValues", SCATTER_VALUES),
         ("HashValues", HASH_VALUES),
         ("Schedule", SCHEDULE),
+        ("SliceOrder", SLICE_ORDER),
     ];
 }
 
 /// Fixed-point scale of the objective's squared distances (`FSOT_COST_SCALE`).
 pub const COST_SCALE: f64 = 4_294_967_296.0;
+
+/// Class-size bins of the per-lane transport's slice order (`FSOT_ORDER_BINS`).
+pub const ORDER_BINS: u32 = 256;
+/// Iterations one slice order holds (`FSOT_ORDER_BATCH`): a batch.
+pub const ORDER_BATCH: u32 = super::BATCH;
+
+/// Words of `SliceOrder` for batches of `slices` slices per iteration (the
+/// regions of `glsl/fsot/slice_order.glsl`): per iteration its bins, each
+/// slice's bin and the slices in order.
+pub fn slice_order_words(slices: u32) -> u64 {
+    ORDER_BATCH as u64 * (ORDER_BINS as u64 + 2 * slices as u64)
+}
 
 /// `TransportPush`.
 #[repr(C)]

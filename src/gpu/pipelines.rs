@@ -31,6 +31,8 @@ pub struct RunPipelines {
     pub large: Option<LargePipelines>,
     /// The stopping rule's pass, on devices with shaderFloat64.
     pub plateau: Option<ComputePipeline>,
+    /// The slice order's two passes (count, place), for the per-lane transport.
+    pub order: Option<[ComputePipeline; 2]>,
 }
 
 pub struct LargePipelines {
@@ -122,6 +124,13 @@ impl RunPipelines {
             None => None,
         };
         let plateau = super::rule::pipeline(ctx)?.map(|p| bound(p, 0, None)).transpose()?;
-        Ok(Self { transport, update, large, plateau })
+        let order = match shape.per_lane {
+            true => Some([
+                bound(pipeline(ctx, shaders::SLICE_ORDER_COUNT, tpush, &[], 1)?, 0, None)?,
+                bound(pipeline(ctx, shaders::SLICE_ORDER_PLACE, tpush, &[], 1)?, 0, None)?,
+            ]),
+            false => None,
+        };
+        Ok(Self { transport, update, large, plateau, order })
     }
 }

@@ -12,8 +12,8 @@ use ash::vk;
 
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
-    CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS,
-    COST_SCALE,
+    slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush, UpdatePush,
+    ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
@@ -89,11 +89,22 @@ impl VulkanRun {
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
         let adam = matches!(settings.rule, StepRule::Adam { .. });
-        let buffers =
-            RunBuffers::new(ctx, &tile, &kernel, &thresholds, &samples, adam, float_acc, &large, local_max)?;
+        let order_words = if shape.per_lane { slice_order_words(slices) } else { 0 };
+        let buffers = RunBuffers::new(
+            ctx,
+            &tile,
+            &kernel,
+            &thresholds,
+            &samples,
+            adam,
+            float_acc,
+            &large,
+            local_max,
+            order_words,
+        )?;
         let sort = buffers.large_sort(ctx, &large)?;
         let pipelines = RunPipelines::new(ctx, &shape, targets, float_acc, &buffers, sort.as_ref())?;
-        let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
+        let timer = if options.profile { Some(Timer::new(ctx, 2 + 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,
             settings,
@@ -161,6 +172,38 @@ impl VulkanRun {
         barrier(&self.ctx, cmd);
         self.record_transport_pass(cmd, push);
         barrier(&self.ctx, cmd);
+    }
+
+    /// Records the slice order of iterations `first..first + count` (count at
+    /// most BATCH) for the per-lane transport, barriers included; nothing for
+    /// the other transport.
+    fn record_slice_order(&self, cmd: vk::CommandBuffer, first: u32, count: u32) {
+        let Some([count_pass, place_pass]) = &self.pipelines.order else { return };
+        let push = self.transport_push(first, 0);
+        let bins = (ORDER_BATCH * ORDER_BINS) as u64 * 4;
+        zero(&self.ctx, cmd, &self.buffers.slice_order, 0, bins);
+        barrier(&self.ctx, cmd);
+        let groups = self.slices.div_ceil(64).clamp(1, 65535);
+        count_pass.dispatch(cmd, 0, [groups, count, 1], bytemuck::bytes_of(&push));
+        barrier(&self.ctx, cmd);
+        place_pass.dispatch(cmd, 0, [1, count, 1], bytemuck::bytes_of(&push));
+        barrier(&self.ctx, cmd);
+    }
+
+    /// The order the per-lane transport takes iteration `iteration`'s slices in
+    /// (slice indices by rank), computed on the device as a batch would; None
+    /// for the other transport, which takes them in index order.
+    pub fn slice_order(&self, iteration: u32) -> Result<Option<Vec<u32>>> {
+        if self.pipelines.order.is_none() {
+            return Ok(None);
+        }
+        self.ctx.submit(|cmd| self.record_slice_order(cmd, iteration, 1))?;
+        // Iteration 0 of the batch: its ranks follow the bins and its slices' bins.
+        let first = (ORDER_BATCH * ORDER_BINS + self.slices) as usize;
+        let bytes = ((first + self.slices as usize) * 4) as u64;
+        let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&parts[0]);
+        Ok(Some(words[first..].to_vec()))
     }
 
     /// Zeroes the large-class counters (a barrier must follow).
@@ -305,6 +348,13 @@ impl VulkanRun {
                     t.reset(cmd);
                 }
                 barrier(&ctx, cmd);
+                // The whole batch's slice orders first (per-lane transport only):
+                // slices do not depend on the samples.
+                stamp(cmd, 0);
+                for (r, &c) in runs.iter().zip(&counts) {
+                    r.record_slice_order(cmd, r.iteration, c);
+                }
+                stamp(cmd, 1);
                 // The runs still stepping at iteration k of the batch, with their pushes
                 // (one list, reused).
                 let mut active: Vec<(&VulkanRun, TransportPush)> = Vec::with_capacity(runs.len());
@@ -316,7 +366,7 @@ impl VulkanRun {
                             .filter(|(_, &c)| k < c)
                             .map(|(r, _)| (*r, r.transport_push(r.iteration + k, k))),
                     );
-                    stamp(cmd, 4 * k);
+                    stamp(cmd, 2 + 4 * k);
                     for (r, _) in &active {
                         r.record_reset_large(cmd);
                     }
@@ -332,16 +382,16 @@ impl VulkanRun {
                         r.record_transport_pass(cmd, push);
                     }
                     barrier(&ctx, cmd);
-                    stamp(cmd, 4 * k + 1);
+                    stamp(cmd, 2 + 4 * k + 1);
                     for (r, push) in &active {
                         r.record_large(cmd, push);
                     }
-                    stamp(cmd, 4 * k + 2);
+                    stamp(cmd, 2 + 4 * k + 2);
                     for (r, _) in &active {
                         r.record_update_pass(cmd, r.iteration + k);
                     }
                     barrier(&ctx, cmd);
-                    stamp(cmd, 4 * k + 3);
+                    stamp(cmd, 2 + 4 * k + 3);
                 }
                 for (r, &c) in runs.iter().zip(&counts) {
                     if c == most {
@@ -385,11 +435,14 @@ impl VulkanRun {
             .map(|s| if s.count > 0 { s.squared as f64 / COST_SCALE / s.count as f64 } else { 0.0 })
             .collect();
         if let (Some(t), true) = (&self.timer, timed && count > 0) {
-            let ns = t.read_ns(4 * count)?;
+            let ns = t.read_ns(2 + 4 * count)?;
+            // The batch's slice order counts with the transport.
+            self.profile.transport_ns += ns[1] - ns[0];
             for k in 0..count as usize {
-                self.profile.transport_ns += ns[4 * k + 1] - ns[4 * k];
-                self.profile.large_ns += ns[4 * k + 2] - ns[4 * k + 1];
-                self.profile.update_ns += ns[4 * k + 3] - ns[4 * k + 2];
+                let at = 2 + 4 * k;
+                self.profile.transport_ns += ns[at + 1] - ns[at];
+                self.profile.large_ns += ns[at + 2] - ns[at + 1];
+                self.profile.update_ns += ns[at + 3] - ns[at + 2];
             }
             self.profile.iterations += count;
         }
@@ -515,6 +568,7 @@ impl Backend for VulkanRun {
         ctx.submit(|cmd| {
             zero(ctx, cmd, acc, 0, vk::WHOLE_SIZE);
             barrier(ctx, cmd);
+            self.record_slice_order(cmd, iteration, 1);
             self.record_transport(cmd, &push);
             self.record_large(cmd, &push);
             copy(ctx, cmd, acc, &self.buffers.readback, (values * width) as u64, 0);

@@ -1,0 +1,35 @@
+// The per-lane transport's slice order (slice_order_count.comp,
+// slice_order_place.comp, read by transport_lane.comp). A CPU implementation runs
+// invocations as SIMD lanes, and a lane's loops run as long as the longest class
+// among its neighbours'; class sizes spread widely (a level's class holds the
+// taps above it), so neighbouring slices are given classes of about the same
+// size: invocation r of iteration k takes the slice of rank r in decreasing class
+// size (the largest first, so the last workgroups are the short ones). The slices
+// themselves, and so the sums of their displacements, are unchanged.
+// Include after transport_common.glsl (`pc`: TransportPush; `cost_slot` is the
+// iteration's index k in its batch).
+//
+// `slice_order`, for a batch of up to B iterations of S slices (src/gpu/layout.rs:
+// slice_order_words):
+//   [k * BINS, (k + 1) * BINS)      slices of iteration k in each bin;
+//   [B * BINS + 2 k S, ... + S)     each slice's bin;
+//   [B * BINS + (2 k + 1) S, ... + S) the slices in order.
+// B is the batch (FSOT_ORDER_BATCH, the same as src/gpu/run.rs's BATCH).
+#define FSOT_ORDER_BATCH 32u
+
+uint fsot_order_bin_at(uint k, uint bin) {
+    return k * FSOT_ORDER_BINS + bin;
+}
+uint fsot_order_key_at(uint k, uint slice) {
+    return FSOT_ORDER_BATCH * FSOT_ORDER_BINS + 2u * k * pc.slices + slice;
+}
+uint fsot_order_rank_at(uint k, uint rank) {
+    return FSOT_ORDER_BATCH * FSOT_ORDER_BINS + (2u * k + 1u) * pc.slices + rank;
+}
+
+// A slice's bin: bin 0 holds the largest classes (every tap), the last bin the
+// smallest.
+uint fsot_order_bin(FsotSlice s) {
+    uint smaller = pc.taps - fsot_class_taps(s);
+    return (smaller * FSOT_ORDER_BINS) / (pc.taps + 1u);
+}

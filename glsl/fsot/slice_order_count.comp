@@ -1,0 +1,22 @@
+#version 450
+// The slice order's first pass (slice_order.glsl): one invocation per slice of
+// each iteration of the batch (workgroup row k: iteration pc.iteration + k)
+// draws the slice, records its class-size bin and counts it there. The bins must
+// be zero before.
+#include "bindings.glsl"
+layout(push_constant) uniform Push { TransportPush pc; };
+#include "transport_common.glsl"
+#include "slice_order.glsl"
+
+layout(local_size_x = 64) in;
+
+void main() {
+    uint k = gl_WorkGroupID.y;
+    uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    for (uint slice = gl_GlobalInvocationID.x; slice < pc.slices; slice += stride) {
+        FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration + k, slice, pc.dims, pc.width, pc.height, pc.frames);
+        uint bin = fsot_order_bin(s);
+        slice_order[fsot_order_key_at(k, slice)] = bin;
+        atomicAdd(slice_order[fsot_order_bin_at(k, bin)], 1u);
+    }
+}

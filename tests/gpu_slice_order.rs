@@ -1,0 +1,92 @@
+//! The per-lane transport's slice order (`glsl/fsot/slice_order.glsl`): on a CPU
+//! implementation of Vulkan, each iteration's slices are taken largest class
+//! first, so the lanes that run together have classes of about the same size.
+//! Checked against the CPU's own slice draws (lavapipe in CI, validation on).
+
+mod common;
+
+use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
+use fsot::kernel::{Kernel, KernelSpec};
+use fsot::problem::Tile;
+use fsot::rng::seed_key;
+use fsot::settings::Settings;
+use fsot::slice::SliceSampler;
+
+fn settings(seed: u64) -> Settings {
+    let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), seed);
+    s.iterations = 40;
+    s
+}
+
+/// Lanes' work over the members' when `lanes` consecutive slices run together
+/// and each group takes as long as its largest class.
+fn lane_waste(lens: &[u32], lanes: usize) -> f64 {
+    let busy: u64 = lens.chunks(lanes).map(|c| *c.iter().max().unwrap() as u64 * c.len() as u64).sum();
+    busy as f64 / lens.iter().map(|&n| n as u64).sum::<u64>() as f64
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
+    let Some(ctx) = common::gpu_context() else { return };
+    if !ctx.info().is_cpu() {
+        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+        return;
+    }
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let s = settings(5);
+    let options = VulkanOptions { transport: Some(TransportKind::PerLane), ..VulkanOptions::default() };
+    let gpu = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
+    let kernel = Kernel::new(s.kernel, &tile);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let taps = kernel.taps.len() as u32;
+    // Classes whose sizes fall in one of the order's 256 bins may come in any order.
+    let bin_width = (taps + 1).div_ceil(256);
+    for iteration in [0u32, 7, 31, 32, 39] {
+        let order = gpu.slice_order(iteration).unwrap().expect("a per-lane run orders its slices");
+        let slices = order.len() as u32;
+        assert!(slices > 100, "{slices} slices");
+        let mut seen = vec![false; slices as usize];
+        for &slice in &order {
+            assert!(slice < slices && !seen[slice as usize], "slice {slice} twice or out of range");
+            seen[slice as usize] = true;
+        }
+        let by_index: Vec<u32> = (0..slices).map(|i| sampler.draw(iteration, i).len).collect();
+        let by_rank: Vec<u32> = order.iter().map(|&i| by_index[i as usize]).collect();
+        for (rank, pair) in by_rank.windows(2).enumerate() {
+            assert!(
+                pair[1] <= pair[0] + bin_width,
+                "iteration {iteration}: rank {} has {} taps after {} (bins of {bin_width})",
+                rank + 1,
+                pair[1],
+                pair[0]
+            );
+        }
+        // As good as an exact sort (within what the bins' width allows), where
+        // index order keeps lanes idle most of the time.
+        let mut exact = by_index.clone();
+        exact.sort_unstable_by(|a, b| b.cmp(a));
+        let (before, after, best) =
+            (lane_waste(&by_index, 8), lane_waste(&by_rank, 8), lane_waste(&exact, 8));
+        eprintln!(
+            "iteration {iteration}: lanes of 8 busy {before:.2}x the members in index order, {after:.3}x in \
+             this order, {best:.3}x sorted exactly"
+        );
+        assert!(after <= best * 1.02, "iteration {iteration}: {after} against {best}");
+        assert!(before > 1.5, "the index order was not wasteful to begin with: {before}");
+    }
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_workgroup_transport_takes_slices_in_index_order() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let options = VulkanOptions { transport: Some(TransportKind::Workgroup), ..VulkanOptions::default() };
+    let gpu = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();
+    assert_eq!(gpu.slice_order(0).unwrap(), None);
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
