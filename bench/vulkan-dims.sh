@@ -4,7 +4,9 @@
 # layer on for Vulkan (FSOT_VALIDATION=1: the command fails on any message);
 # `vulkan-pairs` is Vulkan with the float32-pair targets (FSOT_FLOAT_PAIRS=1), as a
 # device without shaderFloat64 runs them.
-# Usage: bench/vulkan-dims.sh OUT_FILE   (VK_DRIVER_FILES picks the device; lavapipe by default)
+# OLD_BIN=path adds a `vulkan-old` row per d: that binary's Vulkan path (f64), run
+# just before this build's, to compare builds in one sitting.
+# Usage: [OLD_BIN=path] bench/vulkan-dims.sh OUT_FILE   (VK_DRIVER_FILES picks the device; lavapipe by default)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:?usage: bench/vulkan-dims.sh OUT_FILE}
@@ -16,14 +18,15 @@ trap 'rm -rf "$work"' EXIT
 f=target/release/fsot
 head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
-  echo "# bench/vulkan-dims.sh: $head"
+  echo "# bench/vulkan-dims.sh: $head${OLD_BIN:+; vulkan-old: $OLD_BIN ($($OLD_BIN --version | head -1))}"
   echo "d | tile | iterations | backend | device | time | objective | x white"
   echo "---|---|---|---|---|---|---|---"
   for case in 3:32x32x16:300 4:32x32x16:300 8:16x16x8:100; do
     IFS=: read -r d size its <<< "$case"
-    for backend in cpu vulkan vulkan-pairs; do
+    for backend in cpu ${OLD_BIN:+vulkan-old} vulkan vulkan-pairs; do
       pairs=0; [ $backend = vulkan-pairs ] && pairs=1
-      log=$(FSOT_FLOAT_PAIRS=$pairs FSOT_VALIDATION=1 $f optimize --backend ${backend%-pairs} --dims "$d" --size "$size" --kernel perceptual-taa \
+      exe=$f; [ $backend = vulkan-old ] && exe=$OLD_BIN
+      log=$(FSOT_FLOAT_PAIRS=$pairs FSOT_VALIDATION=1 $exe optimize --backend ${backend%-*} --dims "$d" --size "$size" --kernel perceptual-taa \
         --seed 7 --iterations "$its" --out "$work/m.exr" 2>&1)
       device=$(echo "$log" | grep -m1 '^backend:' | sed 's/^backend: //; s/ (.*//' || true)
       time=$(echo "$log" | grep -o 'iterations in [0-9.]* s' | awk '{print $3}')

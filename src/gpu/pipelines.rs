@@ -4,7 +4,7 @@
 use super::buffers::RunBuffers;
 use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
-use super::shape::{TransportShape, LANE_MAX, LARGE_WORKGROUP, LOCAL_MAX};
+use super::shape::{TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
 
@@ -96,7 +96,7 @@ impl RunPipelines {
             (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
             (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
-        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let local_max = shape.local_max;
         let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, local_max];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };

@@ -16,7 +16,7 @@ use super::layout::{
     ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
-use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOCAL_MAX, LOOP_BUDGET};
+use super::shape::{two_d, TransportKind, TransportShape, LOOP_BUDGET};
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
 use crate::cpu_backend::FIXED_SCALE;
@@ -85,7 +85,7 @@ impl VulkanRun {
         let float_acc = !options.deterministic && info.float_atomic_add;
         let max_class = (kernel.taps.len() * tile.spp) as u32;
         let shape = transport_shape(ctx, max_class, tile.dims, &options)?;
-        let local_max = if shape.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let local_max = shape.local_max;
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
         let adam = matches!(settings.rule, StepRule::Adam { .. });

@@ -51,6 +51,10 @@ pub struct TransportShape {
     /// which run invocations as SIMD lanes and pay dearly for barriers and
     /// shared-memory traffic between lanes.
     pub per_lane: bool,
+    /// Largest class the pass sorts itself (`FSOT_LANE_MAX` or
+    /// `FSOT_LOCAL_MAX`); larger classes go to the large-class stage's global
+    /// sort. Per lane: LANE_MAX, less for d >= 3 (`lane_limit`).
+    pub local_max: u32,
 }
 
 impl TransportShape {
@@ -60,11 +64,13 @@ impl TransportShape {
     /// workgroup (launches are dear), fewer when the kernel's largest class would
     /// take an invocation past LOOP_BUDGET loop iterations (lavapipe silently
     /// drops iterations past 65535 per invocation). On CPU implementations, the
-    /// per-lane transport when the kernel allows. For samples of `dims`
-    /// dimensions, d >= 3 on CPU implementations: the per-lane transport only
-    /// where its f64 targets stay within LANE_BUDGET, otherwise workgroups large
-    /// enough that each invocation's share of the targets stays within
-    /// LOOP_BUDGET (`fits_loop_budget` says whether a shape does). `kind` forces
+    /// per-lane transport when the kernel allows: for samples of `dims` >= 3
+    /// dimensions it sorts only the classes whose f64 targets stay within
+    /// LANE_BUDGET (`lane_limit`) and leaves larger ones to the large-class
+    /// stage, as long as that stage's invocations stay within LOOP_BUDGET;
+    /// otherwise workgroups large enough that each invocation's share of the
+    /// targets stays within LOOP_BUDGET (`fits_loop_budget` says whether a shape
+    /// does). `kind` forces
     /// a transport (None: by device); `forced` (invocations, slices per
     /// workgroup): the workgroup transport with that shape.
     pub fn choose(
@@ -78,22 +84,25 @@ impl TransportShape {
             Some(TransportKind::PerLane) => true,
             Some(TransportKind::Workgroup) => false,
             // Per lane when one invocation can also write out the largest class
-            // for the large-class path within the loop budget.
+            // for the large-class path within the loop budget, and that path's
+            // invocations can take the classes past the lane's limit.
             None => {
                 info.is_cpu()
                     && max_class <= LOOP_BUDGET / 2
-                    && Self::lane_iterations(max_class.min(LANE_MAX), dims) <= LANE_BUDGET
+                    && Self::large_fits(max_class, Self::lane_limit(dims), dims)
             }
         };
+        let local_max = if per_lane { Self::lane_limit(dims) } else { LOCAL_MAX };
         let mut shape = if info.is_cpu() {
             let wg = info.subgroup_size.clamp(1, 128);
-            Self { workgroup: wg, slices_per_group: 16, one_subgroup: true, per_lane }
+            Self { workgroup: wg, slices_per_group: 16, one_subgroup: true, per_lane, local_max }
         } else {
             Self {
                 workgroup: 128.min(info.max_workgroup_invocations),
                 slices_per_group: 1,
                 one_subgroup: false,
                 per_lane,
+                local_max,
             }
         };
         let local = max_class.min(LOCAL_MAX);
@@ -111,6 +120,7 @@ impl TransportShape {
             shape.workgroup = wg.min(info.max_workgroup_invocations);
             shape.slices_per_group = spg;
             shape.per_lane = false;
+            shape.local_max = LOCAL_MAX;
             shape.one_subgroup = shape.workgroup <= info.subgroup_size;
         }
         shape
@@ -162,16 +172,37 @@ impl TransportShape {
         if !info.is_cpu() {
             return true;
         }
-        let local = if self.per_lane { LANE_MAX } else { LOCAL_MAX };
+        let local = self.local_max;
         let fits_small = if self.per_lane {
             Self::lane_iterations(max_class.min(local), dims) <= LANE_BUDGET
         } else {
             self.slices_per_group * Self::group_iterations(max_class.min(local), self.workgroup, dims)
                 <= LOOP_BUDGET
         };
-        let fits_large = max_class <= local
-            || Self::walk_iterations((max_class / 2).div_ceil(LARGE_WORKGROUP), dims) <= LOOP_BUDGET;
-        fits_small && fits_large
+        fits_small && Self::large_fits(max_class, local, dims)
+    }
+
+    /// Whether the large-class stage's invocations stay within LOOP_BUDGET for
+    /// classes of up to `max_class` when those up to `local` are sorted locally.
+    fn large_fits(max_class: u32, local: u32, dims: usize) -> bool {
+        max_class <= local
+            || Self::walk_iterations((max_class / 2).div_ceil(LARGE_WORKGROUP), dims) <= LOOP_BUDGET
+    }
+
+    /// Largest class (at most LANE_MAX) that one per-lane invocation sorts and
+    /// sends to its targets within LANE_BUDGET in `dims` dimensions: LANE_MAX
+    /// for d <= 2; about 930 for d = 3, 570 for d = 4, 39 for d = 8.
+    pub fn lane_limit(dims: usize) -> u32 {
+        let (mut lo, mut hi) = (2u32, LANE_MAX);
+        while lo < hi {
+            let mid = (lo + hi).div_ceil(2);
+            if Self::lane_iterations(mid, dims) <= LANE_BUDGET {
+                lo = mid;
+            } else {
+                hi = mid - 1;
+            }
+        }
+        lo
     }
 
     /// Workgroups of the transport pass for `slices` slices.
@@ -243,6 +274,18 @@ mod tests {
                 );
                 assert!(shape.per_lane || dims > 2 || max_class > LOOP_BUDGET / 2, "{dims} {max_class}");
             }
+        }
+        // Per lane, d >= 3 sorts the classes up to its limit, the largest whose
+        // loops fit, and leaves the rest to the large-class stage.
+        assert_eq!(TransportShape::lane_limit(1), LANE_MAX);
+        assert_eq!(TransportShape::lane_limit(2), LANE_MAX);
+        for (dims, near) in [(3, 930), (4, 570), (8, 39)] {
+            let limit = TransportShape::lane_limit(dims);
+            assert!(TransportShape::lane_iterations(limit, dims) <= LANE_BUDGET, "d = {dims}: {limit}");
+            assert!(TransportShape::lane_iterations(limit + 1, dims) > LANE_BUDGET, "d = {dims}: {limit}");
+            assert!(limit.abs_diff(near) <= near / 20, "d = {dims}: limit {limit}, documented about {near}");
+            let shape = TransportShape::choose(&lavapipe, 1408, dims, None, None);
+            assert!(shape.per_lane && shape.local_max == limit, "d = {dims}: {shape:?}");
         }
         // Large classes of d = 8 pass the large-class pass's budget: refused.
         let shape = TransportShape::choose(&lavapipe, 20_000, 8, None, None);
