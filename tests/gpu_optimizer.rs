@@ -134,7 +134,7 @@ fn large_classes_sorted_globally_give_the_cpu_displacements() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn large_classes_in_three_dimensions_give_the_cpu_displacements() {
-    // Per lane, d = 3 leaves classes past its limit (about 930) to this stage.
+    // Per lane, d = 3 leaves classes past its limit (207) to this stage.
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
         large_classes_with(transport, 3);
     }
@@ -318,8 +318,7 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
     // The box-spline targets, in f64 and in float32 pairs, against the CPU
     // path's f64 reference, on both transports. Per lane, a CPU implementation's
     // loop budget takes the f64 targets of classes up to the lane's limit only:
-    // at d = 4 and 8 the larger classes of this kernel go to the large-class
-    // stage. The workgroups are sized so each invocation's share fits.
+    // the larger classes of this kernel go to the large-class stage. The workgroups are sized so each invocation's share fits.
     let Some(ctx) = common::gpu_context() else { return };
     for dims in [3, 4, 8] {
         let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
@@ -332,7 +331,7 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
             let limit = TransportShape::lane_limit(dims);
             assert!(TransportShape::lane_iterations(taps.min(limit), dims) <= LANE_BUDGET);
             if transport == TransportKind::PerLane {
-                assert_eq!(dims >= 4, taps > limit, "d = {dims}: {taps} taps, lane limit {limit}");
+                assert!(taps > limit, "d = {dims}: {taps} taps, lane limit {limit}: no split to test");
                 let run =
                     forced(&ctx, tile, "taa", transport).expect("per lane, the large classes split off");
                 assert!(run.large_capacity() > 0 || taps <= limit, "d = {dims}: no large-class stage");

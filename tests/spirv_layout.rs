@@ -197,7 +197,7 @@ fn check_family(
                 ("large_count", std::mem::offset_of!(LargeMetaHead, large_count)),
                 ("large_segments", std::mem::offset_of!(LargeMetaHead, large_segments)),
                 ("large_overflow", std::mem::offset_of!(LargeMetaHead, large_overflow)),
-                ("large_pad", std::mem::offset_of!(LargeMetaHead, large_pad)),
+                ("loop_cut", std::mem::offset_of!(LargeMetaHead, loop_cut)),
                 ("segments", std::mem::size_of::<LargeMetaHead>()),
             ];
             let want: Vec<(String, u32)> = head.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();

@@ -131,13 +131,15 @@ layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { int64_t acc[]; 
 #endif
 // Per cost slot: squared distances (FSOT_COST_SCALE fixed point), count.
 layout(std430, set = 0, binding = FSOT_BINDING_COSTS) buffer Costs { int64_t costs[]; };
-// Large classes: elements used (the radix sort's count: the first word), classes,
-// classes dropped for want of room, then one segment per class.
+// Large classes: elements used (the radix sort's count: the first word), classes
+// (both reset each iteration), classes dropped for want of room and invocations
+// that a CPU implementation's loop cap cut short (both counted over a batch), then
+// one segment per class.
 layout(std430, set = 0, binding = FSOT_BINDING_LARGE_META) buffer LargeMeta {
     uint large_count;
     uint large_segments;
     uint large_overflow;
-    uint large_pad;
+    uint loop_cut;
     LargeSegment segments[];
 };
 // Large classes, element e: sort key and payload (the radix sort's input and

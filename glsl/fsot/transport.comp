@@ -148,9 +148,10 @@ void main() {
     for (uint k = 0u; k < SLICES_PER_GROUP; ++k) {
         uint slice = group * SLICES_PER_GROUP + k;
         if (slice >= pc.slices) {
-            return;
+            break;
         }
         process_slice(slice);
         sync(); // shared memory is reused by the next slice
     }
+    fsot_check_loop_cap();
 }

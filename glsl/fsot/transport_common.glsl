@@ -3,6 +3,7 @@
 // and the pass's push-constant block `pc` (TransportPush).
 #include "accumulate.glsl"
 #include "rank_targets.glsl"
+#include "loop_cap.glsl"
 
 // Class size of a slice in taps: those whose threshold exceeds its level
 // (thresholds decrease).

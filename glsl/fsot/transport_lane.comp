@@ -103,6 +103,7 @@ void main() {
                 fsot_write_large(s, uint(off), i);
             }
         }
+        fsot_check_loop_cap();
         return;
     }
     // Bucket sort: O(n) expected, few per-lane memory accesses (each one a
@@ -187,4 +188,5 @@ void main() {
     }
 #endif
     fsot_add_cost(pc.cost_slot, cost, n);
+    fsot_check_loop_cap();
 }

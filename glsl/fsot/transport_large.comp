@@ -14,6 +14,7 @@
 layout(local_size_x_id = 0) in;
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "rank_targets.glsl"
+#include "loop_cap.glsl"
 
 shared float s_part[gl_WorkGroupSize.x];
 
@@ -69,4 +70,5 @@ void main() {
     if (tid == 0u) {
         fsot_add_cost(pc.cost_slot, s_part[0], n);
     }
+    fsot_check_loop_cap();
 }

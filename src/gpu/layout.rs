@@ -159,7 +159,7 @@ pub struct LargeMetaHead {
     pub large_count: u32,
     pub large_segments: u32,
     pub large_overflow: u32,
-    pub large_pad: u32,
+    pub loop_cut: u32,
 }
 
 /// `LargeSegment`: one large class in the large-class buffers.

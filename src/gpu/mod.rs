@@ -49,4 +49,8 @@ pub struct VulkanOptions {
     /// Leave a stopping rule to the host (read back and decided once per
     /// window) even where the device could evaluate it: to compare.
     pub host_stopping_rule: bool,
+    /// The per-lane transport's class limit, unchecked against the loop
+    /// budget: for tests that a class a CPU implementation's loop cap cuts
+    /// short fails the run instead of moving samples the wrong way.
+    pub unchecked_lane_limit: Option<u32>,
 }

@@ -16,7 +16,7 @@ use super::layout::{
     ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
-use super::shape::{two_d, TransportKind, TransportShape, LOOP_BUDGET};
+use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOOP_BUDGET};
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
 use crate::cpu_backend::FIXED_SCALE;
@@ -206,9 +206,10 @@ impl VulkanRun {
         Ok(Some(words[first..].to_vec()))
     }
 
-    /// Zeroes the large-class counters (a barrier must follow).
+    /// Zeroes the large-class counters of one iteration, the elements and
+    /// classes (a barrier must follow); the batch's counts stay.
     fn record_reset_large(&self, cmd: vk::CommandBuffer) {
-        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, std::mem::size_of::<LargeMetaHead>() as u64);
+        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, 8);
     }
 
     /// The transport dispatch alone (barriers are the caller's).
@@ -343,6 +344,7 @@ impl VulkanRun {
             ctx.submit(|cmd| {
                 for r in &runs {
                     zero(&ctx, cmd, &r.buffers.costs, 0, vk::WHOLE_SIZE);
+                    zero(&ctx, cmd, &r.buffers.large_meta, 0, head_bytes);
                 }
                 if let Some(t) = timer {
                     t.reset(cmd);
@@ -421,6 +423,19 @@ impl VulkanRun {
         let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes]);
         let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes..cost_bytes + head_bytes]);
         self.overflowed += head.large_overflow as u64;
+        if head.loop_cut > 0 {
+            // Some class's work was cut short: its displacements are wrong, and
+            // so is every iteration after. Nothing of the batch is kept.
+            return Err(Error::VulkanUnavailable(format!(
+                "{} cut {} transport invocations short at its loop limit (65535 iterations per \
+                 invocation) in iterations {} to {}: their classes would move the wrong way; the CPU \
+                 backend takes any class",
+                self.ctx.info().name,
+                head.loop_cut,
+                self.iteration + 1,
+                self.iteration + count
+            )));
+        }
         let mut count = count;
         if self.rule.is_some() {
             let rule: RuleState = bytemuck::pod_read_unaligned(&raw[cost_bytes + head_bytes..]);
@@ -481,7 +496,11 @@ fn transport_shape(
         }
         _ => {}
     }
-    let shape = TransportShape::choose(info, max_class, dims, options.transport, options.transport_shape);
+    let mut shape = TransportShape::choose(info, max_class, dims, options.transport, options.transport_shape);
+    if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
+        shape.local_max = limit.clamp(2, LANE_MAX);
+        return Ok(shape);
+    }
     if !shape.fits_loop_budget(info, max_class, dims) {
         return Err(Error::invalid(format!(
             "classes of up to {max_class} samples in d = {dims} would take {} past its loop budget \

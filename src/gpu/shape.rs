@@ -28,6 +28,12 @@ pub const LARGE_WORKGROUP: u32 = 128;
 /// and 24 for the start.
 const WALK_EVALS: u32 = 10;
 const COLD_EVALS: u32 = 24;
+/// Newton steps one quantile may take at most (`FSOT_NEWTON_MAX` of
+/// glsl/fsot/targets.glsl): the per-lane pass budgets every quantile at this, so
+/// no class, however hard, takes an invocation past the loop cap (budgeting the
+/// mean there let a hard class of 39 samples at d = 8 run past it, and its
+/// targets came out as garbage).
+const NEWTON_MAX: u32 = 60;
 
 /// The two transport passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -65,12 +71,11 @@ impl TransportShape {
     /// take an invocation past LOOP_BUDGET loop iterations (lavapipe silently
     /// drops iterations past 65535 per invocation). On CPU implementations, the
     /// per-lane transport when the kernel allows: for samples of `dims` >= 3
-    /// dimensions it sorts only the classes whose f64 targets stay within
-    /// LANE_BUDGET (`lane_limit`) and leaves larger ones to the large-class
-    /// stage, as long as that stage's invocations stay within LOOP_BUDGET;
-    /// otherwise workgroups large enough that each invocation's share of the
-    /// targets stays within LOOP_BUDGET (`fits_loop_budget` says whether a shape
-    /// does). `kind` forces
+    /// dimensions only where every class's f64 targets stay within LANE_BUDGET
+    /// at their worst (`lane_limit`; forced per lane, larger classes go to the
+    /// large-class stage), otherwise workgroups large enough that each
+    /// invocation's share of the targets stays within LOOP_BUDGET
+    /// (`fits_loop_budget` says whether a shape does). `kind` forces
     /// a transport (None: by device); `forced` (invocations, slices per
     /// workgroup): the workgroup transport with that shape.
     pub fn choose(
@@ -85,10 +90,15 @@ impl TransportShape {
             Some(TransportKind::Workgroup) => false,
             // Per lane when one invocation can also write out the largest class
             // for the large-class path within the loop budget, and that path's
-            // invocations can take the classes past the lane's limit.
+            // invocations can take the classes past the lane's limit. For d >= 3
+            // only when every class fits the lane: there the limit is small (the
+            // targets budgeted at their worst), and on lavapipe the large-class
+            // stage's three sorts cost more than the workgroup transport saves
+            // (bench/results/issue16-lane-dims.txt).
             None => {
                 info.is_cpu()
                     && max_class <= LOOP_BUDGET / 2
+                    && (dims <= 2 || max_class <= Self::lane_limit(dims))
                     && Self::large_fits(max_class, Self::lane_limit(dims), dims)
             }
         };
@@ -148,14 +158,25 @@ impl TransportShape {
         terms * dims as u32 + (COLD_EVALS + ranks * WALK_EVALS) * eval
     }
 
+    /// Loop iterations of the f64 targets (d >= 3) for `ranks` ranks whatever
+    /// the class: filling the subset sums, then each quantile at NEWTON_MAX
+    /// evaluations and its moment.
+    pub fn walk_worst(ranks: u32, dims: usize) -> u32 {
+        if dims <= 2 {
+            return 0;
+        }
+        let terms = 1u32 << dims;
+        64 + terms * dims as u32 + ranks * (NEWTON_MAX * (terms + 1) + terms + 1)
+    }
+
     /// Upper bound on one per-lane invocation's loop iterations for a class of
     /// `n` (n <= LANE_MAX): clear, count, prefix and place (n each), the sort's
     /// worst case (insertion moves or the heap-sort fallback), then the targets
-    /// (n for d <= 2; the walk over n / 2 ranks otherwise).
+    /// (n for d <= 2; for d >= 3 the walk over n / 2 ranks, each at its worst).
     pub fn lane_iterations(n: u32, dims: usize) -> u32 {
         let n = n.max(2);
         let heap = 3 * n / 2 + (3 * n / 2) * n.ilog2();
-        let targets = if dims <= 2 { n } else { Self::walk_iterations(n / 2, dims) };
+        let targets = if dims <= 2 { n } else { Self::walk_worst(n / 2, dims) };
         4 * n + (5 * n).max(heap) + targets
     }
 
@@ -191,7 +212,7 @@ impl TransportShape {
 
     /// Largest class (at most LANE_MAX) that one per-lane invocation sorts and
     /// sends to its targets within LANE_BUDGET in `dims` dimensions: LANE_MAX
-    /// for d <= 2; about 930 for d = 3, 570 for d = 4, 39 for d = 8.
+    /// for d <= 2; 207 for d = 3, 113 for d = 4, 7 for d = 8.
     pub fn lane_limit(dims: usize) -> u32 {
         let (mut lo, mut hi) = (2u32, LANE_MAX);
         while lo < hi {
@@ -247,10 +268,10 @@ mod tests {
         let heap = 3 * n / 2 + (3 * n / 2) * log;
         let per_lane = 5 * n + insertion.max(heap);
         assert!(per_lane < 50_000, "{per_lane}");
-        // The f64 targets: per lane, d = 3 fits at a few hundred samples and d = 8
+        // The f64 targets: per lane, d = 3 fits at two hundred samples and d = 8
         // does not; workgroups grow until every invocation's share fits.
-        assert!(TransportShape::lane_iterations(700, 3) <= LANE_BUDGET);
-        assert!(TransportShape::lane_iterations(700, 8) > LANE_BUDGET);
+        assert!(TransportShape::lane_iterations(200, 3) <= LANE_BUDGET);
+        assert!(TransportShape::lane_iterations(200, 8) > LANE_BUDGET);
         let lavapipe = DeviceInfo {
             name: "llvmpipe".into(),
             driver: String::new(),
@@ -279,13 +300,17 @@ mod tests {
         // loops fit, and leaves the rest to the large-class stage.
         assert_eq!(TransportShape::lane_limit(1), LANE_MAX);
         assert_eq!(TransportShape::lane_limit(2), LANE_MAX);
-        for (dims, near) in [(3, 930), (4, 570), (8, 39)] {
+        for (dims, near) in [(3, 207), (4, 113), (8, 7)] {
             let limit = TransportShape::lane_limit(dims);
             assert!(TransportShape::lane_iterations(limit, dims) <= LANE_BUDGET, "d = {dims}: {limit}");
             assert!(TransportShape::lane_iterations(limit + 1, dims) > LANE_BUDGET, "d = {dims}: {limit}");
             assert!(limit.abs_diff(near) <= near / 20, "d = {dims}: limit {limit}, documented about {near}");
-            let shape = TransportShape::choose(&lavapipe, 1408, dims, None, None);
-            assert!(shape.per_lane && shape.local_max == limit, "d = {dims}: {shape:?}");
+            let whole = TransportShape::choose(&lavapipe, limit, dims, None, None);
+            assert!(whole.per_lane && whole.local_max == limit, "d = {dims}: {whole:?}");
+            let split = TransportShape::choose(&lavapipe, limit + 1, dims, None, None);
+            assert!(!split.per_lane && split.local_max == LOCAL_MAX, "d = {dims}: {split:?}");
+            let forced = TransportShape::choose(&lavapipe, 1408, dims, Some(TransportKind::PerLane), None);
+            assert!(forced.per_lane && forced.local_max == limit, "d = {dims}: {forced:?}");
         }
         // Large classes of d = 8 pass the large-class pass's budget: refused.
         let shape = TransportShape::choose(&lavapipe, 20_000, 8, None, None);

@@ -160,6 +160,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         transport_shape: env::transport_shape(),
         float_pair_targets: env::float_pair_targets(),
         host_stopping_rule: env::host_stopping_rule(),
+        unchecked_lane_limit: None,
     };
     Ok(RunOptions {
         backend,

@@ -1,0 +1,53 @@
+//! A CPU implementation of Vulkan (lavapipe) runs an invocation's loops for 65535
+//! iterations in all and drops the rest silently. The transport passes are
+//! budgeted to stay under that; should a class still run past it, the run fails
+//! with a clear error (a device failure: `auto` goes on with the CPU path) rather
+//! than moving samples by garbage targets (lavapipe, validation on).
+
+mod common;
+
+use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
+use fsot::kernel::KernelSpec;
+use fsot::problem::Tile;
+use fsot::settings::Settings;
+
+fn settings(iterations: u32) -> Settings {
+    let mut s = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
+    s.iterations = iterations;
+    s
+}
+
+fn run_with(ctx: &fsot::vk::Context, lane_limit: Option<u32>, iterations: u32) -> fsot::error::Result<()> {
+    // d = 8: each quantile of the f64 targets takes a loop of 257 per Newton
+    // step, so a class of 200 samples per lane is far past the cap.
+    let tile = Tile::new(16, 16, 8, 1, 8).unwrap();
+    let options = VulkanOptions {
+        deterministic: true,
+        transport: Some(TransportKind::PerLane),
+        unchecked_lane_limit: lane_limit,
+        ..VulkanOptions::default()
+    };
+    let mut run = VulkanRun::new(ctx, tile, settings(iterations), None, options)?;
+    while !run.finished() {
+        run.step_batch(u32::MAX)?;
+    }
+    Ok(())
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_class_cut_short_by_the_loop_cap_fails_the_run_clearly() {
+    let Some(ctx) = common::gpu_context() else { return };
+    if !ctx.info().is_cpu() {
+        eprintln!("SKIPPED: only CPU implementations of Vulkan cap loops; this device is a GPU");
+        return;
+    }
+    let err = run_with(&ctx, Some(200), 4).expect_err("classes of 200 at d = 8 per lane pass the cap");
+    let text = err.to_string();
+    assert!(text.contains("loop limit") && text.contains("CPU backend"), "{text}");
+    assert!(err.is_device_failure(), "auto must be able to go on with the CPU path: {err:?}");
+    // The budgeted limit (7 samples per lane at d = 8, the rest in the large-class
+    // stage) never trips it, over more iterations than the failing run took.
+    run_with(&ctx, None, 40).expect("the budgeted transport stays under the cap");
+    common::assert_no_validation_messages(&ctx);
+}
