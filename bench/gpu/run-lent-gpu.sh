@@ -5,7 +5,7 @@
 #   (cd .gl && apt-get download vulkan-validationlayers)   # for the GPU tests
 #   cargo build --release && cargo test --release --no-run
 #   mkdir -p .gl/bin && cp target/release/fsot .gl/bin/
-#   for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_plan gpu_stopping_rule gpu_sort_look_back gpu_slice_order gpu_failures vk_layer run stress bench; do
+#   for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_plan gpu_stopping_rule gpu_sort_look_back gpu_slice_order gpu_loop_cap gpu_failures vk_layer run stress bench; do
 #     cp "$(ls -t target/release/deps/$t-* | grep -v '\.d$' | head -1)" .gl/bin/$t; done
 #   strip .gl/bin/*
 # Other builds to compare (say, the sort before a change) go in as .gl/bin/fsot-NAME;
@@ -83,7 +83,7 @@ step() { echo; echo "### $*"; /usr/bin/time -f "wall %e s, max RSS %M KB" timeou
   echo; echo "### GPU tests on this device, validation layer on"
   # Tests that run the command line look for it where it was built.
   mkdir -p "$(dirname "$BUILT_FSOT")" 2>/dev/null && cp $B/fsot "$BUILT_FSOT"
-  for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_plan gpu_stopping_rule gpu_sort_look_back gpu_slice_order gpu_failures vk_layer run stress bench; do
+  for t in gpu_toolchain gpu_sort gpu_optimizer gpu_scatter gpu_swap gpu_plan gpu_stopping_rule gpu_sort_look_back gpu_slice_order gpu_loop_cap gpu_failures vk_layer run stress bench; do
     [ -x "$B/$t" ] && step "$B/$t" --test-threads 1
   done
   fi

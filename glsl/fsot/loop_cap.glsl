@@ -4,7 +4,7 @@
 #ifndef FSOT_LOOP_CAP_GLSL
 #define FSOT_LOOP_CAP_GLSL
 
-// Lavapipe runs an invocation's loops (a SIMD group's) for 65535 iterations in
+// Lavapipe runs an invocation's loops for 65535 iterations in
 // all and then drops the rest silently, which would leave a class's targets as
 // garbage. The passes are budgeted to stay under it (src/gpu/shape.rs); this
 // last loop, of a run-time count of at least 3, checks it: past the cap a loop
