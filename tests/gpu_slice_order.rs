@@ -5,6 +5,7 @@
 
 mod common;
 
+use fsot::backend::Backend;
 use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::problem::Tile;
@@ -76,6 +77,38 @@ fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
         assert!(before > 1.5, "the index order was not wasteful to begin with: {before}");
     }
     drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
+    // Where one binding cannot hold a batch's orders (large tiles), the slices
+    // are ordered a few iterations at a time within the batch; the run is the
+    // same bit for bit (deterministic mode), whatever the slots.
+    let Some(ctx) = common::gpu_context() else { return };
+    if !ctx.info().is_cpu() {
+        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+        return;
+    }
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let samples = |slots: Option<u32>| {
+        let options = VulkanOptions {
+            deterministic: true,
+            transport: Some(TransportKind::PerLane),
+            slice_order_slots: slots,
+            ..VulkanOptions::default()
+        };
+        let mut run = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();
+        while !run.finished() {
+            run.step_batch(u32::MAX).unwrap();
+        }
+        run.mask().unwrap().samples
+    };
+    let whole = samples(None);
+    for slots in [1, 3] {
+        assert!(whole == samples(Some(slots)), "{slots} slots at a time changed the run");
+    }
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -56,7 +56,7 @@ struct TransportPush {
     uint slices;         // slices this iteration
     uint cost_slot;      // where this iteration's objective goes: its index in the batch
     uint large_capacity; // elements the large-class buffers hold
-    uint pad;
+    uint order_slot;     // where the per-lane transport finds this iteration's slice order
 };
 
 // The update pass.

@@ -6,15 +6,17 @@
 // size: invocation r of iteration k takes the slice of rank r in decreasing class
 // size (the largest first, so the last workgroups are the short ones). The slices
 // themselves, and so the sums of their displacements, are unchanged.
-// Include after transport_common.glsl (`pc`: TransportPush; `cost_slot` is the
-// iteration's index k in its batch).
+// Include after transport_common.glsl (`pc`: TransportPush).
 //
-// `slice_order`, for a batch of up to B iterations of S slices (src/gpu/layout.rs:
-// slice_order_words):
-//   [k * BINS, (k + 1) * BINS)      slices of iteration k in each bin;
+// `slice_order` holds the orders of up to B iterations of S slices, in slots k
+// (src/gpu/layout.rs: slice_order_words; fewer slots where a binding cannot hold
+// B, and the host then orders that many iterations at a time):
+//   [k * BINS, (k + 1) * BINS)      slices of slot k in each bin;
 //   [B * BINS + 2 k S, ... + S)     each slice's bin;
 //   [B * BINS + (2 k + 1) S, ... + S) the slices in order.
-// B is the batch (FSOT_ORDER_BATCH, the same as src/gpu/run.rs's BATCH).
+// B is the batch (FSOT_ORDER_BATCH, the same as src/gpu/run.rs's BATCH). The
+// ordering passes fill slots 0, 1, ... (workgroup row k) for iterations
+// pc.iteration + k; the transport reads slot pc.order_slot.
 #define FSOT_ORDER_BATCH 32u
 
 uint fsot_order_bin_at(uint k, uint bin) {

@@ -90,7 +90,7 @@ void main() {
     if (rank >= pc.slices || schedule.stopped != 0u) {
         return; // past the slices, or the stopping rule ended the run
     }
-    uint slice = slice_order[fsot_order_rank_at(pc.cost_slot, rank)];
+    uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
     FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
     if (n < 2u) {

@@ -59,14 +59,38 @@ pub const COST_SCALE: f64 = 4_294_967_296.0;
 
 /// Class-size bins of the per-lane transport's slice order (`FSOT_ORDER_BINS`).
 pub const ORDER_BINS: u32 = 256;
-/// Iterations one slice order holds (`FSOT_ORDER_BATCH`): a batch.
+/// Slots of bins the slice order holds (`FSOT_ORDER_BATCH`): a batch.
 pub const ORDER_BATCH: u32 = super::BATCH;
 
-/// Words of `SliceOrder` for batches of `slices` slices per iteration (the
-/// regions of `glsl/fsot/slice_order.glsl`): per iteration its bins, each
-/// slice's bin and the slices in order.
-pub fn slice_order_words(slices: u32) -> u64 {
-    ORDER_BATCH as u64 * (ORDER_BINS as u64 + 2 * slices as u64)
+/// Words of `SliceOrder` for `slots` iterations' orders (at most ORDER_BATCH)
+/// of `slices` slices each (the regions of `glsl/fsot/slice_order.glsl`): the
+/// bins of every slot, then per slot each slice's bin and the slices in order.
+pub fn slice_order_words(slices: u32, slots: u32) -> u64 {
+    ORDER_BATCH as u64 * ORDER_BINS as u64 + slots as u64 * 2 * slices as u64
+}
+
+/// Slots of slice orders for `slices` slices per iteration that one binding of
+/// `max_bytes` holds: a batch's worth (ORDER_BATCH) where it can, else fewer, at
+/// least one (whose buffer is then refused with a clear error if too large).
+pub fn slice_order_slots(slices: u32, max_bytes: u64) -> u32 {
+    (1..=ORDER_BATCH).rev().find(|&s| slice_order_words(slices, s) * 4 <= max_bytes).unwrap_or(1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slice_orders_fill_a_binding_at_most() {
+        let lavapipe = 128 << 20;
+        assert_eq!(slice_order_slots(3000, lavapipe), ORDER_BATCH);
+        // 256x256x64 at 16 hits per sample: about 594k slices per iteration.
+        let slots = slice_order_slots(594_000, lavapipe);
+        assert!(slots < ORDER_BATCH && slots >= 1, "{slots}");
+        assert!(slice_order_words(594_000, slots) * 4 <= lavapipe);
+        assert!(slice_order_words(594_000, slots + 1) * 4 > lavapipe);
+        assert_eq!(slice_order_slots(40_000_000, lavapipe), 1);
+    }
 }
 
 /// `TransportPush`.
@@ -84,7 +108,8 @@ pub struct TransportPush {
     pub slices: u32,
     pub cost_slot: u32,
     pub large_capacity: u32,
-    pub pad: u32,
+    /// The per-lane transport's slice order slot (`slice_order.glsl`).
+    pub order_slot: u32,
 }
 
 /// `UpdatePush`.

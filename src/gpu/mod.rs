@@ -53,4 +53,8 @@ pub struct VulkanOptions {
     /// budget: for tests that a class a CPU implementation's loop cap cuts
     /// short fails the run instead of moving samples the wrong way.
     pub unchecked_lane_limit: Option<u32>,
+    /// Order the per-lane transport's slices this many iterations at a time
+    /// (at most a batch), as where one binding cannot hold a batch's orders:
+    /// for tests.
+    pub slice_order_slots: Option<u32>,
 }

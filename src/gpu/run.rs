@@ -12,8 +12,8 @@ use ash::vk;
 
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
-    slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush, UpdatePush,
-    ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
+    slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush,
+    UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOOP_BUDGET};
@@ -43,6 +43,9 @@ pub struct VulkanRun {
     float_acc: bool,
     shape: TransportShape,
     large: LargePlan,
+    /// Iterations whose slice orders the per-lane transport's buffer holds (0:
+    /// the other transport, which takes slices in index order).
+    order_slots: u32,
     profile: Profile,
     overflowed: u64,
     /// A step scale set by the caller; None: the cosine schedule.
@@ -89,7 +92,16 @@ impl VulkanRun {
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
         let adam = matches!(settings.rule, StepRule::Adam { .. });
-        let order_words = if shape.per_lane { slice_order_words(slices) } else { 0 };
+        // The per-lane transport's slice orders: a batch's worth at a time where
+        // one binding holds them, fewer otherwise (at least one).
+        let order_slots = match shape.per_lane {
+            true => options
+                .slice_order_slots
+                .map(|s| s.clamp(1, ORDER_BATCH))
+                .unwrap_or_else(|| slice_order_slots(slices, info.max_storage_buffer_range)),
+            false => 0,
+        };
+        let order_words = if shape.per_lane { slice_order_words(slices, order_slots) } else { 0 };
         let buffers = RunBuffers::new(
             ctx,
             &tile,
@@ -104,7 +116,7 @@ impl VulkanRun {
         )?;
         let sort = buffers.large_sort(ctx, &large)?;
         let pipelines = RunPipelines::new(ctx, &shape, targets, float_acc, &buffers, sort.as_ref())?;
-        let timer = if options.profile { Some(Timer::new(ctx, 2 + 4 * BATCH)?) } else { None };
+        let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,
             settings,
@@ -116,6 +128,7 @@ impl VulkanRun {
             float_acc,
             shape,
             large,
+            order_slots,
             profile: Profile::default(),
             overflowed: 0,
             scale: None,
@@ -174,9 +187,9 @@ impl VulkanRun {
         barrier(&self.ctx, cmd);
     }
 
-    /// Records the slice order of iterations `first..first + count` (count at
-    /// most BATCH) for the per-lane transport, barriers included; nothing for
-    /// the other transport.
+    /// Records the slice orders of iterations `first..first + count` (count at
+    /// most `order_slots`) into slots 0.. for the per-lane transport, barriers
+    /// included; nothing for the other transport.
     fn record_slice_order(&self, cmd: vk::CommandBuffer, first: u32, count: u32) {
         let Some([count_pass, place_pass]) = &self.pipelines.order else { return };
         let push = self.transport_push(first, 0);
@@ -269,7 +282,7 @@ impl VulkanRun {
             slices: self.slices,
             cost_slot: slot,
             large_capacity: self.large.capacity,
-            pad: 0,
+            order_slot: if self.order_slots > 0 { slot % self.order_slots } else { 0 },
         }
     }
 
@@ -350,13 +363,6 @@ impl VulkanRun {
                     t.reset(cmd);
                 }
                 barrier(&ctx, cmd);
-                // The whole batch's slice orders first (per-lane transport only):
-                // slices do not depend on the samples.
-                stamp(cmd, 0);
-                for (r, &c) in runs.iter().zip(&counts) {
-                    r.record_slice_order(cmd, r.iteration, c);
-                }
-                stamp(cmd, 1);
                 // The runs still stepping at iteration k of the batch, with their pushes
                 // (one list, reused).
                 let mut active: Vec<(&VulkanRun, TransportPush)> = Vec::with_capacity(runs.len());
@@ -368,7 +374,15 @@ impl VulkanRun {
                             .filter(|(_, &c)| k < c)
                             .map(|(r, _)| (*r, r.transport_push(r.iteration + k, k))),
                     );
-                    stamp(cmd, 2 + 4 * k);
+                    stamp(cmd, 4 * k);
+                    // The per-lane transport's slice orders, for as many
+                    // iterations as its slots hold (slices do not depend on
+                    // the samples).
+                    for (r, &c) in runs.iter().zip(&counts) {
+                        if k < c && r.order_slots > 0 && k % r.order_slots == 0 {
+                            r.record_slice_order(cmd, r.iteration + k, (c - k).min(r.order_slots));
+                        }
+                    }
                     for (r, _) in &active {
                         r.record_reset_large(cmd);
                     }
@@ -384,16 +398,16 @@ impl VulkanRun {
                         r.record_transport_pass(cmd, push);
                     }
                     barrier(&ctx, cmd);
-                    stamp(cmd, 2 + 4 * k + 1);
+                    stamp(cmd, 4 * k + 1);
                     for (r, push) in &active {
                         r.record_large(cmd, push);
                     }
-                    stamp(cmd, 2 + 4 * k + 2);
+                    stamp(cmd, 4 * k + 2);
                     for (r, _) in &active {
                         r.record_update_pass(cmd, r.iteration + k);
                     }
                     barrier(&ctx, cmd);
-                    stamp(cmd, 2 + 4 * k + 3);
+                    stamp(cmd, 4 * k + 3);
                 }
                 for (r, &c) in runs.iter().zip(&counts) {
                     if c == most {
@@ -450,11 +464,10 @@ impl VulkanRun {
             .map(|s| if s.count > 0 { s.squared as f64 / COST_SCALE / s.count as f64 } else { 0.0 })
             .collect();
         if let (Some(t), true) = (&self.timer, timed && count > 0) {
-            let ns = t.read_ns(2 + 4 * count)?;
-            // The batch's slice order counts with the transport.
-            self.profile.transport_ns += ns[1] - ns[0];
+            let ns = t.read_ns(4 * count)?;
+            // The slice order's passes count with the transport.
             for k in 0..count as usize {
-                let at = 2 + 4 * k;
+                let at = 4 * k;
                 self.profile.transport_ns += ns[at + 1] - ns[at];
                 self.profile.large_ns += ns[at + 2] - ns[at + 1];
                 self.profile.update_ns += ns[at + 3] - ns[at + 2];

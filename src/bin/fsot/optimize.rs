@@ -161,6 +161,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         float_pair_targets: env::float_pair_targets(),
         host_stopping_rule: env::host_stopping_rule(),
         unchecked_lane_limit: None,
+        slice_order_slots: None,
     };
     Ok(RunOptions {
         backend,
