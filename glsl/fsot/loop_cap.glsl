@@ -8,8 +8,9 @@
 // all and then drops the rest silently, which would leave a class's targets as
 // garbage. The passes are budgeted to stay under it (src/gpu/shape.rs); this
 // last loop, of a run-time count of at least 3, checks it: past the cap a loop
-// runs its first iteration only (the driver tests its limit at the end of each),
-// and the batch's count of cut invocations fails the run on the host.
+// still runs its first iteration, and no more (measured on llvmpipe: a count of
+// 1 did not tell), and the batch's count of cut invocations fails the run on the
+// host.
 void fsot_check_loop_cap() {
     uint want = pc.spp + 2u;
     uint ran = 0u;
