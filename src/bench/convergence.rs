@@ -141,9 +141,12 @@ impl SceneJudge {
     }
 }
 
-/// Runs the problem on one backend to the last checkpoint, judging each. `base`:
-/// the device and validation settings (its backend and Vulkan options are set
-/// here).
+/// Iterations of the untimed warm-up run before each backend's timed run.
+pub const WARM_UP_ITERATIONS: u32 = 2;
+
+/// Runs the problem on one backend to the last checkpoint, judging each, after
+/// an untimed warm-up run of WARM_UP_ITERATIONS. `base`: the device and
+/// validation settings (its backend and Vulkan options are set here).
 pub fn convergence(
     choice: BackendChoice,
     base: &RunOptions,
@@ -159,6 +162,17 @@ pub fn convergence(
     // Profiled: timestamps around every pass give the GPU's own time.
     let vulkan = VulkanOptions { profile: true, ..VulkanOptions::default() };
     let options = RunOptions { backend: choice, vulkan, ..base.clone() };
+    // An untimed warm-up of the same problem first, so that one-time costs are
+    // not counted as the optimisation's: llvmpipe compiles each shader at its
+    // first dispatch (8 s of 8.3 in a first quick run after a build), and the
+    // CPU path's thread pool starts.
+    let mut warm_up = settings;
+    warm_up.iterations = WARM_UP_ITERATIONS;
+    Run::start(tile, warm_up, None, options.clone())?.advance(
+        WARM_UP_ITERATIONS,
+        &CancelFlag::new(),
+        &mut |_| {},
+    )?;
     let mut run = Run::start(tile, settings, None, options)?;
     let kind = run.backend().kind();
     let machine = match kind {

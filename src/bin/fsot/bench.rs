@@ -144,7 +144,7 @@ fn json_error(e: serde_json::Error) -> Error {
 
 /// Convergence of each backend on the same problem, and time to quality.
 fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
-    use fsot::bench::convergence::{convergence, SceneJudge};
+    use fsot::bench::convergence::{convergence, SceneJudge, WARM_UP_ITERATIONS};
     let (tile, kernel, checkpoints): (Tile, &str, Vec<u32>) = if args.quick {
         (Tile::new(32, 32, 16, 1, 2)?, "taa", vec![2, 4, 8, 16, 32, 64, 128, 192])
     } else {
@@ -177,8 +177,9 @@ fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
     let mut table = format!(
         "# fsot bench{}\n\nfsot {} (commit {}) on {}.\n\nProblem: {}, kernel {}, seed {seed}; checkpoints of one run per backend (schedule \
          planned for the last). Objective: `fsot score` / white noise. pRelMSE: soft-shadow scene, 64 x 64, TAA, \
-         eye sigma 2.1, / white noise. Seconds: optimisation only, host wall time; GPU s: the GPU's own \
-         time from timestamp queries (Vulkan).\n\n\
+         eye sigma 2.1, / white noise. Seconds: optimisation only, host wall time, after an untimed \
+         warm-up run of {WARM_UP_ITERATIONS} iterations per backend (one-time costs such as llvmpipe's shader \
+         compilation); GPU s: the GPU's own time from timestamp queries (Vulkan).\n\n\
          | backend | machine | iteration | seconds | GPU s | objective | pRelMSE | perceived |\n\
          | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n",
         if args.quick { " --quick" } else { "" },
