@@ -162,9 +162,9 @@ layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_TARGETS) readonly buffer 
 layout(std430, set = 0, binding = FSOT_BINDING_SCATTER_VALUES) readonly buffer ScatterValues { float scatter_values[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_HASH_VALUES) writeonly buffer HashValues { uint hash_values[]; };
 layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleState schedule; };
-// The per-lane transport's slice order for a batch of iterations (slice_order.glsl
-// says where each part lies): per iteration, the slices in each class-size bin,
-// each slice's bin, and the slices in order of decreasing class size.
+// The per-lane transport's slice orders, in slots of one iteration each
+// (slice_order.glsl says where each part lies): per slot, the slices in each
+// class-size bin, each slice's bin, and the slices in order of decreasing class size.
 layout(std430, set = 0, binding = FSOT_BINDING_SLICE_ORDER) buffer SliceOrder { uint slice_order[]; };
 
 #endif

@@ -101,7 +101,7 @@ impl VulkanRun {
                 .unwrap_or_else(|| slice_order_slots(slices, info.max_storage_buffer_range)),
             false => 0,
         };
-        let order_words = if shape.per_lane { slice_order_words(slices, order_slots) } else { 0 };
+        let order_words = if order_slots > 0 { slice_order_words(slices, order_slots) } else { 0 };
         let buffers = RunBuffers::new(
             ctx,
             &tile,
@@ -211,7 +211,7 @@ impl VulkanRun {
             return Ok(None);
         }
         self.ctx.submit(|cmd| self.record_slice_order(cmd, iteration, 1))?;
-        // Iteration 0 of the batch: its ranks follow the bins and its slices' bins.
+        // Slot 0: its ranks follow every slot's bins and its own slices' bins.
         let first = (ORDER_BATCH * ORDER_BINS + self.slices) as usize;
         let bytes = ((first + self.slices as usize) * 4) as u64;
         let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
@@ -282,7 +282,7 @@ impl VulkanRun {
             slices: self.slices,
             cost_slot: slot,
             large_capacity: self.large.capacity,
-            order_slot: if self.order_slots > 0 { slot % self.order_slots } else { 0 },
+            order_slot: slot % self.order_slots.max(1),
         }
     }
 

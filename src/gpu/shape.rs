@@ -96,10 +96,11 @@ impl TransportShape {
             // stage's three sorts cost more than the workgroup transport saves
             // (bench/results/issue16-lane-dims.txt).
             None => {
+                let limit = Self::lane_limit(dims);
                 info.is_cpu()
                     && max_class <= LOOP_BUDGET / 2
-                    && (dims <= 2 || max_class <= Self::lane_limit(dims))
-                    && Self::large_fits(max_class, Self::lane_limit(dims), dims)
+                    && (dims <= 2 || max_class <= limit)
+                    && Self::large_fits(max_class, limit, dims)
             }
         };
         let local_max = if per_lane { Self::lane_limit(dims) } else { LOCAL_MAX };
