@@ -5,10 +5,18 @@
 // form for d <= 2 (common.glsl). Include after the pass's push constants `pc`.
 #ifndef FSOT_RANK_TARGETS_GLSL
 #define FSOT_RANK_TARGETS_GLSL
+// The tile's spp and d as the pass knows them: push constants unless the pass
+// defined these first as specialization constants (transport_common.glsl).
+#ifndef FSOT_PASS_SPP
+#define FSOT_PASS_SPP pc.spp
+#endif
+#ifndef FSOT_PASS_DIMS
+#define FSOT_PASS_DIMS pc.dims
+#endif
 #ifdef FSOT_ANY_DIMS
 #include "targets.glsl"
 #define FsotTargets FsotBox
-FsotTargets fsot_targets(FsotSlice s) { return fsot_box(s.theta, pc.dims); }
+FsotTargets fsot_targets(FsotSlice s) { return fsot_box(s.theta, FSOT_PASS_DIMS); }
 // (Ranks: a walk over the lower half, fsot_walk; each pass splits it.)
 // The projections' range: [low, low + width].
 float fsot_targets_low(FsotTargets z) { return r_float(z.offset); }

@@ -1,6 +1,9 @@
 // Helpers of the transport passes (transport.comp for GPUs, transport_lane.comp
 // for CPU implementations): same buffers, same rules. Include after bindings.glsl
-// and the pass's push-constant block `pc` (TransportPush).
+// and the pass's push-constant block `pc` (TransportPush). A pass may define
+// FSOT_PASS_SPP and FSOT_PASS_DIMS first as specialization constants (equal to
+// pc.spp and pc.dims), so that the compiler folds what depends on them
+// (defaults in rank_targets.glsl).
 #include "accumulate.glsl"
 #include "rank_targets.glsl"
 #include "loop_cap.glsl"
@@ -18,16 +21,17 @@ uint fsot_class_taps(FsotSlice s) {
 
 // Class size of a slice in samples: its taps times spp.
 uint fsot_class_size(FsotSlice s) {
-    return fsot_class_taps(s) * pc.spp;
+    return fsot_class_taps(s) * FSOT_PASS_SPP;
 }
 
 // Point index of class member i.
 uint fsot_class_point(FsotSlice s, uint i) {
-    // No integer division or remainder by a run-time value on the common path:
-    // on SIMD drivers (llvmpipe) each one is a scalar divide per lane. Taps and
-    // centres both lie in [0, size), so one conditional subtraction wraps.
-    uint tap_index = pc.spp == 1u ? i : i / pc.spp;
-    uint member = i - tap_index * pc.spp;
+    // No integer division or remainder by a run-time value where spp is a
+    // specialization constant: on SIMD drivers (llvmpipe) each one is a scalar
+    // divide per lane, both sides of a select included. Taps and centres both
+    // lie in [0, size), so one conditional subtraction wraps.
+    uint tap_index = FSOT_PASS_SPP == 1u ? i : i / FSOT_PASS_SPP;
+    uint member = i - tap_index * FSOT_PASS_SPP;
     uvec4 tap = taps[tap_index];
     uint x = s.cx + tap.x;
     uint y = s.cy + tap.y;
@@ -35,22 +39,22 @@ uint fsot_class_point(FsotSlice s, uint i) {
     x = x >= pc.width ? x - pc.width : x;
     y = y >= pc.height ? y - pc.height : y;
     f = f >= pc.frames ? f - pc.frames : f;
-    return ((f * pc.height + y) * pc.width + x) * pc.spp + member;
+    return ((f * pc.height + y) * pc.width + x) * FSOT_PASS_SPP + member;
 }
 
 // Projection of a point on the slice's direction after its toroidal shift.
 // For d <= 2 written out: a loop over a run-time count with indexed private
 // arrays costs gathers on SIMD drivers.
 float fsot_project(FsotSlice s, uint point) {
-    uint base = point * pc.dims;
+    uint base = point * FSOT_PASS_DIMS;
     float y = samples[base] - s.shift[0];
     float p = 0.0 + s.theta[0] * (y - floor(y));
-    if (pc.dims > 1u) {
+    if (FSOT_PASS_DIMS > 1u) {
         y = samples[base + 1u] - s.shift[1];
         p += s.theta[1] * (y - floor(y));
     }
 #ifdef FSOT_ANY_DIMS
-    for (uint k = 2u; k < pc.dims; ++k) {
+    for (uint k = 2u; k < FSOT_PASS_DIMS; ++k) {
         y = samples[base + k] - s.shift[k];
         p += s.theta[k] * (y - floor(y));
     }

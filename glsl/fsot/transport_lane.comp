@@ -14,6 +14,12 @@
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
+// The tile's spp and d (pc.spp and pc.dims, set by the host): known when the
+// pipeline is made, so no division per member and no branch on d is left.
+layout(constant_id = 4) const uint FSOT_LANE_SPP = 1u;
+layout(constant_id = 5) const uint FSOT_LANE_DIMS = 2u;
+#define FSOT_PASS_SPP FSOT_LANE_SPP
+#define FSOT_PASS_DIMS FSOT_LANE_DIMS
 #include "transport_common.glsl"
 #include "slice_order.glsl"
 
@@ -81,7 +87,7 @@ void heap_sort(uint n) {
 // Sends the member of rank i towards `target`; its squared distance.
 float send(FsotSlice s, uint i, float target) {
     float delta = target - sorted_key[i];
-    fsot_add_displacement(sorted_point[i], pc.dims, delta, s.theta);
+    fsot_add_displacement(sorted_point[i], FSOT_LANE_DIMS, delta, s.theta);
     return delta * delta;
 }
 
@@ -91,7 +97,7 @@ void main() {
         return; // past the slices, or the stopping rule ended the run
     }
     uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
-    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, FSOT_LANE_DIMS, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
     if (n < 2u) {
         return;

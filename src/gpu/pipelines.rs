@@ -6,6 +6,7 @@ use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
 use super::shape::{TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
+use crate::problem::Tile;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
 
 /// Descriptor sets of the gather: keyed by segment, or by projection.
@@ -61,10 +62,11 @@ fn pipeline(
 }
 
 impl RunPipelines {
-    /// The passes for this shape, sample dimension and accumulator, bound to
-    /// `buffers` (and the large-class sort's buffers).
+    /// The passes for this tile, shape, sample dimension and accumulator, bound
+    /// to `buffers` (and the large-class sort's buffers).
     pub fn new(
         ctx: &Context,
+        tile: &Tile,
         shape: &TransportShape,
         targets: Targets,
         float_acc: bool,
@@ -96,8 +98,15 @@ impl RunPipelines {
             (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
             (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
-        let local_max = shape.local_max;
-        let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, local_max];
+        // Constants 4 and 5 (spp, d) are the per-lane pass's; others ignore them.
+        let spec = [
+            shape.workgroup,
+            shape.slices_per_group,
+            shape.one_subgroup as u32,
+            shape.local_max,
+            tile.spp as u32,
+            tile.dims as u32,
+        ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
         let update =
