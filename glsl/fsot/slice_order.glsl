@@ -3,9 +3,10 @@
 // invocations as SIMD lanes, and a lane's loops run as long as the longest class
 // among its neighbours'; class sizes spread widely (a level's class holds the
 // taps above it), so neighbouring slices are given classes of about the same
-// size: invocation r of iteration k takes the slice of rank r in decreasing class
-// size (the largest first, so the last workgroups are the short ones). The slices
-// themselves, and so the sums of their displacements, are unchanged.
+// size: the lanes of one workgroup take slices of neighbouring ranks in
+// decreasing class size (the workgroups take the groups of ranks in a stride
+// that spreads large classes over all of the driver's threads: transport_lane.comp).
+// The slices themselves, and so the sums of their displacements, are unchanged.
 // Include after transport_common.glsl (`pc`: TransportPush).
 //
 // `slice_order` holds the orders of up to B iterations of S slices, in slots k

@@ -18,6 +18,9 @@ layout(push_constant) uniform Push { TransportPush pc; };
 // pipeline is made, so no division per member and no branch on d is left.
 layout(constant_id = 4) const uint FSOT_LANE_SPP = 1u;
 layout(constant_id = 5) const uint FSOT_LANE_DIMS = 2u;
+// Stride between the groups of ranks that neighbouring workgroups take (set by
+// the host: shape::group_stride; see main).
+layout(constant_id = 6) const uint FSOT_LANE_STRIDE = 1u;
 #define FSOT_PASS_SPP FSOT_LANE_SPP
 #define FSOT_PASS_DIMS FSOT_LANE_DIMS
 #include "transport_common.glsl"
@@ -92,9 +95,22 @@ float send(FsotSlice s, uint i, float target) {
 }
 
 void main() {
-    uint rank = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
-    if (rank >= pc.slices || schedule.stopped != 0u) {
+    // Workgroup p takes the group of ranks (p * FSOT_LANE_STRIDE) mod G, G the
+    // groups of the slices: a permutation (the host makes the stride coprime
+    // with G). llvmpipe hands each of its threads one contiguous share of a
+    // dispatch's workgroups, and in rank order the first share would hold the
+    // largest classes; the stride (near G / golden ratio) mixes large and small
+    // classes evenly into every share, while the lanes of one workgroup keep
+    // neighbouring ranks.
+    uint groups = (pc.slices + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
+    uint p = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    if (p >= groups || schedule.stopped != 0u) {
         return; // past the slices, or the stopping rule ended the run
+    }
+    uint q = (p * FSOT_LANE_STRIDE) % groups; // below 2^32: the stride is 1 past 65535 groups
+    uint rank = q * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    if (rank >= pc.slices) {
+        return; // the last group's lanes past the slices
     }
     uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
     FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, FSOT_LANE_DIMS, pc.width, pc.height, pc.frames);

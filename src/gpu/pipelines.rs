@@ -4,7 +4,7 @@
 use super::buffers::RunBuffers;
 use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
-use super::shape::{TransportShape, LARGE_WORKGROUP};
+use super::shape::{group_stride, TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
 use crate::problem::Tile;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
@@ -62,11 +62,13 @@ fn pipeline(
 }
 
 impl RunPipelines {
-    /// The passes for this tile, shape, sample dimension and accumulator, bound
-    /// to `buffers` (and the large-class sort's buffers).
+    /// The passes for this tile, slices per iteration, shape, sample dimension
+    /// and accumulator, bound to `buffers` (and the large-class sort's buffers).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
         tile: &Tile,
+        slices: u32,
         shape: &TransportShape,
         targets: Targets,
         float_acc: bool,
@@ -98,7 +100,8 @@ impl RunPipelines {
             (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
             (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
-        // Constants 4 and 5 (spp, d) are the per-lane pass's; others ignore them.
+        // Constants 4 to 6 (spp, d, the workgroups' stride) are the per-lane
+        // pass's; others ignore them.
         let spec = [
             shape.workgroup,
             shape.slices_per_group,
@@ -106,6 +109,7 @@ impl RunPipelines {
             shape.local_max,
             tile.spp as u32,
             tile.dims as u32,
+            group_stride(shape.groups(slices)),
         ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };

@@ -115,7 +115,8 @@ impl VulkanRun {
             order_words,
         )?;
         let sort = buffers.large_sort(ctx, &large)?;
-        let pipelines = RunPipelines::new(ctx, &tile, &shape, targets, float_acc, &buffers, sort.as_ref())?;
+        let pipelines =
+            RunPipelines::new(ctx, &tile, slices, &shape, targets, float_acc, &buffers, sort.as_ref())?;
         let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,

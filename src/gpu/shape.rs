@@ -237,6 +237,28 @@ impl TransportShape {
     }
 }
 
+/// The stride of the per-lane transport's workgroups through the groups of
+/// slice ranks (`FSOT_LANE_STRIDE`): workgroup p takes group (p * stride) mod
+/// `groups`. Coprime with `groups`, so every group is taken once, and near
+/// `groups` / golden ratio, so that any run of consecutive workgroups (llvmpipe
+/// gives each thread one) takes groups spread evenly over the ranks, large
+/// classes and small alike. 1 past 65535 groups (the shader's product p *
+/// stride stays below 2^32).
+pub fn group_stride(groups: u32) -> u32 {
+    if groups > 65535 {
+        return 1;
+    }
+    let gcd = |mut a: u64, mut b: u64| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let g = groups.max(1) as u64;
+    let start = ((g as f64 * 0.618_033_988_749_895).round() as u64).clamp(1, g);
+    (start..start + g).find(|&k| gcd(k % g, g) == 1).map_or(1, |k| (k % g).max(1) as u32)
+}
+
 /// `groups` workgroups as a dispatch, spread over y past 65535.
 pub fn two_d(groups: u32) -> [u32; 3] {
     let x = groups.clamp(1, 65535);
@@ -246,6 +268,43 @@ pub fn two_d(groups: u32) -> [u32; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_group_stride_takes_every_group_once_and_mixes_every_threads_share() {
+        // Group q of the ranks weighs as a class of size (G - q)^2 would: the
+        // largest first, as the slice order puts them. llvmpipe gives each of
+        // T threads one contiguous share of ceil(G / T) workgroups.
+        for groups in 1..3000u32 {
+            let stride = group_stride(groups);
+            let taken: Vec<u32> = (0..groups).map(|p| p * stride % groups).collect();
+            let mut sorted = taken.clone();
+            sorted.sort_unstable();
+            assert!(sorted.iter().copied().eq(0..groups), "G = {groups}: stride {stride} is no permutation");
+            if groups < 64 {
+                continue;
+            }
+            let weight = |q: u32| ((groups - q) as f64).powi(2);
+            let total: f64 = taken.iter().map(|&q| weight(q)).sum();
+            for (threads, tolerance) in [(2u32, 0.10), (3, 0.20), (4, 0.20)] {
+                let share = groups.div_ceil(threads) as usize;
+                let mean = total / groups as f64 * share as f64;
+                for part in taken.chunks_exact(share) {
+                    let work: f64 = part.iter().map(|&q| weight(q)).sum();
+                    assert!(
+                        (work / mean - 1.0).abs() <= tolerance,
+                        "G = {groups}, {threads} threads: a share does {:.2} of its part",
+                        work / mean
+                    );
+                }
+            }
+        }
+        // In rank order (stride 1) the first of two shares would do most of it.
+        let groups = 291u32;
+        let first: f64 = (0..groups / 2).map(|q| ((groups - q) as f64).powi(2)).sum();
+        let all: f64 = (0..groups).map(|q| ((groups - q) as f64).powi(2)).sum();
+        assert!(first / all > 0.85);
+        assert_eq!(group_stride(70_000), 1, "past 65535 groups the product would overflow");
+    }
 
     #[test]
     fn every_invocation_stays_under_the_loop_budget() {
