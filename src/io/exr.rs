@@ -72,7 +72,52 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
     let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
     let mut bytes = Cursor::new(Vec::new());
     image.write().to_buffered(&mut bytes).map_err(|e| Error::invalid(format!("EXR encoding failed: {e}")))?;
-    Ok(bytes.into_inner())
+    let mut bytes = bytes.into_inner();
+    sort_attributes(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Puts every header's attributes in name order, so that one mask always gives
+/// the same bytes: the exr crate writes a layer's other attributes from a
+/// HashMap, whose order changes from run to run. A header keeps its length,
+/// so the offset tables after the headers stay valid. The layout (OpenEXR file
+/// layout): magic and version (8 bytes); headers, each a run of attributes
+/// (name and type as null-terminated strings, a little-endian i32 size, the
+/// value) ended by a null byte; in a multi-part file (version bit 12) the run
+/// of headers ends with one more null byte.
+fn sort_attributes(bytes: &mut [u8]) -> Result<()> {
+    let bad = || Error::invalid("EXR encoding produced a header fsot cannot read back");
+    let multipart = bytes.get(4..8).ok_or_else(bad)?[1] & 0x10 != 0;
+    let mut at = 8;
+    loop {
+        let start = at;
+        let mut attributes: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+        while *bytes.get(at).ok_or_else(bad)? != 0 {
+            let name_end = string_end(bytes, at).ok_or_else(bad)?;
+            let type_end = string_end(bytes, name_end).ok_or_else(bad)?;
+            let size = bytes.get(type_end..type_end + 4).ok_or_else(bad)?;
+            let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
+            let end =
+                usize::try_from(size).ok().and_then(|s| (type_end + 4).checked_add(s)).ok_or_else(bad)?;
+            if end > bytes.len() {
+                return Err(bad());
+            }
+            attributes.push((bytes[at..name_end].to_vec(), at..end));
+            at = end;
+        }
+        attributes.sort_by(|a, b| a.0.cmp(&b.0));
+        let sorted: Vec<u8> = attributes.iter().flat_map(|(_, r)| bytes[r.clone()].to_vec()).collect();
+        bytes[start..at].copy_from_slice(&sorted);
+        at += 1; // the header's null byte
+        if !multipart || *bytes.get(at).ok_or_else(bad)? == 0 {
+            return Ok(());
+        }
+    }
+}
+
+/// The index past the null byte that ends the string at `at`.
+fn string_end(bytes: &[u8], at: usize) -> Option<usize> {
+    bytes.get(at..)?.iter().position(|&b| b == 0).map(|i| at + i + 1)
 }
 
 /// Writes a mask to `out` atomically.
