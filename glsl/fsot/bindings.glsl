@@ -122,7 +122,8 @@ struct LargeSegment {
 };
 
 layout(std430, set = 0, binding = FSOT_BINDING_SAMPLES) buffer Samples { float samples[]; };
-// Kernel taps in decreasing weight: dx, dy, dt, level threshold.
+// Kernel taps in decreasing weight: offsets packed in one word (fsot_tap_offsets),
+// two unused words, level threshold.
 layout(std430, set = 0, binding = FSOT_BINDING_TAPS) readonly buffer Taps { uvec4 taps[]; };
 #ifdef FSOT_FLOAT_ATOMICS
 layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { float acc[]; };

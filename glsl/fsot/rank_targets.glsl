@@ -5,13 +5,23 @@
 // form for d <= 2 (common.glsl). Include after the pass's push constants `pc`.
 #ifndef FSOT_RANK_TARGETS_GLSL
 #define FSOT_RANK_TARGETS_GLSL
-// The tile's spp and d as the pass knows them: push constants unless the pass
-// defined these first as specialization constants (transport_common.glsl).
+// The tile's spp, d and packed taps' field widths as the pass knows them: from
+// push constants unless the pass defined these first as specialization
+// constants (transport_common.glsl).
 #ifndef FSOT_PASS_SPP
 #define FSOT_PASS_SPP pc.spp
 #endif
 #ifndef FSOT_PASS_DIMS
 #define FSOT_PASS_DIMS pc.dims
+#endif
+// Bits of a coordinate in [0, size) (0 for a size of 1): src/gpu/layout.rs
+// axis_bits; the packed taps' fields (transport_common.glsl: fsot_tap_offsets).
+uint fsot_axis_bits(uint size) {
+    return size > 1u ? uint(findMSB(size - 1u)) + 1u : 0u;
+}
+#ifndef FSOT_PASS_X_BITS
+#define FSOT_PASS_X_BITS fsot_axis_bits(pc.width)
+#define FSOT_PASS_Y_BITS fsot_axis_bits(pc.height)
 #endif
 #ifdef FSOT_ANY_DIMS
 #include "targets.glsl"

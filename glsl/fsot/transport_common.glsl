@@ -1,9 +1,9 @@
 // Helpers of the transport passes (transport.comp for GPUs, transport_lane.comp
 // for CPU implementations): same buffers, same rules. Include after bindings.glsl
 // and the pass's push-constant block `pc` (TransportPush). A pass may define
-// FSOT_PASS_SPP and FSOT_PASS_DIMS first as specialization constants (equal to
-// pc.spp and pc.dims), so that the compiler folds what depends on them
-// (defaults in rank_targets.glsl).
+// FSOT_PASS_SPP, FSOT_PASS_DIMS, FSOT_PASS_X_BITS and FSOT_PASS_Y_BITS first as
+// specialization constants (equal to what the defaults in rank_targets.glsl
+// compute from `pc`), so that the compiler folds what depends on them.
 #include "accumulate.glsl"
 #include "rank_targets.glsl"
 #include "loop_cap.glsl"
@@ -24,6 +24,15 @@ uint fsot_class_size(FsotSlice s) {
     return fsot_class_taps(s) * FSOT_PASS_SPP;
 }
 
+// A tap's offsets (dx, dy, dt) from its packed word (src/gpu/layout.rs pack_tap):
+// one word per member read where three would be (on a SIMD driver each read is
+// a loop over the lanes).
+uvec3 fsot_tap_offsets(uint packed) {
+    uint bx = FSOT_PASS_X_BITS;
+    uint by = FSOT_PASS_Y_BITS;
+    return uvec3(packed & ((1u << bx) - 1u), (packed >> bx) & ((1u << by) - 1u), packed >> (bx + by));
+}
+
 // Point index of class member i.
 uint fsot_class_point(FsotSlice s, uint i) {
     // No integer division or remainder by a run-time value where spp is a
@@ -32,7 +41,7 @@ uint fsot_class_point(FsotSlice s, uint i) {
     // lie in [0, size), so one conditional subtraction wraps.
     uint tap_index = FSOT_PASS_SPP == 1u ? i : i / FSOT_PASS_SPP;
     uint member = i - tap_index * FSOT_PASS_SPP;
-    uvec4 tap = taps[tap_index];
+    uvec3 tap = fsot_tap_offsets(taps[tap_index].x);
     uint x = s.cx + tap.x;
     uint y = s.cy + tap.y;
     uint f = s.ct + tap.z;

@@ -15,14 +15,20 @@
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 // The tile's spp and d (pc.spp and pc.dims, set by the host): known when the
-// pipeline is made, so no division per member and no branch on d is left.
+// pipeline is made, so no division per member, no branch on d and no variable
+// shift is left.
 layout(constant_id = 4) const uint FSOT_LANE_SPP = 1u;
 layout(constant_id = 5) const uint FSOT_LANE_DIMS = 2u;
 // Stride between the groups of ranks that neighbouring workgroups take (set by
 // the host: shape::group_stride; see main).
 layout(constant_id = 6) const uint FSOT_LANE_STRIDE = 1u;
+// The packed taps' widths of dx and dy (src/gpu/layout.rs axis_bits).
+layout(constant_id = 7) const uint FSOT_LANE_X_BITS = 5u;
+layout(constant_id = 8) const uint FSOT_LANE_Y_BITS = 5u;
 #define FSOT_PASS_SPP FSOT_LANE_SPP
 #define FSOT_PASS_DIMS FSOT_LANE_DIMS
+#define FSOT_PASS_X_BITS FSOT_LANE_X_BITS
+#define FSOT_PASS_Y_BITS FSOT_LANE_Y_BITS
 #include "transport_common.glsl"
 #include "slice_order.glsl"
 

@@ -2,7 +2,7 @@
 //! from the tile, the kernel and the device, with the large-class stage's
 //! capacity.
 
-use super::layout::{binding, CostSlot, LargeMetaHead, LargeSegment, RuleState};
+use super::layout::{binding, pack_tap, CostSlot, LargeMetaHead, LargeSegment, RuleState};
 use super::BATCH;
 use crate::error::{Error, Result};
 use crate::kernel::Kernel;
@@ -122,8 +122,13 @@ impl RunBuffers {
         let acc = device(fits("accumulators", values * if float_acc { 4 } else { 8 })?, "accumulators")?;
         let first = device(values * 4, "state-first")?;
         let second = device(if adam { values * 4 } else { 4 }, "state-second")?;
-        let table: Vec<u32> =
-            kernel.taps.iter().zip(thresholds).flat_map(|(t, &q)| [t.dx, t.dy, t.dt, q]).collect();
+        let mut table: Vec<u32> = Vec::with_capacity(kernel.taps.len() * 4);
+        for (t, &q) in kernel.taps.iter().zip(thresholds) {
+            let packed = pack_tap(tile, t.dx, t.dy, t.dt).ok_or_else(|| {
+                Error::invalid(format!("tile {}: a kernel tap's offsets do not fit 32 bits", tile.describe()))
+            })?;
+            table.extend([packed, 0, 0, q]);
+        }
         let taps = device(table.len() as u64 * 4, "kernel-taps")?;
         let costs = device(BATCH as u64 * std::mem::size_of::<CostSlot>() as u64, "costs")?;
         let segment = std::mem::size_of::<LargeSegment>() as u64;

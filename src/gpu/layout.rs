@@ -4,6 +4,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::problem::Tile;
+
 /// Binding indices (`FSOT_BINDING_*`); every fsot pass uses this one layout.
 pub mod binding {
     pub const SAMPLES: u32 = 0;
@@ -76,9 +78,60 @@ pub fn slice_order_slots(slices: u32, max_bytes: u64) -> u32 {
     (1..=ORDER_BATCH).rev().find(|&s| slice_order_words(slices, s) * 4 <= max_bytes).unwrap_or(1)
 }
 
+/// Bits of a coordinate in [0, size) in a packed tap (`fsot_axis_bits`): 0
+/// for a size of 1.
+pub fn axis_bits(size: u32) -> u32 {
+    if size <= 1 {
+        0
+    } else {
+        32 - (size - 1).leading_zeros()
+    }
+}
+
+/// A kernel tap's offsets (each below its axis's size) packed in one word, as
+/// the `Taps` table holds them (`fsot_tap_offsets` unpacks): dx in the low
+/// `axis_bits(width)` bits, then dy in `axis_bits(height)` bits, then dt. None
+/// where they do not fit 32 bits, which no tile of at most `MAX_POINTS` points
+/// reaches (each axis takes under one bit more than its log2, and the sizes
+/// multiply to at most 2^28).
+pub fn pack_tap(tile: &Tile, dx: u32, dy: u32, dt: u32) -> Option<u32> {
+    let (bx, by, bt) =
+        (axis_bits(tile.width as u32), axis_bits(tile.height as u32), axis_bits(tile.frames as u32));
+    let fits = dx < tile.width as u32 && dy < tile.height as u32 && dt < tile.frames as u32;
+    (fits && bx + by + bt <= 32)
+        .then(|| dx | dy.checked_shl(bx).unwrap_or(0) | dt.checked_shl(bx + by).unwrap_or(0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn taps_pack_into_one_word_on_every_tile_and_unpack_as_the_shader_does() {
+        // The shader's unpacking (fsot_tap_offsets), written out.
+        let unpack = |tile: &Tile, p: u32| {
+            let (bx, by) = (axis_bits(tile.width as u32), axis_bits(tile.height as u32));
+            (p & ((1u64 << bx) - 1) as u32, (p >> bx) & ((1u64 << by) - 1) as u32, p >> (bx + by))
+        };
+        for (w, h, t) in
+            [(1, 1, 1), (32, 32, 16), (5, 3, 7), (64, 1, 1), (256, 256, 64), (1 << 14, 1 << 14, 1)]
+        {
+            let tile = Tile::new(w, h, t, 1, 2).unwrap();
+            for (dx, dy, dt) in [(0, 0, 0), (w - 1, h - 1, t - 1), (w / 2, h / 3, t / 2), (1 % w, 0, t - 1)] {
+                let (dx, dy, dt) = (dx as u32, dy as u32, dt as u32);
+                let p = pack_tap(&tile, dx, dy, dt).unwrap();
+                assert_eq!(unpack(&tile, p), (dx, dy, dt), "{w}x{h}x{t}");
+            }
+        }
+        // The worst tiles MAX_POINTS allows: every axis just past a power of two.
+        for (w, h, t) in
+            [(513, 511, 1023), (1025, 1025, 255), (2049, 2049, 63), ((1 << 28) - 1, 1, 1), (16385, 16383, 1)]
+        {
+            let tile = Tile::new(w, h, t, 1, 1).unwrap();
+            assert!(pack_tap(&tile, w as u32 - 1, h as u32 - 1, t as u32 - 1).is_some(), "{w}x{h}x{t}");
+        }
+        assert_eq!(pack_tap(&Tile::new(4, 4, 4, 1, 1).unwrap(), 4, 0, 0), None, "an offset past its axis");
+    }
 
     #[test]
     fn slice_orders_fill_a_binding_at_most() {

@@ -2,7 +2,7 @@
 //! fsot layout.
 
 use super::buffers::RunBuffers;
-use super::layout::{binding, TransportPush, UpdatePush};
+use super::layout::{axis_bits, binding, TransportPush, UpdatePush};
 use super::shaders;
 use super::shape::{group_stride, TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
@@ -100,8 +100,8 @@ impl RunPipelines {
             (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
             (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
-        // Constants 4 to 6 (spp, d, the workgroups' stride) are the per-lane
-        // pass's; others ignore them.
+        // Constants 4 to 8 (spp, d, the workgroups' stride, the packed taps'
+        // widths) are the per-lane pass's; others ignore them.
         let spec = [
             shape.workgroup,
             shape.slices_per_group,
@@ -110,6 +110,8 @@ impl RunPipelines {
             tile.spp as u32,
             tile.dims as u32,
             group_stride(shape.groups(slices)),
+            axis_bits(tile.width as u32),
+            axis_bits(tile.height as u32),
         ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
