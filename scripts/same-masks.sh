@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the same optimizations with two fsot binaries and compares the masks'
-# samples bit for bit (examples/same_samples.rs; the EXR files themselves differ
-# run to run in bytes that are not samples). CPU runs, and --deterministic Vulkan
+# samples bit for bit (examples/same_samples.rs; the EXR files also carry each
+# run's metadata, which may differ). CPU runs, and --deterministic Vulkan
 # runs on whatever device VK_DRIVER_FILES / --device selects (lavapipe in CI).
 #   scripts/same-masks.sh OLD_FSOT NEW_FSOT
 set -euo pipefail
