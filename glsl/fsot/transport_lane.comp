@@ -38,20 +38,21 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 
-// Private arrays: the members in class order, each as its projection and
-// point packed in 64 bits (one private-memory access where two would be: on a
-// SIMD driver each is a loop over the lanes); one counter per bucket; the
-// members in sorted order.
+// Private arrays: the members in class order and in sorted order, each as its
+// projection's sortable key (fsot_float_key) above its point in 64 bits, so
+// that one comparison of two members orders them by projection, ties by point
+// (the CPU's order), and one private-memory access moves a member where two
+// would (on a SIMD driver each is a loop over the lanes); one counter per
+// bucket.
 uint64_t member[FSOT_LANE_MAX];
 uint bucket_start[FSOT_LANE_MAX];
-float sorted_key[FSOT_LANE_MAX];
-uint sorted_point[FSOT_LANE_MAX];
+uint64_t sorted[FSOT_LANE_MAX];
 
 uint64_t pack_member(float key, uint point) {
-    return (uint64_t(floatBitsToUint(key)) << 32) | uint64_t(point);
+    return (uint64_t(fsot_float_key(key)) << 32) | uint64_t(point);
 }
 float member_key(uint64_t m) {
-    return uintBitsToFloat(uint(m >> 32));
+    return fsot_key_float(uint(m >> 32));
 }
 uint member_point(uint64_t m) {
     return uint(m);
@@ -64,20 +65,17 @@ uint lane_bucket(float key_value, float offset, float scale, uint n) {
     return min(uint(max(key_value - offset, 0.0) * scale), n - 1u);
 }
 
-// Heap sort of sorted_key/sorted_point in place: the fallback when keys pile
-// into few buckets.
+// Heap sort of `sorted` in place: the fallback when keys pile into few buckets.
 void sift_down(uint root, uint end) {
     while (2u * root + 1u < end) {
         uint child = 2u * root + 1u;
-        if (child + 1u < end
-            && fsot_before(sorted_key[child], sorted_point[child], sorted_key[child + 1u], sorted_point[child + 1u])) {
+        if (child + 1u < end && sorted[child] < sorted[child + 1u]) {
             child += 1u;
         }
-        if (!fsot_before(sorted_key[root], sorted_point[root], sorted_key[child], sorted_point[child])) {
+        if (!(sorted[root] < sorted[child])) {
             return;
         }
-        float tk = sorted_key[root]; sorted_key[root] = sorted_key[child]; sorted_key[child] = tk;
-        uint tv = sorted_point[root]; sorted_point[root] = sorted_point[child]; sorted_point[child] = tv;
+        uint64_t t = sorted[root]; sorted[root] = sorted[child]; sorted[child] = t;
         root = child;
     }
 }
@@ -87,16 +85,16 @@ void heap_sort(uint n) {
         sift_down(i - 1u, n);
     }
     for (uint end = n - 1u; end > 0u; --end) {
-        float tk = sorted_key[0]; sorted_key[0] = sorted_key[end]; sorted_key[end] = tk;
-        uint tv = sorted_point[0]; sorted_point[0] = sorted_point[end]; sorted_point[end] = tv;
+        uint64_t t = sorted[0]; sorted[0] = sorted[end]; sorted[end] = t;
         sift_down(0u, end);
     }
 }
 
 // Sends the member of rank i towards `target`; its squared distance.
 float send(FsotSlice s, uint i, float target) {
-    float delta = target - sorted_key[i];
-    fsot_add_displacement(sorted_point[i], FSOT_LANE_DIMS, delta, s.theta);
+    uint64_t m = sorted[i];
+    float delta = target - member_key(m);
+    fsot_add_displacement(member_point(m), FSOT_LANE_DIMS, delta, s.theta);
     return delta * delta;
 }
 
@@ -162,8 +160,7 @@ void main() {
         uint b = lane_bucket(member_key(m), low, scale, n);
         uint at = bucket_start[b];
         bucket_start[b] = at + 1u;
-        sorted_key[at] = member_key(m);
-        sorted_point[at] = member_point(m);
+        sorted[at] = m;
     }
     // Insertion sort: each key moves past the larger keys of its own bucket,
     // so at most `pairs` moves in all. Where keys pile into few buckets
@@ -173,24 +170,19 @@ void main() {
         // The largest key so far stays in registers: most keys are already in
         // place (a different bucket from their predecessor), so they cost one
         // comparison and no private-memory traffic.
-        float last_key = sorted_key[0];
-        uint last_point = sorted_point[0];
+        uint64_t last = sorted[0];
         for (uint i = 1u; i < n; ++i) {
-            float k = sorted_key[i];
-            uint v = sorted_point[i];
-            if (!fsot_before(k, v, last_key, last_point)) {
-                last_key = k;
-                last_point = v;
+            uint64_t m = sorted[i];
+            if (!(m < last)) {
+                last = m;
                 continue;
             }
             uint j = i;
             do {
-                sorted_key[j] = sorted_key[j - 1u];
-                sorted_point[j] = sorted_point[j - 1u];
+                sorted[j] = sorted[j - 1u];
                 --j;
-            } while (j > 0u && fsot_before(k, v, sorted_key[j - 1u], sorted_point[j - 1u]));
-            sorted_key[j] = k;
-            sorted_point[j] = v;
+            } while (j > 0u && m < sorted[j - 1u]);
+            sorted[j] = m;
         }
     } else {
         heap_sort(n);
