@@ -217,7 +217,12 @@ fn float_atomics_agree_with_the_cpu_too() {
         return;
     }
     drop(ctx);
-    compare_one_iteration(Tile::new(16, 16, 8, 1, 2).unwrap(), "perceptual-taa", false);
+    let mask = Mask::white(Tile::new(16, 16, 8, 1, 2).unwrap(), 21);
+    for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        let options =
+            VulkanOptions { float_atomics: true, transport: Some(transport), ..VulkanOptions::default() };
+        compare_with_options(&mask, "perceptual-taa", options);
+    }
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]

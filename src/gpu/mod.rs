@@ -31,9 +31,14 @@ pub const BATCH: u32 = 32;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct VulkanOptions {
     /// Fixed-point int64 atomics: bit-identical run to run. Otherwise float
-    /// atomic add where the device has it (faster on some devices, not
-    /// reproducible bit for bit).
+    /// atomic add where a GPU has it (faster on some GPUs, not reproducible bit
+    /// for bit); CPU implementations (lavapipe) take fixed point either way
+    /// unless `float_atomics` says otherwise: there it is as fast or faster
+    /// (`bench/results/issue16-lane-taps-transport.txt`) and reproducible.
     pub deterministic: bool,
+    /// Float atomics also on a CPU implementation that has them (ignored with
+    /// `deterministic`): for tests and comparisons.
+    pub float_atomics: bool,
     /// Time each pass with timestamp queries.
     pub profile: bool,
     /// Which transport pass to use: None picks by device (per lane on CPU

@@ -85,7 +85,8 @@ impl VulkanRun {
         let kernel = Kernel::new(settings.kernel, &tile);
         let (slices, hits_per_value) = slices_and_hits(&tile, &kernel, &settings)?;
         let samples = initial_samples(&tile, &settings, init)?;
-        let float_acc = !options.deterministic && info.float_atomic_add;
+        let float_acc =
+            !options.deterministic && info.float_atomic_add && (!info.is_cpu() || options.float_atomics);
         let max_class = (kernel.taps.len() * tile.spp) as u32;
         let shape = transport_shape(ctx, max_class, tile.dims, &options)?;
         let local_max = shape.local_max;
