@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The Vulkan transport pass's time per iteration (timestamps, --profile), an old
 # binary against a new one, alternating, six runs each, in both scatter modes
-# (float atomics, lavapipe's default, and --deterministic's int64 fixed point):
+# (float atomics, asked for with FSOT_FLOAT_ATOMICS=1 since 8bd64e6 made fixed
+# point lavapipe's default (builds before it take float atomics by default and
+# ignore the variable), and --deterministic's int64 fixed point):
 # 32x32x16, d = 2, taa, seed 7, 192 iterations. Medians at the end.
 # Usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE   (lavapipe unless VK_DRIVER_FILES says otherwise)
 set -euo pipefail
@@ -25,7 +27,7 @@ head="old $($old --version | head -1) ($old), new $($new --version | head -1) ($
         exe=$old
         [ "$bin" = new ] && exe=$new
         rm -f "$work/m.exr"
-        ms=$("$exe" optimize --backend vulkan "${flag[@]}" --size 32x32x16 --dims 2 --kernel taa --seed 7 \
+        ms=$(FSOT_FLOAT_ATOMICS=$([ "$mode" = float ] && echo 1 || echo 0) "$exe" optimize --backend vulkan "${flag[@]}" --size 32x32x16 --dims 2 --kernel taa --seed 7 \
           --iterations 192 --profile --out "$work/m.exr" 2>&1 | grep -o 'transport [0-9.]* ms' | awk '{print $2}')
         echo "$ms" >> "$work/$bin"
         echo "$mode, round $round, $bin: transport $ms ms per iteration"
