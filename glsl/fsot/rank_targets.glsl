@@ -5,28 +5,15 @@
 // form for d <= 2 (common.glsl). Include after the pass's push constants `pc`.
 #ifndef FSOT_RANK_TARGETS_GLSL
 #define FSOT_RANK_TARGETS_GLSL
-// The tile's spp, d and packed taps' field widths as the pass knows them: from
-// push constants unless the pass defined these first as specialization
-// constants (transport_common.glsl).
-#ifndef FSOT_PASS_SPP
-#define FSOT_PASS_SPP pc.spp
-#endif
-#ifndef FSOT_PASS_DIMS
-#define FSOT_PASS_DIMS pc.dims
-#endif
 // Bits of a coordinate in [0, size) (0 for a size of 1): src/gpu/layout.rs
 // axis_bits; the packed taps' fields (transport_common.glsl: fsot_tap_offsets).
 uint fsot_axis_bits(uint size) {
     return size > 1u ? uint(findMSB(size - 1u)) + 1u : 0u;
 }
-#ifndef FSOT_PASS_X_BITS
-#define FSOT_PASS_X_BITS fsot_axis_bits(pc.width)
-#define FSOT_PASS_Y_BITS fsot_axis_bits(pc.height)
-#endif
 #ifdef FSOT_ANY_DIMS
 #include "targets.glsl"
 #define FsotTargets FsotBox
-FsotTargets fsot_targets(FsotSlice s) { return fsot_box(s.theta, FSOT_PASS_DIMS); }
+FsotTargets fsot_targets(FsotSlice s) { return fsot_box(s.theta, pc.dims); }
 // (Ranks: a walk over the lower half, fsot_walk; each pass splits it.)
 // The projections' range: [low, low + width].
 float fsot_targets_low(FsotTargets z) { return r_float(z.offset); }

@@ -1,9 +1,9 @@
 // Helpers of the transport passes (transport.comp for GPUs, transport_lane.comp
 // for CPU implementations): same buffers, same rules. Include after bindings.glsl
-// and the pass's push-constant block `pc` (TransportPush). A pass may define
-// FSOT_PASS_SPP, FSOT_PASS_DIMS, FSOT_PASS_X_BITS and FSOT_PASS_Y_BITS first as
-// specialization constants (equal to what the defaults in rank_targets.glsl
-// compute from `pc`), so that the compiler folds what depends on them.
+// and the pass's push-constant block `pc` (TransportPush). Nothing here depends
+// on a specialization constant that changes with the tile: llvmpipe compiles a
+// pipeline at its first dispatch (seconds for these passes), and a pipeline
+// that differs from run to run is compiled again for each run.
 #include "accumulate.glsl"
 #include "rank_targets.glsl"
 #include "loop_cap.glsl"
@@ -21,26 +21,31 @@ uint fsot_class_taps(FsotSlice s) {
 
 // Class size of a slice in samples: its taps times spp.
 uint fsot_class_size(FsotSlice s) {
-    return fsot_class_taps(s) * FSOT_PASS_SPP;
+    return fsot_class_taps(s) * pc.spp;
 }
 
 // A tap's offsets (dx, dy, dt) from its packed word (src/gpu/layout.rs pack_tap):
 // one word per member read where three would be (on a SIMD driver each read is
 // a loop over the lanes).
 uvec3 fsot_tap_offsets(uint packed) {
-    uint bx = FSOT_PASS_X_BITS;
-    uint by = FSOT_PASS_Y_BITS;
+    uint bx = fsot_axis_bits(pc.width);
+    uint by = fsot_axis_bits(pc.height);
     return uvec3(packed & ((1u << bx) - 1u), (packed >> bx) & ((1u << by) - 1u), packed >> (bx + by));
 }
 
 // Point index of class member i.
 uint fsot_class_point(FsotSlice s, uint i) {
-    // No integer division or remainder by a run-time value where spp is a
-    // specialization constant: on SIMD drivers (llvmpipe) each one is a scalar
-    // divide per lane, both sides of a select included. Taps and centres both
-    // lie in [0, size), so one conditional subtraction wraps.
-    uint tap_index = FSOT_PASS_SPP == 1u ? i : i / FSOT_PASS_SPP;
-    uint member = i - tap_index * FSOT_PASS_SPP;
+    // No integer division by a run-time value: on SIMD drivers (llvmpipe) each
+    // one is a scalar divide per lane, both sides of a select included. i / spp
+    // is the high word of i * m, m = floor((2^32 - 1) / spp) + 1 (the same for
+    // every member, so computed once), exact while i * spp < 2^32
+    // (src/gpu/layout.rs: spp_reciprocal; a class holds at most taps x spp
+    // members). Taps and centres both lie in [0, size), so one conditional
+    // subtraction wraps.
+    uint high, low;
+    umulExtended(i, 0xffffffffu / pc.spp + 1u, high, low);
+    uint tap_index = pc.spp == 1u ? i : high;
+    uint member = i - tap_index * pc.spp;
     uvec3 tap = fsot_tap_offsets(taps[tap_index].x);
     uint x = s.cx + tap.x;
     uint y = s.cy + tap.y;
@@ -48,22 +53,22 @@ uint fsot_class_point(FsotSlice s, uint i) {
     x = x >= pc.width ? x - pc.width : x;
     y = y >= pc.height ? y - pc.height : y;
     f = f >= pc.frames ? f - pc.frames : f;
-    return ((f * pc.height + y) * pc.width + x) * FSOT_PASS_SPP + member;
+    return ((f * pc.height + y) * pc.width + x) * pc.spp + member;
 }
 
 // Projection of a point on the slice's direction after its toroidal shift.
 // For d <= 2 written out: a loop over a run-time count with indexed private
 // arrays costs gathers on SIMD drivers.
 float fsot_project(FsotSlice s, uint point) {
-    uint base = point * FSOT_PASS_DIMS;
+    uint base = point * pc.dims;
     float y = samples[base] - s.shift[0];
     float p = 0.0 + s.theta[0] * (y - floor(y));
-    if (FSOT_PASS_DIMS > 1u) {
+    if (pc.dims > 1u) {
         y = samples[base + 1u] - s.shift[1];
         p += s.theta[1] * (y - floor(y));
     }
 #ifdef FSOT_ANY_DIMS
-    for (uint k = 2u; k < FSOT_PASS_DIMS; ++k) {
+    for (uint k = 2u; k < pc.dims; ++k) {
         y = samples[base + k] - s.shift[k];
         p += s.theta[k] * (y - floor(y));
     }

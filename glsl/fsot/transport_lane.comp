@@ -14,21 +14,6 @@
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
-// The tile's spp and d (pc.spp and pc.dims, set by the host): known when the
-// pipeline is made, so no division per member, no branch on d and no variable
-// shift is left.
-layout(constant_id = 4) const uint FSOT_LANE_SPP = 1u;
-layout(constant_id = 5) const uint FSOT_LANE_DIMS = 2u;
-// Stride between the groups of ranks that neighbouring workgroups take (set by
-// the host: shape::group_stride; see main).
-layout(constant_id = 6) const uint FSOT_LANE_STRIDE = 1u;
-// The packed taps' widths of dx and dy (src/gpu/layout.rs axis_bits).
-layout(constant_id = 7) const uint FSOT_LANE_X_BITS = 5u;
-layout(constant_id = 8) const uint FSOT_LANE_Y_BITS = 5u;
-#define FSOT_PASS_SPP FSOT_LANE_SPP
-#define FSOT_PASS_DIMS FSOT_LANE_DIMS
-#define FSOT_PASS_X_BITS FSOT_LANE_X_BITS
-#define FSOT_PASS_Y_BITS FSOT_LANE_Y_BITS
 #include "transport_common.glsl"
 #include "slice_order.glsl"
 
@@ -94,12 +79,12 @@ void heap_sort(uint n) {
 float send(FsotSlice s, uint i, float target) {
     uint64_t m = sorted[i];
     float delta = target - member_key(m);
-    fsot_add_displacement(member_point(m), FSOT_LANE_DIMS, delta, s.theta);
+    fsot_add_displacement(member_point(m), pc.dims, delta, s.theta);
     return delta * delta;
 }
 
 void main() {
-    // Workgroup p takes the group of ranks (p * FSOT_LANE_STRIDE) mod G, G the
+    // Workgroup p takes the group of ranks (p * pc.lane_stride) mod G, G the
     // groups of the slices: a permutation (the host makes the stride coprime
     // with G). llvmpipe hands each of its threads one contiguous share of a
     // dispatch's workgroups, and in rank order the first share would hold the
@@ -111,13 +96,13 @@ void main() {
     if (p >= groups || schedule.stopped != 0u) {
         return; // past the slices, or the stopping rule ended the run
     }
-    uint q = (p * FSOT_LANE_STRIDE) % groups; // below 2^32: the stride is 1 past 65535 groups
+    uint q = (p * pc.lane_stride) % groups; // below 2^32: the stride is 1 past 65535 groups
     uint rank = q * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
     if (rank >= pc.slices) {
         return; // the last group's lanes past the slices
     }
     uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
-    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, FSOT_LANE_DIMS, pc.width, pc.height, pc.frames);
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
     if (n < 2u) {
         return;

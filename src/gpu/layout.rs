@@ -78,6 +78,13 @@ pub fn slice_order_slots(slices: u32, max_bytes: u64) -> u32 {
     (1..=ORDER_BATCH).rev().find(|&s| slice_order_words(slices, s) * 4 <= max_bytes).unwrap_or(1)
 }
 
+/// The multiplier by which the transport passes divide a class member's index
+/// by spp (`fsot_class_point`): i / spp is the high word of i * m, exact while
+/// i * spp < 2^32. Unused for spp = 1 (the shader takes i itself).
+pub fn spp_reciprocal(spp: u32) -> u32 {
+    (u32::MAX / spp.max(1)).wrapping_add(1)
+}
+
 /// Bits of a coordinate in [0, size) in a packed tap (`fsot_axis_bits`): 0
 /// for a size of 1.
 pub fn axis_bits(size: u32) -> u32 {
@@ -105,6 +112,20 @@ pub fn pack_tap(tile: &Tile, dx: u32, dy: u32, dt: u32) -> Option<u32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_member_index_divides_by_spp_exactly_through_the_reciprocal() {
+        // Every spp the tiles allow, every index of a class of up to 2^20 taps
+        // (sampled past 2^16), against integer division.
+        for spp in 2..=crate::problem::MAX_SPP as u32 {
+            let m = spp_reciprocal(spp) as u64;
+            let last = (1u64 << 20) * spp as u64;
+            let indices = (0..1u64 << 16).chain((1u64 << 16..last).step_by(997)).chain([last - 1]);
+            for i in indices {
+                assert_eq!((i * m) >> 32, i / spp as u64, "spp {spp}, index {i}");
+            }
+        }
+    }
 
     #[test]
     fn taps_pack_into_one_word_on_every_tile_and_unpack_as_the_shader_does() {
@@ -163,6 +184,9 @@ pub struct TransportPush {
     pub large_capacity: u32,
     /// The per-lane transport's slice order slot (`slice_order.glsl`).
     pub order_slot: u32,
+    /// The per-lane transport's stride through its groups of ranks
+    /// (`shape::group_stride`).
+    pub lane_stride: u32,
 }
 
 /// `UpdatePush`.

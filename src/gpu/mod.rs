@@ -33,8 +33,9 @@ pub struct VulkanOptions {
     /// Fixed-point int64 atomics: bit-identical run to run. Otherwise float
     /// atomic add where a GPU has it (faster on some GPUs, not reproducible bit
     /// for bit); CPU implementations (lavapipe) take fixed point either way
-    /// unless `float_atomics` says otherwise: there it is as fast or faster
-    /// (`bench/results/issue16-lane-taps-transport.txt`) and reproducible.
+    /// unless `float_atomics` says otherwise: there the two cost the same within
+    /// the timings' spread (`bench/results/issue16-lane-*-transport.txt`), and
+    /// fixed point is reproducible.
     pub deterministic: bool,
     /// Float atomics also on a CPU implementation that has them (ignored with
     /// `deterministic`): for tests and comparisons.

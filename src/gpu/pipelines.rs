@@ -2,11 +2,10 @@
 //! fsot layout.
 
 use super::buffers::RunBuffers;
-use super::layout::{axis_bits, binding, TransportPush, UpdatePush};
+use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
-use super::shape::{group_stride, TransportShape, LARGE_WORKGROUP};
+use super::shape::{TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
-use crate::problem::Tile;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
 
 /// Descriptor sets of the gather: keyed by segment, or by projection.
@@ -62,13 +61,10 @@ fn pipeline(
 }
 
 impl RunPipelines {
-    /// The passes for this tile, slices per iteration, shape, sample dimension
-    /// and accumulator, bound to `buffers` (and the large-class sort's buffers).
-    #[allow(clippy::too_many_arguments)]
+    /// The passes for this shape, sample dimension and accumulator, bound to
+    /// `buffers` (and the large-class sort's buffers).
     pub fn new(
         ctx: &Context,
-        tile: &Tile,
-        slices: u32,
         shape: &TransportShape,
         targets: Targets,
         float_acc: bool,
@@ -100,19 +96,11 @@ impl RunPipelines {
             (false, Targets::FloatPairs, true) => shaders::TRANSPORT_DIMS_DF_FLOAT,
             (false, Targets::FloatPairs, false) => shaders::TRANSPORT_DIMS_DF,
         };
-        // Constants 4 to 8 (spp, d, the workgroups' stride, the packed taps'
-        // widths) are the per-lane pass's; others ignore them.
-        let spec = [
-            shape.workgroup,
-            shape.slices_per_group,
-            shape.one_subgroup as u32,
-            shape.local_max,
-            tile.spp as u32,
-            tile.dims as u32,
-            group_stride(shape.groups(slices)),
-            axis_bits(tile.width as u32),
-            axis_bits(tile.height as u32),
-        ];
+        // The same constants whatever the tile: llvmpipe compiles a pipeline at
+        // its first dispatch (seconds for this pass) and keeps it by its
+        // constants, so a constant that changed with the tile would cost every
+        // run that compilation (what changes goes in TransportPush).
+        let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, shape.local_max];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
         let update =

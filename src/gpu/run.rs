@@ -16,7 +16,7 @@ use super::layout::{
     UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
-use super::shape::{two_d, TransportKind, TransportShape, LANE_MAX, LOOP_BUDGET};
+use super::shape::{group_stride, two_d, TransportKind, TransportShape, LANE_MAX, LOOP_BUDGET};
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
 use crate::cpu_backend::FIXED_SCALE;
@@ -116,8 +116,7 @@ impl VulkanRun {
             order_words,
         )?;
         let sort = buffers.large_sort(ctx, &large)?;
-        let pipelines =
-            RunPipelines::new(ctx, &tile, slices, &shape, targets, float_acc, &buffers, sort.as_ref())?;
+        let pipelines = RunPipelines::new(ctx, &shape, targets, float_acc, &buffers, sort.as_ref())?;
         let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
             tile,
@@ -285,6 +284,7 @@ impl VulkanRun {
             cost_slot: slot,
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
+            lane_stride: group_stride(self.shape.groups(self.slices)),
         }
     }
 
