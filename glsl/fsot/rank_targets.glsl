@@ -5,11 +5,6 @@
 // form for d <= 2 (common.glsl). Include after the pass's push constants `pc`.
 #ifndef FSOT_RANK_TARGETS_GLSL
 #define FSOT_RANK_TARGETS_GLSL
-// Bits of a coordinate in [0, size) (0 for a size of 1): src/gpu/layout.rs
-// axis_bits; the packed taps' fields (transport_common.glsl: fsot_tap_offsets).
-uint fsot_axis_bits(uint size) {
-    return size > 1u ? uint(findMSB(size - 1u)) + 1u : 0u;
-}
 #ifdef FSOT_ANY_DIMS
 #include "targets.glsl"
 #define FsotTargets FsotBox

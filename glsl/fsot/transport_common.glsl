@@ -24,6 +24,12 @@ uint fsot_class_size(FsotSlice s) {
     return fsot_class_taps(s) * pc.spp;
 }
 
+// Bits of a coordinate in [0, size) (0 for a size of 1): src/gpu/layout.rs
+// axis_bits.
+uint fsot_axis_bits(uint size) {
+    return size > 1u ? uint(findMSB(size - 1u)) + 1u : 0u;
+}
+
 // A tap's offsets (dx, dy, dt) from its packed word (src/gpu/layout.rs pack_tap):
 // one word per member read where three would be (on a SIMD driver each read is
 // a loop over the lanes).

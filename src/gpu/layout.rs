@@ -98,15 +98,15 @@ pub fn axis_bits(size: u32) -> u32 {
 /// A kernel tap's offsets (each below its axis's size) packed in one word, as
 /// the `Taps` table holds them (`fsot_tap_offsets` unpacks): dx in the low
 /// `axis_bits(width)` bits, then dy in `axis_bits(height)` bits, then dt. None
-/// where they do not fit 32 bits, which no tile of at most `MAX_POINTS` points
-/// reaches (each axis takes under one bit more than its log2, and the sizes
-/// multiply to at most 2^28).
+/// where they do not fit 31 bits (the shader shifts by the sum of the first two
+/// widths), which no tile of at most `MAX_POINTS` points reaches (each axis
+/// takes under one bit more than its log2, and the sizes multiply to at most
+/// 2^28).
 pub fn pack_tap(tile: &Tile, dx: u32, dy: u32, dt: u32) -> Option<u32> {
     let (bx, by, bt) =
         (axis_bits(tile.width as u32), axis_bits(tile.height as u32), axis_bits(tile.frames as u32));
     let fits = dx < tile.width as u32 && dy < tile.height as u32 && dt < tile.frames as u32;
-    (fits && bx + by + bt <= 32)
-        .then(|| dx | dy.checked_shl(bx).unwrap_or(0) | dt.checked_shl(bx + by).unwrap_or(0))
+    (fits && bx + by + bt < 32).then(|| dx | dy << bx | dt << (bx + by))
 }
 
 #[cfg(test)]

@@ -238,25 +238,24 @@ impl TransportShape {
 }
 
 /// The stride of the per-lane transport's workgroups through the groups of
-/// slice ranks (`FSOT_LANE_STRIDE`): workgroup p takes group (p * stride) mod
-/// `groups`. Coprime with `groups`, so every group is taken once, and near
-/// `groups` / golden ratio, so that any run of consecutive workgroups (llvmpipe
-/// gives each thread one) takes groups spread evenly over the ranks, large
-/// classes and small alike. 1 past 65535 groups (the shader's product p *
+/// slice ranks (`TransportPush::lane_stride`): workgroup p takes group (p *
+/// stride) mod `groups`. Coprime with `groups`, so every group is taken once,
+/// and near `groups` / golden ratio, so that any run of consecutive workgroups
+/// (llvmpipe gives each thread one) takes groups spread evenly over the ranks,
+/// large classes and small alike. 1 past 65535 groups (the shader's product p *
 /// stride stays below 2^32).
 pub fn group_stride(groups: u32) -> u32 {
-    if groups > 65535 {
+    if groups > 65535 || groups <= 2 {
         return 1;
     }
-    let gcd = |mut a: u64, mut b: u64| {
+    let gcd = |mut a: u32, mut b: u32| {
         while b != 0 {
             (a, b) = (b, a % b);
         }
         a
     };
-    let g = groups.max(1) as u64;
-    let start = ((g as f64 * 0.618_033_988_749_895).round() as u64).clamp(1, g);
-    (start..start + g).find(|&k| gcd(k % g, g) == 1).map_or(1, |k| (k % g).max(1) as u32)
+    let start = ((groups as f64 * 0.618_033_988_749_895).round() as u32).clamp(1, groups - 1);
+    (start..groups).chain(1..start).find(|&k| gcd(k, groups) == 1).unwrap_or(1)
 }
 
 /// `groups` workgroups as a dispatch, spread over y past 65535.
