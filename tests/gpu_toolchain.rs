@@ -32,6 +32,7 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         sets: 1,
         images: &[],
         uniforms: &[],
+        texels: &binding::TEXELS,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     pipeline.bind(0, &[(binding::HASH_VALUES, &out)]).unwrap();

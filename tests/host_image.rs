@@ -146,6 +146,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
         sets: 1,
         images: &[1],
         uniforms: &[2],
+        texels: &[],
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     pipeline.bind_image(0, 1, view, sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();

@@ -1,5 +1,5 @@
-//! The compiled SPIR-V agrees with its Rust mirror: every storage block's binding
-//! index, every push-constant struct's member names and offsets, and the layout
+//! The compiled SPIR-V agrees with its Rust mirror: every storage block's and
+//! texel buffer's binding index, every push-constant struct's member names and offsets, and the layout
 //! of the structs inside buffers, read from the shaders build.rs compiled (with
 //! rspirv, an independent SPIR-V reader). GLSL and Rust cannot drift apart.
 
@@ -141,11 +141,13 @@ impl Reflection {
     }
 }
 
-/// Checks a shader family against its binding table; returns the blocks seen.
+/// Checks a shader family against its binding tables (storage blocks by block
+/// name, texel buffers by variable name); returns the names seen.
 fn check_family(
     family: &str,
     shaders: &[(&str, &[u8])],
     blocks: &[(&str, u32)],
+    texels: &[(&str, u32)],
     bindings: u32,
 ) -> Vec<String> {
     let mirrors = mirrors();
@@ -164,6 +166,18 @@ fn check_family(
                         expected,
                         Some(binding),
                         "{family}/{shader}: block {name:?} at binding {binding}"
+                    );
+                    assert!(binding < bindings, "{family}/{shader}: binding {binding} outside the layout");
+                    seen.push(name);
+                }
+                StorageClass::UniformConstant => {
+                    let name = r.names.get(&var).cloned().unwrap_or_default();
+                    let binding = r.bindings[&var];
+                    let expected = texels.iter().find(|b| b.0 == name).map(|b| b.1);
+                    assert_eq!(
+                        expected,
+                        Some(binding),
+                        "{family}/{shader}: texel buffer {name:?} at binding {binding}"
                     );
                     assert!(binding < bindings, "{family}/{shader}: binding {binding} outside the layout");
                     seen.push(name);
@@ -217,18 +231,23 @@ fn check_family(
 
 #[test]
 fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
-    let seen =
-        check_family("fsot", fsot::gpu::shaders::ALL, &layout::binding::BLOCKS, layout::binding::BINDINGS);
+    let b = &layout::binding::BLOCKS;
+    let t = &layout::binding::TEXEL_VARIABLES;
+    let seen = check_family("fsot", fsot::gpu::shaders::ALL, b, t, layout::binding::BINDINGS);
     // Every Rust binding is used by some pass (no stale entry in the mirror).
-    for (name, _) in layout::binding::BLOCKS {
+    for (name, _) in b.iter().chain(t) {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no fsot pass");
     }
-    assert_eq!(layout::binding::BLOCKS.len() as u32, layout::binding::BINDINGS);
+    assert_eq!((b.len() + t.len()) as u32, layout::binding::BINDINGS);
+    // The texel buffers, and only they, are made uniform texel buffers.
+    let texels: Vec<u32> = t.iter().map(|(_, b)| *b).collect();
+    assert_eq!(texels, layout::binding::TEXELS);
 }
 
 #[test]
 fn every_sort_binding_and_struct_matches_its_rust_mirror() {
-    let seen = check_family("sort", fsot::vk::shaders::ALL, &sort::binding::BLOCKS, sort::binding::BINDINGS);
+    let seen =
+        check_family("sort", fsot::vk::shaders::ALL, &sort::binding::BLOCKS, &[], sort::binding::BINDINGS);
     for (name, _) in sort::binding::BLOCKS {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no sort pass");
     }
@@ -236,8 +255,13 @@ fn every_sort_binding_and_struct_matches_its_rust_mirror() {
 
 #[test]
 fn every_swap_binding_and_struct_matches_its_rust_mirror() {
-    let seen =
-        check_family("swap", fsot::gpu::swap::shaders::ALL, &swap::binding::BLOCKS, swap::binding::BINDINGS);
+    let seen = check_family(
+        "swap",
+        fsot::gpu::swap::shaders::ALL,
+        &swap::binding::BLOCKS,
+        &[],
+        swap::binding::BINDINGS,
+    );
     for (name, _) in swap::binding::BLOCKS {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no swap pass");
     }
@@ -250,7 +274,15 @@ fn a_mirror_that_drifted_is_caught() {
     let mut drifted = layout::binding::BLOCKS;
     (drifted[0].1, drifted[2].1) = (drifted[2].1, drifted[0].1);
     let caught = std::panic::catch_unwind(|| {
-        check_family("fsot", fsot::gpu::shaders::ALL, &drifted, layout::binding::BINDINGS);
+        let t = &layout::binding::TEXEL_VARIABLES;
+        check_family("fsot", fsot::gpu::shaders::ALL, &drifted, t, layout::binding::BINDINGS);
     });
     assert!(caught.is_err(), "a swapped binding went unnoticed");
+    let mut drifted = layout::binding::TEXEL_VARIABLES;
+    (drifted[0].1, drifted[1].1) = (drifted[1].1, drifted[0].1);
+    let caught = std::panic::catch_unwind(|| {
+        let b = &layout::binding::BLOCKS;
+        check_family("fsot", fsot::gpu::shaders::ALL, b, &drifted, layout::binding::BINDINGS);
+    });
+    assert!(caught.is_err(), "a swapped texel binding went unnoticed");
 }

@@ -85,3 +85,62 @@ fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_
     drop(image);
     common::assert_no_validation_messages(&ctx);
 }
+
+/// Reads texel j of a float view and of an RGBA32UI view (its texel j / 4,
+/// component j % 4) into an output buffer: what a pass sees through a view.
+const TEXEL_PROBE: &str = r#"#version 450
+layout(local_size_x = 64) in;
+layout(set = 0, binding = 0) uniform samplerBuffer floats;
+layout(set = 0, binding = 1) uniform usamplerBuffer words;
+layout(std430, set = 0, binding = 2) writeonly buffer Out { vec2 got[]; };
+layout(push_constant) uniform Push { uint count; };
+void main() {
+    uint j = gl_GlobalInvocationID.x;
+    if (j < count) {
+        got[j] = vec2(texelFetch(floats, int(j)).x, float(texelFetch(words, int(j / 4u))[j % 4u]));
+    }
+}
+"#;
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_kind_is_refused() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let Some(spirv) = common::compile_glsl(TEXEL_PROBE) else { return };
+    use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location, TexelView};
+    let count = 1000usize;
+    let floats: Vec<f32> = (0..count).map(|i| (i as f32 * 0.37).fract() - 0.5).collect();
+    let words: Vec<u32> = (0..count as u32).map(|i| i * 7 % 1009).collect();
+    let float_buf = Buffer::with_data(&ctx, &floats, Location::Device, "floats").unwrap();
+    let word_buf = Buffer::with_data(&ctx, &words, Location::Device, "words").unwrap();
+    let out = Buffer::new(&ctx, count as u64 * 8, Location::Device, "out").unwrap();
+    let float_view = TexelView::new(&ctx, &float_buf, vk::Format::R32_SFLOAT, 4).unwrap();
+    let word_view = TexelView::new(&ctx, &word_buf, vk::Format::R32G32B32A32_UINT, 16).unwrap();
+    assert_eq!((float_view.texels, word_view.texels), (count as u64, count as u64 / 4));
+    let desc = ComputeDesc {
+        spirv: &spirv,
+        bindings: 3,
+        push_bytes: 4,
+        spec: &[],
+        sets: 1,
+        images: &[],
+        uniforms: &[],
+        texels: &[0, 1],
+    };
+    let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
+    pipeline.bind_texels(0, &[(0, &float_view), (1, &word_view)]).unwrap();
+    pipeline.bind(0, &[(2, &out)]).unwrap();
+    // A texel binding is no storage buffer, and a storage binding takes no view.
+    assert!(pipeline.bind(0, &[(0, &float_buf)]).is_err());
+    assert!(pipeline.bind_texels(0, &[(2, &float_view)]).is_err());
+    ctx.submit(|cmd| {
+        pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &(count as u32).to_le_bytes());
+        fsot::vk::commands::barrier(&ctx, cmd);
+    })
+    .unwrap();
+    let got: Vec<[f32; 2]> = out.download(count).unwrap();
+    for (j, g) in got.iter().enumerate() {
+        assert_eq!(*g, [floats[j], words[j] as f32], "texel {j}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

@@ -1,7 +1,8 @@
 // Every buffer, push-constant struct and binding index of the fsot passes, declared
 // once. Mirrored once in Rust (src/gpu/layout.rs); tests/spirv_layout.rs checks
 // the compiled SPIR-V against the mirror. Every pass uses the same descriptor set
-// layout (FSOT_BINDINGS storage buffers) and touches only the buffers it names.
+// layout (FSOT_BINDINGS bindings: storage buffers, and two uniform texel
+// buffers) and touches only the buffers it names.
 // Include first, right after #version and any extension of the pass's own.
 // FSOT_FLOAT_ATOMICS (set by build.rs for the `_FLOAT` variants): accumulators are
 // floats added with VK_EXT_shader_atomic_float; otherwise int64 fixed point.
@@ -34,7 +35,9 @@
 #define FSOT_BINDING_HASH_VALUES 17
 #define FSOT_BINDING_SCHEDULE 18
 #define FSOT_BINDING_SLICE_ORDER 19
-#define FSOT_BINDINGS 20
+#define FSOT_BINDING_SAMPLE_TEXELS 20
+#define FSOT_BINDING_TAP_TEXELS 21
+#define FSOT_BINDINGS 22
 
 // Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
@@ -126,6 +129,13 @@ layout(std430, set = 0, binding = FSOT_BINDING_SAMPLES) buffer Samples { float s
 // Kernel taps in decreasing weight: offsets packed in one word (fsot_tap_offsets),
 // two unused words, level threshold.
 layout(std430, set = 0, binding = FSOT_BINDING_TAPS) readonly buffer Taps { uvec4 taps[]; };
+// The samples and the taps again, as uniform texel buffers: views of the same
+// buffers (R32_SFLOAT and R32G32B32A32_UINT texels; src/vk/texel_view.rs). The
+// per-lane transport reads them through the texture path, which llvmpipe
+// gathers with one vector instruction, where a storage-buffer read at per-lane
+// addresses is a loop over the lanes (transport_common.glsl: FSOT_TEXEL_READS).
+layout(set = 0, binding = FSOT_BINDING_SAMPLE_TEXELS) uniform samplerBuffer sample_texels;
+layout(set = 0, binding = FSOT_BINDING_TAP_TEXELS) uniform usamplerBuffer tap_texels;
 #ifdef FSOT_FLOAT_ATOMICS
 layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { float acc[]; };
 #else

@@ -8,13 +8,31 @@
 #include "rank_targets.glsl"
 #include "loop_cap.glsl"
 
+// Where the per-member reads go: with FSOT_TEXEL_READS (the per-lane pass) the
+// texel views of the samples and the taps (bindings.glsl), otherwise the storage
+// buffers. Same values either way.
+float fsot_sample(uint i) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(sample_texels, int(i)).x;
+#else
+    return samples[i];
+#endif
+}
+uvec4 fsot_tap(uint t) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(tap_texels, int(t));
+#else
+    return taps[t];
+#endif
+}
+
 // Class size of a slice in taps: those whose threshold exceeds its level
 // (thresholds decrease).
 uint fsot_class_taps(FsotSlice s) {
     uint lo = 0u, hi = pc.taps;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (taps[mid].w > s.level) { lo = mid + 1u; } else { hi = mid; }
+        if (fsot_tap(mid).w > s.level) { lo = mid + 1u; } else { hi = mid; }
     }
     return lo;
 }
@@ -52,7 +70,7 @@ uint fsot_class_point(FsotSlice s, uint i) {
     umulExtended(i, 0xffffffffu / pc.spp + 1u, high, low);
     uint tap_index = pc.spp == 1u ? i : high;
     uint member = i - tap_index * pc.spp;
-    uvec3 tap = fsot_tap_offsets(taps[tap_index].x);
+    uvec3 tap = fsot_tap_offsets(fsot_tap(tap_index).x);
     uint x = s.cx + tap.x;
     uint y = s.cy + tap.y;
     uint f = s.ct + tap.z;
@@ -67,15 +85,15 @@ uint fsot_class_point(FsotSlice s, uint i) {
 // arrays costs gathers on SIMD drivers.
 float fsot_project(FsotSlice s, uint point) {
     uint base = point * pc.dims;
-    float y = samples[base] - s.shift[0];
+    float y = fsot_sample(base) - s.shift[0];
     float p = 0.0 + s.theta[0] * (y - floor(y));
     if (pc.dims > 1u) {
-        y = samples[base + 1u] - s.shift[1];
+        y = fsot_sample(base + 1u) - s.shift[1];
         p += s.theta[1] * (y - floor(y));
     }
 #ifdef FSOT_ANY_DIMS
     for (uint k = 2u; k < pc.dims; ++k) {
-        y = samples[base + k] - s.shift[k];
+        y = fsot_sample(base + k) - s.shift[k];
         p += s.theta[k] * (y - floor(y));
     }
 #endif

@@ -14,6 +14,8 @@
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
+#define FSOT_TEXEL_READS // samples and taps through their texel views
+
 #include "transport_common.glsl"
 #include "slice_order.glsl"
 

@@ -129,6 +129,7 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
         sets: 1,
         images: &[],
         uniforms: &[],
+        texels: &binding::TEXELS,
     };
     let pipeline = ComputePipeline::new(ctx, &desc)?;
     pipeline

@@ -28,10 +28,18 @@ pub mod binding {
     pub const HASH_VALUES: u32 = 17;
     pub const SCHEDULE: u32 = 18;
     pub const SLICE_ORDER: u32 = 19;
+    pub const SAMPLE_TEXELS: u32 = 20;
+    pub const TAP_TEXELS: u32 = 21;
     /// Bindings in the layout (`FSOT_BINDINGS`).
-    pub const BINDINGS: u32 = 20;
+    pub const BINDINGS: u32 = 22;
+    /// The bindings that are uniform texel buffers; every other is a storage buffer.
+    pub const TEXELS: [u32; 2] = [SAMPLE_TEXELS, TAP_TEXELS];
 
-    /// Every binding with the name of its block in GLSL.
+    /// Every uniform texel buffer with the name of its variable in GLSL.
+    pub const TEXEL_VARIABLES: [(&str, u32); 2] =
+        [("sample_texels", SAMPLE_TEXELS), ("tap_texels", TAP_TEXELS)];
+
+    /// Every storage buffer with the name of its block in GLSL.
     pub const BLOCKS: [(&str, u32); 20] = [
         ("Samples", SAMPLES),
         ("Taps", TAPS),

@@ -6,7 +6,7 @@ use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
 use super::shape::{TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
-use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort};
+use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort, TexelView};
 
 /// Descriptor sets of the gather: keyed by segment, or by projection.
 pub const GATHER_BY_SEGMENT: usize = 0;
@@ -33,6 +33,9 @@ pub struct RunPipelines {
     pub plateau: Option<ComputePipeline>,
     /// The slice order's two passes (count, place), for the per-lane transport.
     pub order: Option<[ComputePipeline; 2]>,
+    /// The texel views of the samples and the taps the per-lane transport reads
+    /// (bindings SAMPLE_TEXELS and TAP_TEXELS), kept while the sets point at them.
+    pub texels: Option<[TexelView; 2]>,
 }
 
 pub struct LargePipelines {
@@ -56,6 +59,7 @@ fn pipeline(
         sets,
         images: &[],
         uniforms: &[],
+        texels: &binding::TEXELS,
     };
     ComputePipeline::new(ctx, &desc)
 }
@@ -72,8 +76,18 @@ impl RunPipelines {
         sort: Option<&RadixSort>,
     ) -> Result<Self> {
         let all = buffers.bindings(sort)?;
+        let texels = match shape.per_lane {
+            true => Some([
+                TexelView::new(ctx, &buffers.samples, ash::vk::Format::R32_SFLOAT, 4)?,
+                TexelView::new(ctx, &buffers.taps, ash::vk::Format::R32G32B32A32_UINT, 16)?,
+            ]),
+            false => None,
+        };
         let bound = |p: ComputePipeline, set: usize, table: Option<&Buffer>| -> Result<ComputePipeline> {
             p.bind(set, &all)?;
+            if let Some([samples, taps]) = &texels {
+                p.bind_texels(set, &[(binding::SAMPLE_TEXELS, samples), (binding::TAP_TEXELS, taps)])?;
+            }
             if let Some(t) = table {
                 p.bind(set, &[(binding::GATHER_TABLE, t)])?;
             }
@@ -134,6 +148,6 @@ impl RunPipelines {
             ]),
             false => None,
         };
-        Ok(Self { transport, update, large, plateau, order })
+        Ok(Self { transport, update, large, plateau, order, texels })
     }
 }

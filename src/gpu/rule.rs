@@ -59,6 +59,7 @@ pub fn pipeline(ctx: &Context) -> Result<Option<ComputePipeline>> {
         sets: 1,
         images: &[],
         uniforms: &[],
+        texels: &binding::TEXELS,
     };
     ComputePipeline::new(ctx, &desc).map(Some)
 }

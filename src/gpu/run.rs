@@ -88,7 +88,9 @@ impl VulkanRun {
         let float_acc =
             !options.deterministic && info.float_atomic_add && (!info.is_cpu() || options.float_atomics);
         let max_class = (kernel.taps.len() * tile.spp) as u32;
-        let shape = transport_shape(ctx, max_class, tile.dims, &options)?;
+        // The per-lane transport's texel views: the samples, and the taps.
+        let texels = (tile.values() as u64).max(kernel.taps.len() as u64);
+        let shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
         let local_max = shape.local_max;
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
@@ -494,12 +496,20 @@ fn transport_shape(
     ctx: &Context,
     max_class: u32,
     dims: usize,
+    texels: u64,
     options: &VulkanOptions,
 ) -> Result<TransportShape> {
     let info = ctx.info();
     match options.transport {
         Some(TransportKind::PerLane) if max_class > LOOP_BUDGET / 2 => {
             return Err(Error::invalid("the per-lane transport cannot take classes this large"))
+        }
+        Some(TransportKind::PerLane) if texels > info.max_texel_buffer_elements => {
+            return Err(Error::invalid(format!(
+                "the per-lane transport reads the samples through a texel view of {texels} texels; {} \
+                 holds at most {} (maxTexelBufferElements)",
+                info.name, info.max_texel_buffer_elements
+            )))
         }
         // Built for CPU implementations only: an H100's driver (580) refuses its
         // pipeline at 2048 samples per invocation (bench/results/h100-run.log).
@@ -511,7 +521,8 @@ fn transport_shape(
         }
         _ => {}
     }
-    let mut shape = TransportShape::choose(info, max_class, dims, options.transport, options.transport_shape);
+    let mut shape =
+        TransportShape::choose(info, max_class, dims, texels, options.transport, options.transport_shape);
     if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);

@@ -75,13 +75,17 @@ impl TransportShape {
     /// at their worst (`lane_limit`; forced per lane, larger classes go to the
     /// large-class stage), otherwise workgroups large enough that each
     /// invocation's share of the targets stays within LOOP_BUDGET
-    /// (`fits_loop_budget` says whether a shape does). `kind` forces
-    /// a transport (None: by device); `forced` (invocations, slices per
-    /// workgroup): the workgroup transport with that shape.
+    /// (`fits_loop_budget` says whether a shape does). The per-lane transport
+    /// reads the samples and the taps through texel views: not chosen where one
+    /// would hold more than the device's maxTexelBufferElements (`texels`: the
+    /// larger view's texels). `kind` forces a transport (None: by device);
+    /// `forced` (invocations, slices per workgroup): the workgroup transport
+    /// with that shape.
     pub fn choose(
         info: &DeviceInfo,
         max_class: u32,
         dims: usize,
+        texels: u64,
         kind: Option<TransportKind>,
         forced: Option<(u32, u32)>,
     ) -> Self {
@@ -98,6 +102,7 @@ impl TransportShape {
             None => {
                 let limit = Self::lane_limit(dims);
                 info.is_cpu()
+                    && texels <= info.max_texel_buffer_elements
                     && max_class <= LOOP_BUDGET / 2
                     && (dims <= 2 || max_class <= limit)
                     && Self::large_fits(max_class, limit, dims)
@@ -337,6 +342,7 @@ mod tests {
             device_type: ash::vk::PhysicalDeviceType::CPU,
             subgroup_size: 8,
             max_storage_buffer_range: 1 << 27,
+            max_texel_buffer_elements: 1 << 27,
             max_workgroup_invocations: 1024,
             max_shared_memory: 32768,
             timestamp_period_ns: 1.0,
@@ -347,7 +353,7 @@ mod tests {
         };
         for dims in 1..=8 {
             for max_class in [2u32, 16, 100, 744, 2048] {
-                let shape = TransportShape::choose(&lavapipe, max_class, dims, None, None);
+                let shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
                 assert!(
                     shape.fits_loop_budget(&lavapipe, max_class, dims),
                     "d = {dims}, {max_class}: {shape:?}"
@@ -364,16 +370,22 @@ mod tests {
             assert!(TransportShape::lane_iterations(limit, dims) <= LANE_BUDGET, "d = {dims}: {limit}");
             assert!(TransportShape::lane_iterations(limit + 1, dims) > LANE_BUDGET, "d = {dims}: {limit}");
             assert!(limit.abs_diff(near) <= near / 20, "d = {dims}: limit {limit}, documented about {near}");
-            let whole = TransportShape::choose(&lavapipe, limit, dims, None, None);
+            let whole = TransportShape::choose(&lavapipe, limit, dims, 1 << 15, None, None);
             assert!(whole.per_lane && whole.local_max == limit, "d = {dims}: {whole:?}");
-            let split = TransportShape::choose(&lavapipe, limit + 1, dims, None, None);
+            let split = TransportShape::choose(&lavapipe, limit + 1, dims, 1 << 15, None, None);
             assert!(!split.per_lane && split.local_max == LOCAL_MAX, "d = {dims}: {split:?}");
-            let forced = TransportShape::choose(&lavapipe, 1408, dims, Some(TransportKind::PerLane), None);
+            let forced =
+                TransportShape::choose(&lavapipe, 1408, dims, 1 << 15, Some(TransportKind::PerLane), None);
             assert!(forced.per_lane && forced.local_max == limit, "d = {dims}: {forced:?}");
         }
         // Large classes of d = 8 pass the large-class pass's budget: refused.
-        let shape = TransportShape::choose(&lavapipe, 20_000, 8, None, None);
+        let shape = TransportShape::choose(&lavapipe, 20_000, 8, 1 << 15, None, None);
         assert!(!shape.fits_loop_budget(&lavapipe, 20_000, 8));
+        // A device whose texel views hold fewer texels than the samples: the
+        // workgroup transport, which reads them from the storage buffer.
+        let small_views = DeviceInfo { max_texel_buffer_elements: 65536, ..lavapipe.clone() };
+        assert!(TransportShape::choose(&small_views, 744, 2, 65536, None, None).per_lane);
+        assert!(!TransportShape::choose(&small_views, 744, 2, 65537, None, None).per_lane);
         // A bitonic network of 2048 on 8 invocations: 66 stages of 256 pairs.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 256);
     }

@@ -261,6 +261,7 @@ impl Passes {
                     bindings: binding::BINDINGS,
                     images: &[],
                     uniforms: &[],
+                    texels: &[],
                     push_bytes: std::mem::size_of::<SwapPush>() as u32,
                     spec: &[workgroup, dims],
                     sets: 1,

@@ -32,8 +32,9 @@ pub struct Buffer {
 }
 
 impl Buffer {
-    /// A storage buffer (also a uniform buffer, a copy source and destination,
-    /// and indirect arguments) of `size` bytes. Device-local buffers larger than one binding
+    /// A storage buffer (also a uniform buffer, a uniform texel buffer through a
+    /// `TexelView`, a copy source and destination, and indirect arguments) of
+    /// `size` bytes. Device-local buffers larger than one binding
     /// (maxStorageBufferRange) are refused.
     pub fn new(ctx: &Context, size: u64, location: Location, name: &str) -> Result<Self> {
         if size == 0 {
@@ -53,7 +54,8 @@ impl Buffer {
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::INDIRECT_BUFFER
-            | vk::BufferUsageFlags::UNIFORM_BUFFER;
+            | vk::BufferUsageFlags::UNIFORM_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER;
         let info =
             vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: a valid create info on a live device.

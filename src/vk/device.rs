@@ -13,6 +13,8 @@ pub struct DeviceInfo {
     pub device_type: vk::PhysicalDeviceType,
     pub subgroup_size: u32,
     pub max_storage_buffer_range: u64,
+    /// Texels one texel-buffer view may hold (maxTexelBufferElements).
+    pub max_texel_buffer_elements: u64,
     pub max_workgroup_invocations: u32,
     pub max_shared_memory: u32,
     pub timestamp_period_ns: f32,
@@ -113,6 +115,7 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         device_type: props.device_type,
         subgroup_size: subgroup.subgroup_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
+        max_texel_buffer_elements: props.limits.max_texel_buffer_elements as u64,
         max_workgroup_invocations: props.limits.max_compute_work_group_invocations,
         max_shared_memory: props.limits.max_compute_shared_memory_size,
         timestamp_period_ns: props.limits.timestamp_period,

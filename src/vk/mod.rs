@@ -10,6 +10,7 @@
 //!   context, and the barrier and copy helpers;
 //! - `buffer`: buffers that own their memory, with one upload and one download
 //!   path through staging, and fills of a host's buffer;
+//! - `texel_view`: a buffer viewed as texels of one format (texel buffers);
 //! - `image`: 2-D array images (owned, or a host's described by `ImageTarget`)
 //!   filled and read back through staging with their layout transitions, and a
 //!   nearest sampler;
@@ -29,6 +30,7 @@ pub mod image;
 pub mod instance;
 pub mod pipeline;
 pub mod sort;
+pub mod texel_view;
 pub mod timer;
 
 pub use buffer::{Buffer, BufferTarget, Location};
@@ -37,6 +39,7 @@ pub use device::DeviceInfo;
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 pub use pipeline::{ComputeDesc, ComputePipeline};
 pub use sort::{RadixSort, SortCount, SortPath};
+pub use texel_view::TexelView;
 pub use timer::Timer;
 
 pub mod shaders {

@@ -1,14 +1,15 @@
 //! Compute pipelines: one shader pass, a descriptor set layout at bindings 0..n
-//! in set 0 (storage buffers unless listed as uniform buffers or combined image
-//! samplers; a shader family shares one layout), a push-constant block,
+//! in set 0 (storage buffers unless listed as uniform buffers, uniform texel
+//! buffers or combined image samplers; a shader family shares one layout), a push-constant block,
 //! specialization constants 0..m (workgroup size first), and descriptor sets
-//! bound to buffers and images by binding index.
+//! bound to buffers, texel views and images by binding index.
 
 use ash::vk;
 
 use super::buffer::Buffer;
 use super::check;
 use super::context::Context;
+use super::texel_view::TexelView;
 use crate::error::{Error, Result};
 
 /// What a compute pipeline is made from.
@@ -22,6 +23,8 @@ pub struct ComputeDesc<'a> {
     pub images: &'a [u32],
     /// Bindings that are uniform buffers.
     pub uniforms: &'a [u32],
+    /// Bindings that are uniform texel buffers (`samplerBuffer` and the like).
+    pub texels: &'a [u32],
     /// Size of the push-constant block (0: none).
     pub push_bytes: u32,
     /// Values of specialization constants 0, 1, ...
@@ -61,16 +64,24 @@ impl ComputePipeline {
             sets: Vec::new(),
             raw: vk::Pipeline::null(),
             kinds: (0..desc.bindings)
-                .map(|b| match (desc.images.contains(&b), desc.uniforms.contains(&b)) {
-                    (true, _) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    (_, true) => vk::DescriptorType::UNIFORM_BUFFER,
-                    _ => vk::DescriptorType::STORAGE_BUFFER,
+                .map(|b| {
+                    if desc.images.contains(&b) {
+                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+                    } else if desc.uniforms.contains(&b) {
+                        vk::DescriptorType::UNIFORM_BUFFER
+                    } else if desc.texels.contains(&b) {
+                        vk::DescriptorType::UNIFORM_TEXEL_BUFFER
+                    } else {
+                        vk::DescriptorType::STORAGE_BUFFER
+                    }
                 })
                 .collect(),
             push_bytes: desc.push_bytes,
         };
         // Every handle below is destroyed by Drop if a later step fails.
-        if let Some(b) = desc.images.iter().chain(desc.uniforms).find(|&&b| b >= desc.bindings) {
+        if let Some(b) =
+            desc.images.iter().chain(desc.uniforms).chain(desc.texels).find(|&&b| b >= desc.bindings)
+        {
             return Err(Error::invalid(format!("binding {b} is outside the pipeline's {}", desc.bindings)));
         }
         let layout_bindings: Vec<_> = (0..desc.bindings)
@@ -117,6 +128,7 @@ impl ComputePipeline {
             vk::DescriptorType::STORAGE_BUFFER,
             vk::DescriptorType::UNIFORM_BUFFER,
             vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
         ]
         .into_iter()
         .map(|ty| {
@@ -135,8 +147,15 @@ impl ComputePipeline {
         Ok(me)
     }
 
-    /// Descriptor set `set`, checked to exist, and each binding checked to be of `kind`.
-    fn set_for(&self, set: usize, bindings: &[u32], kind: &str) -> Result<vk::DescriptorSet> {
+    /// Descriptor set `set`, checked to exist, and each binding checked to be one
+    /// of `kinds` (`what` names them in the error).
+    fn set_for(
+        &self,
+        set: usize,
+        bindings: &[u32],
+        kinds: &[vk::DescriptorType],
+        what: &str,
+    ) -> Result<vk::DescriptorSet> {
         let target = *self
             .sets
             .get(set)
@@ -145,9 +164,8 @@ impl ComputePipeline {
             let found = self.kinds.get(b as usize).ok_or_else(|| {
                 Error::invalid(format!("binding {b} is outside the pipeline's {} bindings", self.kinds.len()))
             })?;
-            let image = *found == vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
-            if image != (kind == "image") {
-                return Err(Error::invalid(format!("binding {b} is a {found:?}, not a {kind}")));
+            if !kinds.contains(found) {
+                return Err(Error::invalid(format!("binding {b} is a {found:?}, not a {what}")));
             }
         }
         Ok(target)
@@ -164,7 +182,8 @@ impl ComputePipeline {
     /// them alive while the set is used.
     pub fn bind_raw(&self, set: usize, buffers: &[(u32, vk::Buffer)]) -> Result<()> {
         let bindings: Vec<u32> = buffers.iter().map(|(b, _)| *b).collect();
-        let target = self.set_for(set, &bindings, "buffer")?;
+        let kinds = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_BUFFER];
+        let target = self.set_for(set, &bindings, &kinds, "buffer")?;
         let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
             .iter()
             .map(|(_, b)| [vk::DescriptorBufferInfo::default().buffer(*b).offset(0).range(vk::WHOLE_SIZE)])
@@ -195,7 +214,7 @@ impl ComputePipeline {
         sampler: vk::Sampler,
         layout: vk::ImageLayout,
     ) -> Result<()> {
-        let target = self.set_for(set, &[binding], "image")?;
+        let target = self.set_for(set, &[binding], &[vk::DescriptorType::COMBINED_IMAGE_SAMPLER], "image")?;
         let info =
             [vk::DescriptorImageInfo::default().image_view(view).sampler(sampler).image_layout(layout)];
         let write = vk::WriteDescriptorSet::default()
@@ -206,6 +225,30 @@ impl ComputePipeline {
         // SAFETY: the set is not in use by a pending submission; the view and
         // sampler are alive (the caller keeps them while the set is used).
         unsafe { self.ctx.device().update_descriptor_sets(&[write], &[]) };
+        Ok(())
+    }
+
+    /// Points the given uniform-texel-buffer bindings of set `set` at texel
+    /// views (the caller keeps the views and their buffers alive while the set
+    /// is used).
+    pub fn bind_texels(&self, set: usize, views: &[(u32, &TexelView)]) -> Result<()> {
+        let bindings: Vec<u32> = views.iter().map(|(b, _)| *b).collect();
+        let target =
+            self.set_for(set, &bindings, &[vk::DescriptorType::UNIFORM_TEXEL_BUFFER], "texel buffer")?;
+        let raw: Vec<[vk::BufferView; 1]> = views.iter().map(|(_, v)| [v.raw]).collect();
+        let writes: Vec<_> = raw
+            .iter()
+            .zip(views)
+            .map(|(view, (binding, _))| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(target)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                    .texel_buffer_view(view)
+            })
+            .collect();
+        // SAFETY: the set is not in use by a pending submission; the views are alive.
+        unsafe { self.ctx.device().update_descriptor_sets(&writes, &[]) };
         Ok(())
     }
 

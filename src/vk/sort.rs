@@ -248,6 +248,7 @@ impl RadixSort {
                     sets: 2,
                     images: &[],
                     uniforms: &[],
+                    texels: &[],
                 },
             )
         };
@@ -277,6 +278,7 @@ impl RadixSort {
                     sets: 1,
                     images: &[],
                     uniforms: &[],
+                    texels: &[],
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
                 pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])?;
