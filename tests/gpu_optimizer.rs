@@ -13,6 +13,7 @@ use fsot::run::optimize;
 use fsot::score::score;
 use fsot::settings::Settings;
 use fsot::slice::SliceSampler;
+use fsot::step_rule::StepRule;
 use fsot::transport::{transport_slice, Scratch};
 
 /// The per-lane transport is for CPU implementations (lavapipe); a GPU must refuse
@@ -302,6 +303,44 @@ fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
     eprintln!("objective: cpu {sc:.4e}, vulkan {sg:.4e}");
     assert!((sg - sc).abs() / sc < 0.05, "cpu {sc} vulkan {sg}");
     drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_few_steps_of_momentum_and_of_adam_move_the_samples_as_the_cpu_path_does() {
+    // The update pass in both variants (storage reads with the workgroup
+    // transport; texel reads and the host's reset on CPU implementations with
+    // the per-lane one) against the CPU path's f64 steps from the same start.
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let torus = |a: f32, b: f32| {
+        let d = (a - b).abs();
+        d.min(1.0 - d)
+    };
+    for rule in [StepRule::DEFAULT, StepRule::DEFAULT_ADAM] {
+        let mut s = settings("taa", 4, 5);
+        s.rule = rule;
+        let white = Mask::white(tile, 5);
+        let cpu = optimize(tile, s, Some(&white)).unwrap();
+        let moved = cpu.samples.iter().zip(&white.samples).map(|(a, b)| torus(*a, *b)).fold(0.0, f32::max);
+        assert!(moved > 1e-3, "{rule:?}: the CPU run moved the samples by at most {moved}");
+        for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+            if refused_here(&ctx, transport) {
+                continue;
+            }
+            let options =
+                VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+            let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&white), options).unwrap();
+            while !gpu.finished() {
+                gpu.step_batch(u32::MAX).unwrap();
+            }
+            let g = gpu.samples().unwrap();
+            let worst = g.iter().zip(&cpu.samples).map(|(a, b)| torus(*a, *b)).fold(0.0, f32::max);
+            eprintln!("{rule:?} {transport:?}: moved up to {moved:.2e}, largest difference {worst:.2e}");
+            assert!(worst < 1e-5, "{rule:?} {transport:?}: largest difference {worst}");
+        }
+    }
     common::assert_no_validation_messages(&ctx);
 }
 

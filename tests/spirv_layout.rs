@@ -286,3 +286,32 @@ fn a_mirror_that_drifted_is_caught() {
     });
     assert!(caught.is_err(), "a swapped texel binding went unnoticed");
 }
+
+#[test]
+fn the_cpu_passes_read_through_texel_views_and_no_other_pass_does() {
+    // A texel view is read where some instruction of a function loads its variable.
+    for (shader, spirv) in fsot::gpu::shaders::ALL {
+        let module = load_bytes(spirv).unwrap();
+        let r = reflect(&module);
+        let loaded = |var: u32| {
+            module.functions.iter().flat_map(|f| &f.blocks).flat_map(|b| &b.instructions).any(|i| {
+                i.class.opcode == Op::Load && i.operands.first().is_some_and(|o| *o == Operand::IdRef(var))
+            })
+        };
+        let mut used: Vec<String> = r
+            .variables
+            .iter()
+            .filter(|v| v.2 == StorageClass::UniformConstant && loaded(v.0))
+            .map(|v| r.names.get(&v.0).cloned().unwrap_or_default())
+            .collect();
+        used.sort();
+        let want: &[&str] = if shader.starts_with("TRANSPORT_LANE") {
+            &["sample_texels", "tap_texels"]
+        } else if shader.starts_with("UPDATE_TEXELS") {
+            &["acc_texels", "first_texels", "sample_texels", "second_texels"]
+        } else {
+            &[]
+        };
+        assert_eq!(used, want, "{shader}");
+    }
+}

@@ -2,7 +2,7 @@
 // once. Mirrored once in Rust (src/gpu/layout.rs); tests/spirv_layout.rs checks
 // the compiled SPIR-V against the mirror. Every pass uses the same descriptor set
 // layout (FSOT_BINDINGS bindings: storage buffers, and two uniform texel
-// buffers) and touches only the buffers it names.
+// buffers that view some of them again) and touches only the buffers it names.
 // Include first, right after #version and any extension of the pass's own.
 // FSOT_FLOAT_ATOMICS (set by build.rs for the `_FLOAT` variants): accumulators are
 // floats added with VK_EXT_shader_atomic_float; otherwise int64 fixed point.
@@ -37,7 +37,10 @@
 #define FSOT_BINDING_SLICE_ORDER 19
 #define FSOT_BINDING_SAMPLE_TEXELS 20
 #define FSOT_BINDING_TAP_TEXELS 21
-#define FSOT_BINDINGS 22
+#define FSOT_BINDING_ACC_TEXELS 22
+#define FSOT_BINDING_FIRST_TEXELS 23
+#define FSOT_BINDING_SECOND_TEXELS 24
+#define FSOT_BINDINGS 25
 
 // Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
@@ -129,13 +132,6 @@ layout(std430, set = 0, binding = FSOT_BINDING_SAMPLES) buffer Samples { float s
 // Kernel taps in decreasing weight: offsets packed in one word (fsot_tap_offsets),
 // two unused words, level threshold.
 layout(std430, set = 0, binding = FSOT_BINDING_TAPS) readonly buffer Taps { uvec4 taps[]; };
-// The samples and the taps again, as uniform texel buffers: views of the same
-// buffers (R32_SFLOAT and R32G32B32A32_UINT texels; src/vk/texel_view.rs). The
-// per-lane transport reads them through the texture path, which llvmpipe
-// gathers with one vector instruction, where a storage-buffer read at per-lane
-// addresses is a loop over the lanes (transport_common.glsl: FSOT_TEXEL_READS).
-layout(set = 0, binding = FSOT_BINDING_SAMPLE_TEXELS) uniform samplerBuffer sample_texels;
-layout(set = 0, binding = FSOT_BINDING_TAP_TEXELS) uniform usamplerBuffer tap_texels;
 #ifdef FSOT_FLOAT_ATOMICS
 layout(std430, set = 0, binding = FSOT_BINDING_ACC) buffer Acc { float acc[]; };
 #else
@@ -178,5 +174,61 @@ layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleS
 // (slice_order.glsl says where each part lies): per slot, the slices in each
 // class-size bin, each slice's bin, and the slices in order of decreasing class size.
 layout(std430, set = 0, binding = FSOT_BINDING_SLICE_ORDER) buffer SliceOrder { uint slice_order[]; };
+
+// Views of the samples, the taps, the accumulators and the optimizer's state as
+// uniform texel buffers (src/vk/texel_view.rs; on CPU implementations only).
+// Passes built with FSOT_TEXEL_READS read them through the texture path, which
+// llvmpipe gathers with one vector instruction, where it reads a storage buffer
+// at per-lane addresses one lane at a time; the accessors below pick the path.
+layout(set = 0, binding = FSOT_BINDING_SAMPLE_TEXELS) uniform samplerBuffer sample_texels; // R32_SFLOAT
+layout(set = 0, binding = FSOT_BINDING_TAP_TEXELS) uniform usamplerBuffer tap_texels; // R32G32B32A32_UINT
+#ifdef FSOT_FLOAT_ATOMICS
+layout(set = 0, binding = FSOT_BINDING_ACC_TEXELS) uniform samplerBuffer acc_texels; // R32_SFLOAT
+#else
+layout(set = 0, binding = FSOT_BINDING_ACC_TEXELS) uniform usamplerBuffer acc_texels; // R32G32_UINT: int64 halves
+#endif
+layout(set = 0, binding = FSOT_BINDING_FIRST_TEXELS) uniform samplerBuffer first_texels; // R32_SFLOAT
+layout(set = 0, binding = FSOT_BINDING_SECOND_TEXELS) uniform samplerBuffer second_texels; // R32_SFLOAT
+
+float fsot_sample(uint i) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(sample_texels, int(i)).x;
+#else
+    return samples[i];
+#endif
+}
+uvec4 fsot_tap(uint t) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(tap_texels, int(t));
+#else
+    return taps[t];
+#endif
+}
+float fsot_first(uint i) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(first_texels, int(i)).x;
+#else
+    return first[i];
+#endif
+}
+float fsot_second(uint i) {
+#ifdef FSOT_TEXEL_READS
+    return texelFetch(second_texels, int(i)).x;
+#else
+    return second[i];
+#endif
+}
+// Accumulator i in units of the sample.
+float fsot_acc(uint i) {
+#if defined(FSOT_TEXEL_READS) && defined(FSOT_FLOAT_ATOMICS)
+    return texelFetch(acc_texels, int(i)).x;
+#elif defined(FSOT_TEXEL_READS)
+    return float(int64_t(packUint2x32(texelFetch(acc_texels, int(i)).xy))) * (1.0 / FSOT_FIXED_SCALE);
+#elif defined(FSOT_FLOAT_ATOMICS)
+    return acc[i];
+#else
+    return float(acc[i]) * (1.0 / FSOT_FIXED_SCALE);
+#endif
+}
 
 #endif

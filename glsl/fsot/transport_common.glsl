@@ -8,24 +8,6 @@
 #include "rank_targets.glsl"
 #include "loop_cap.glsl"
 
-// Where the per-member reads go: with FSOT_TEXEL_READS (the per-lane pass) the
-// texel views of the samples and the taps (bindings.glsl), otherwise the storage
-// buffers. Same values either way.
-float fsot_sample(uint i) {
-#ifdef FSOT_TEXEL_READS
-    return texelFetch(sample_texels, int(i)).x;
-#else
-    return samples[i];
-#endif
-}
-uvec4 fsot_tap(uint t) {
-#ifdef FSOT_TEXEL_READS
-    return texelFetch(tap_texels, int(t));
-#else
-    return taps[t];
-#endif
-}
-
 // Class size of a slice in taps: those whose threshold exceeds its level
 // (thresholds decrease).
 uint fsot_class_taps(FsotSlice s) {

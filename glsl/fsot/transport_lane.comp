@@ -12,9 +12,9 @@
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 // variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
+#define FSOT_TEXEL_READS // samples and taps through their texel views (bindings.glsl)
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
-#define FSOT_TEXEL_READS // samples and taps through their texel views
 
 #include "transport_common.glsl"
 #include "slice_order.glsl"

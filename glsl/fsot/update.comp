@@ -1,9 +1,15 @@
 #version 450
-// The update pass, one invocation per coordinate: read and reset its accumulated
-// displacement, apply the step rule (src/step_rule.rs: step_value), wrap into
-// [0, 1). The step scale is the push constant's (the cosine schedule, or the
-// host's stopping rule) or the device's stopping rule's (plateau.comp).
+// The update pass, one invocation per coordinate: read its accumulated
+// displacement and reset it, apply the step rule (src/step_rule.rs: step_value),
+// wrap into [0, 1). The step scale is the push constant's (the cosine schedule,
+// or the host's stopping rule) or the device's stopping rule's (plateau.comp).
+// The TEXELS variants (CPU implementations) read through the texel views and
+// leave the reset to the host, which fills the accumulators with zeros after
+// the pass: on llvmpipe each storage-buffer access at per-lane addresses is a
+// loop over the lanes.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
+// variant TEXELS: FSOT_TEXEL_READS
+// variant TEXELS_FLOAT: FSOT_TEXEL_READS FSOT_FLOAT_ATOMICS
 #include "bindings.glsl"
 
 layout(local_size_x_id = 0) in;
@@ -15,26 +21,31 @@ float wrap01(float x) {
 }
 
 void main() {
+    // The stopping rule's state read first, where every lane runs: llvmpipe
+    // reads it once there, and lane by lane after a divergent branch.
+    bool stopped = schedule.stopped != 0u;
+    float device_scale = schedule.scale;
+    float scale = pc.scheduled != 0u ? device_scale : pc.scale;
     uint i = gl_GlobalInvocationID.y * (gl_NumWorkGroups.x * gl_WorkGroupSize.x) + gl_GlobalInvocationID.x;
-    if (i >= pc.values || schedule.stopped != 0u) {
-        return; // past the values, or the stopping rule ended the run
+    if (stopped || i >= pc.values) {
+        return; // the stopping rule ended the run, or past the values
     }
-    float scale = pc.scheduled != 0u ? schedule.scale : pc.scale;
+    float g = fsot_acc(i) * pc.inv_hits;
+#ifndef FSOT_TEXEL_READS
 #ifdef FSOT_FLOAT_ATOMICS
-    float g = acc[i] * pc.inv_hits;
     acc[i] = 0.0;
 #else
-    float g = float(acc[i]) * (1.0 / FSOT_FIXED_SCALE) * pc.inv_hits;
     acc[i] = int64_t(0);
 #endif
-    float x = samples[i];
+#endif
+    float x = fsot_sample(i);
     if (pc.rule == 0u) {
-        float m = pc.p1 * first[i] + (1.0 - pc.p1) * g;
+        float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
         first[i] = m;
         samples[i] = wrap01(x + pc.p0 * scale * m);
     } else {
-        float m = pc.p1 * first[i] + (1.0 - pc.p1) * g;
-        float v = pc.p2 * second[i] + (1.0 - pc.p2) * g * g;
+        float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
+        float v = pc.p2 * fsot_second(i) + (1.0 - pc.p2) * g * g;
         first[i] = m;
         second[i] = v;
         float mh = m / pc.bias1;

@@ -30,14 +30,22 @@ pub mod binding {
     pub const SLICE_ORDER: u32 = 19;
     pub const SAMPLE_TEXELS: u32 = 20;
     pub const TAP_TEXELS: u32 = 21;
+    pub const ACC_TEXELS: u32 = 22;
+    pub const FIRST_TEXELS: u32 = 23;
+    pub const SECOND_TEXELS: u32 = 24;
     /// Bindings in the layout (`FSOT_BINDINGS`).
-    pub const BINDINGS: u32 = 22;
+    pub const BINDINGS: u32 = 25;
     /// The bindings that are uniform texel buffers; every other is a storage buffer.
-    pub const TEXELS: [u32; 2] = [SAMPLE_TEXELS, TAP_TEXELS];
+    pub const TEXELS: [u32; 5] = [SAMPLE_TEXELS, TAP_TEXELS, ACC_TEXELS, FIRST_TEXELS, SECOND_TEXELS];
 
     /// Every uniform texel buffer with the name of its variable in GLSL.
-    pub const TEXEL_VARIABLES: [(&str, u32); 2] =
-        [("sample_texels", SAMPLE_TEXELS), ("tap_texels", TAP_TEXELS)];
+    pub const TEXEL_VARIABLES: [(&str, u32); 5] = [
+        ("sample_texels", SAMPLE_TEXELS),
+        ("tap_texels", TAP_TEXELS),
+        ("acc_texels", ACC_TEXELS),
+        ("first_texels", FIRST_TEXELS),
+        ("second_texels", SECOND_TEXELS),
+    ];
 
     /// Every storage buffer with the name of its block in GLSL.
     pub const BLOCKS: [(&str, u32); 20] = [

@@ -33,9 +33,10 @@ pub struct RunPipelines {
     pub plateau: Option<ComputePipeline>,
     /// The slice order's two passes (count, place), for the per-lane transport.
     pub order: Option<[ComputePipeline; 2]>,
-    /// The texel views of the samples and the taps the per-lane transport reads
-    /// (bindings SAMPLE_TEXELS and TAP_TEXELS), kept while the sets point at them.
-    pub texels: Option<[TexelView; 2]>,
+    /// The texel views the per-lane transport and the update pass read on CPU
+    /// implementations (bindings `TEXELS`), kept while the sets point at them;
+    /// there the update pass leaves the accumulators' reset to the host.
+    pub texels: Option<Vec<(u32, TexelView)>>,
 }
 
 pub struct LargePipelines {
@@ -76,17 +77,33 @@ impl RunPipelines {
         sort: Option<&RadixSort>,
     ) -> Result<Self> {
         let all = buffers.bindings(sort)?;
+        // The per-lane shape is for CPU implementations; its passes read through
+        // texel views: R32_SFLOAT values, RGBA32UI taps, the int64 accumulators
+        // as two words.
         let texels = match shape.per_lane {
-            true => Some([
-                TexelView::new(ctx, &buffers.samples, ash::vk::Format::R32_SFLOAT, 4)?,
-                TexelView::new(ctx, &buffers.taps, ash::vk::Format::R32G32B32A32_UINT, 16)?,
-            ]),
+            true => {
+                use ash::vk::Format;
+                let acc = if float_acc { (Format::R32_SFLOAT, 4) } else { (Format::R32G32_UINT, 8) };
+                let views = [
+                    (binding::SAMPLE_TEXELS, &buffers.samples, (Format::R32_SFLOAT, 4)),
+                    (binding::TAP_TEXELS, &buffers.taps, (Format::R32G32B32A32_UINT, 16)),
+                    (binding::ACC_TEXELS, &buffers.acc, acc),
+                    (binding::FIRST_TEXELS, &buffers.first, (Format::R32_SFLOAT, 4)),
+                    (binding::SECOND_TEXELS, &buffers.second, (Format::R32_SFLOAT, 4)),
+                ];
+                let made: Result<Vec<(u32, TexelView)>> = views
+                    .into_iter()
+                    .map(|(b, buffer, (format, bytes))| Ok((b, TexelView::new(ctx, buffer, format, bytes)?)))
+                    .collect();
+                Some(made?)
+            }
             false => None,
         };
         let bound = |p: ComputePipeline, set: usize, table: Option<&Buffer>| -> Result<ComputePipeline> {
             p.bind(set, &all)?;
-            if let Some([samples, taps]) = &texels {
-                p.bind_texels(set, &[(binding::SAMPLE_TEXELS, samples), (binding::TAP_TEXELS, taps)])?;
+            if let Some(views) = &texels {
+                let views: Vec<(u32, &TexelView)> = views.iter().map(|(b, v)| (*b, v)).collect();
+                p.bind_texels(set, &views)?;
             }
             if let Some(t) = table {
                 p.bind(set, &[(binding::GATHER_TABLE, t)])?;
@@ -116,7 +133,12 @@ impl RunPipelines {
         // run that compilation (what changes goes in TransportPush).
         let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, shape.local_max];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
-        let update_spv = if float_acc { shaders::UPDATE_FLOAT } else { shaders::UPDATE };
+        let update_spv = match (texels.is_some(), float_acc) {
+            (false, false) => shaders::UPDATE,
+            (false, true) => shaders::UPDATE_FLOAT,
+            (true, false) => shaders::UPDATE_TEXELS,
+            (true, true) => shaders::UPDATE_TEXELS_FLOAT,
+        };
         let update =
             bound(pipeline(ctx, update_spv, std::mem::size_of::<UpdatePush>(), &[256], 1)?, 0, None)?;
         let large = match sort {

@@ -234,7 +234,14 @@ impl VulkanRun {
         self.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
     }
 
-    /// The update dispatch of iteration `iteration` alone (barriers are the caller's).
+    /// The update pass reads through texel views (CPU implementations) and leaves
+    /// the accumulators' reset to a fill after it (`record_update_pass`).
+    fn update_leaves_reset(&self) -> bool {
+        self.pipelines.texels.is_some()
+    }
+
+    /// The update dispatch of iteration `iteration` alone (barriers are the
+    /// caller's; so is the accumulators' reset where `update_leaves_reset`).
     fn record_update_pass(&self, cmd: vk::CommandBuffer, iteration: u32) {
         let update = self.update_push(iteration);
         let groups = two_d((self.tile.values() as u32).div_ceil(256));
@@ -411,6 +418,12 @@ impl VulkanRun {
                         r.record_update_pass(cmd, r.iteration + k);
                     }
                     barrier(&ctx, cmd);
+                    if active.iter().any(|(r, _)| r.update_leaves_reset()) {
+                        for (r, _) in active.iter().filter(|(r, _)| r.update_leaves_reset()) {
+                            zero(&ctx, cmd, &r.buffers.acc, 0, vk::WHOLE_SIZE);
+                        }
+                        barrier(&ctx, cmd);
+                    }
                     stamp(cmd, 4 * k + 3);
                 }
                 for (r, &c) in runs.iter().zip(&counts) {
