@@ -2,7 +2,9 @@
 // The slice order's first pass (slice_order.glsl): one invocation per slice of
 // each iteration of the batch (workgroup row k: iteration pc.iteration + k)
 // draws the slice, records its class-size bin and counts it there. The bins must
-// be zero before.
+// be zero before. Run on CPU implementations only: the class size's binary
+// search reads the taps through their texel view.
+#define FSOT_TEXEL_READS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
 #include "transport_common.glsl"
