@@ -20,8 +20,8 @@ layout(push_constant) uniform Push { TransportPush pc; };
 #include "slice_order.glsl"
 
 layout(local_size_x_id = 0) in;
-// Largest class sorted in one invocation (set by the host: LANE_MAX); 40 KiB of
-// private memory per invocation at 2048.
+// Largest class sorted in one invocation (set by the host: LANE_MAX, at most
+// 65535 for the 16-bit counters); 36 KiB of private memory per invocation at 2048.
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 
@@ -29,10 +29,10 @@ layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 // projection's sortable key (fsot_float_key) above its point in 64 bits, so
 // that one comparison of two members orders them by projection, ties by point
 // (the CPU's order), and one private-memory access moves a member where two
-// would (on a SIMD driver each is a loop over the lanes); one counter per
-// bucket.
+// would (on a SIMD driver each is a loop over the lanes); a 16-bit counter per
+// bucket, two a word (the count, then the bucket's next position).
 uint64_t member[FSOT_LANE_MAX];
-uint bucket_start[FSOT_LANE_MAX];
+uint bucket_pair[(FSOT_LANE_MAX + 1u) / 2u];
 uint64_t sorted[FSOT_LANE_MAX];
 
 uint64_t pack_member(float key, uint point) {
@@ -125,29 +125,37 @@ void main() {
     FsotTargets z = fsot_targets(s);
     float low = fsot_targets_low(z);
     float scale = float(n) / max(fsot_targets_width(z), 1e-30);
-    for (uint b = 0u; b < n; ++b) {
-        bucket_start[b] = 0u;
+    // Two 16-bit counters a word (classes hold at most 2048 members): half the
+    // words to clear and to turn into first positions, where each word is a
+    // private-memory access per lane.
+    uint words = (n + 1u) / 2u;
+    for (uint w = 0u; w < words; ++w) {
+        bucket_pair[w] = 0u;
     }
     for (uint i = 0u; i < n; ++i) {
         uint point = fsot_class_point(s, i);
         float p = fsot_project(s, point);
         member[i] = pack_member(p, point);
-        bucket_start[lane_bucket(p, low, scale, n)] += 1u;
+        uint b = lane_bucket(p, low, scale, n);
+        bucket_pair[b >> 1u] += 1u << ((b & 1u) * 16u);
     }
     uint total = 0u;
     uint pairs = 0u; // pairs sharing a bucket: at most this many insertion moves
-    for (uint b = 0u; b < n; ++b) {
-        uint c = bucket_start[b];
-        bucket_start[b] = total;
-        total += c;
-        pairs += c * (c - min(c, 1u)) / 2u;
+    for (uint w = 0u; w < words; ++w) {
+        uint c = bucket_pair[w];
+        uint c0 = c & 0xffffu;
+        uint c1 = c >> 16u;
+        bucket_pair[w] = total | ((total + c0) << 16u);
+        total += c0 + c1;
+        pairs += c0 * (c0 - min(c0, 1u)) / 2u + c1 * (c1 - min(c1, 1u)) / 2u;
     }
     for (uint i = 0u; i < n; ++i) {
         uint64_t m = member[i];
         uint b = lane_bucket(member_key(m), low, scale, n);
-        uint at = bucket_start[b];
-        bucket_start[b] = at + 1u;
-        sorted[at] = m;
+        uint shift = (b & 1u) * 16u;
+        uint word = bucket_pair[b >> 1u];
+        bucket_pair[b >> 1u] = word + (1u << shift);
+        sorted[(word >> shift) & 0xffffu] = m;
     }
     // Insertion sort: each key moves past the larger keys of its own bucket,
     // so at most `pairs` moves in all. Where keys pile into few buckets

@@ -6,9 +6,9 @@ use crate::vk::DeviceInfo;
 /// specialization constant `FSOT_LOCAL_MAX` of transport.comp).
 pub const LOCAL_MAX: u32 = 2048;
 /// Classes up to this many samples are sorted by one invocation in the per-lane
-/// transport (`FSOT_LANE_MAX` of transport_lane.comp; its private arrays take 20
+/// transport (`FSOT_LANE_MAX` of transport_lane.comp; its private arrays take 18
 /// bytes per sample per invocation, which lavapipe takes and an NVIDIA driver
-/// refuses: the per-lane transport is for CPU implementations only).
+/// refused at 20: the per-lane transport is for CPU implementations only).
 pub const LANE_MAX: u32 = 2048;
 /// Loop iterations one transport invocation may spend over its slices: under half
 /// of lavapipe's cap of 65535 per invocation.
