@@ -235,7 +235,7 @@ impl VulkanRun {
     }
 
     /// The update pass reads through texel views (CPU implementations) and leaves
-    /// the accumulators' reset to a fill after it (`record_update_pass`).
+    /// the accumulators' reset to the fill the batch records after it.
     fn update_leaves_reset(&self) -> bool {
         self.pipelines.texels.is_some()
     }

@@ -65,7 +65,10 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
         layers.push(Layer::new(
             (w, h),
             layer_attributes,
-            Encoding::FAST_LOSSLESS,
+            // Chunks in increasing order: compressed in parallel, written in
+            // the order they would be one at a time (unspecified, the file's
+            // bytes depend on which thread finishes first).
+            Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS },
             AnyChannels::sort(channels),
         ));
     }

@@ -1,8 +1,8 @@
 //! Compute pipelines: one shader pass, a descriptor set layout at bindings 0..n
 //! in set 0 (storage buffers unless listed as uniform buffers, uniform texel
-//! buffers or combined image samplers; a shader family shares one layout), a push-constant block,
-//! specialization constants 0..m (workgroup size first), and descriptor sets
-//! bound to buffers, texel views and images by binding index.
+//! buffers or combined image samplers; a shader family shares one layout), a
+//! push-constant block, specialization constants 0..m (workgroup size first),
+//! and descriptor sets bound to buffers, texel views and images by binding index.
 
 use ash::vk;
 
