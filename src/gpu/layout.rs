@@ -35,9 +35,6 @@ pub mod binding {
     pub const SECOND_TEXELS: u32 = 24;
     /// Bindings in the layout (`FSOT_BINDINGS`).
     pub const BINDINGS: u32 = 25;
-    /// The bindings that are uniform texel buffers; every other is a storage buffer.
-    pub const TEXELS: [u32; 5] = [SAMPLE_TEXELS, TAP_TEXELS, ACC_TEXELS, FIRST_TEXELS, SECOND_TEXELS];
-
     /// Every uniform texel buffer with the name of its variable in GLSL.
     pub const TEXEL_VARIABLES: [(&str, u32); 5] = [
         ("sample_texels", SAMPLE_TEXELS),
@@ -46,6 +43,17 @@ pub mod binding {
         ("first_texels", FIRST_TEXELS),
         ("second_texels", SECOND_TEXELS),
     ];
+    /// The bindings that are uniform texel buffers (TEXEL_VARIABLES's); every
+    /// other is a storage buffer.
+    pub const TEXELS: [u32; TEXEL_VARIABLES.len()] = {
+        let mut out = [0; TEXEL_VARIABLES.len()];
+        let mut i = 0;
+        while i < out.len() {
+            out[i] = TEXEL_VARIABLES[i].1;
+            i += 1;
+        }
+        out
+    };
 
     /// Every storage buffer with the name of its block in GLSL.
     pub const BLOCKS: [(&str, u32); 20] = [
