@@ -124,19 +124,21 @@ float fsot_piece_mean_mid(FsotTrapezoid z, float y, float x) {
     return 0.5 * z.a2 * (x + y) + 0.5 * z.a1;
 }
 
+// Written without branches: a SIMD driver (lavapipe) runs every branch for all
+// its lanes, so each piece is evaluated once, on the part of the bin it covers,
+// and weighted by that part (exactly 1 or 0 for a bin wholly in one piece,
+// where the other piece's value is finite).
 float fsot_quantile_mean(FsotTrapezoid z, uint q, uint n) {
     float nf = float(n);
     float y = float(q) / nf, x = float(q + 1u) / nf;
     float u1 = 0.5 * z.a1 / z.a2;
     float u1n = u1 * nf; // u1 in units of the width
-    if (float(q + 1u) <= u1n) {
-        return fsot_piece_mean_low(z, y, x);
-    }
-    if (float(q) >= u1n) {
-        return fsot_piece_mean_mid(z, y, x);
-    }
-    float low = u1n - float(q); // fraction of the bin below u1
-    return low * fsot_piece_mean_low(z, y, u1) + (1.0 - low) * fsot_piece_mean_mid(z, u1, x);
+    bool all_low = float(q + 1u) <= u1n;
+    bool all_mid = float(q) >= u1n;
+    float below = all_low ? 1.0 : (all_mid ? 0.0 : u1n - float(q)); // fraction of the bin below u1
+    float low = fsot_piece_mean_low(z, y, all_low ? x : u1);
+    float mid = fsot_piece_mean_mid(z, all_mid ? y : u1, x);
+    return below * low + (1.0 - below) * mid;
 }
 
 // Target of rank r of n on the real line.

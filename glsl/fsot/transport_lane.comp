@@ -162,17 +162,25 @@ void main() {
     // (degenerate samples), a heap sort instead: O(n log n) whatever the keys,
     // so no class pushes an invocation past the driver's loop budget.
     if (pairs <= FSOT_INSERTION_BUDGET * n) {
-        // The largest key so far stays in registers: most keys are already in
-        // place (a different bucket from their predecessor), so they cost one
-        // comparison and no private-memory traffic.
+        // In two loops, because a SIMD driver runs every branch of a loop's
+        // body for all its lanes (masked): first the keys smaller than the
+        // largest before them, found with that largest in registers and listed
+        // in `member` (free after the placing pass); then only those, in order,
+        // each moved down past the larger keys (the same moves as one insertion
+        // loop: a key's predecessors are in order when its turn comes). About a
+        // fifth of the keys are listed, so the loop with the moves runs a fifth
+        // as often.
         uint64_t last = sorted[0];
+        uint listed = 0u;
         for (uint i = 1u; i < n; ++i) {
             uint64_t m = sorted[i];
-            if (!(m < last)) {
-                last = m;
-                continue;
-            }
-            uint j = i;
+            member[listed] = uint64_t(i); // kept only if counted
+            listed += m < last ? 1u : 0u;
+            last = max(last, m);
+        }
+        for (uint k = 0u; k < listed; ++k) {
+            uint j = uint(member[k]);
+            uint64_t m = sorted[j];
             do {
                 sorted[j] = sorted[j - 1u];
                 --j;

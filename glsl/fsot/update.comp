@@ -39,17 +39,20 @@ void main() {
 #endif
 #endif
     float x = fsot_sample(i);
-    if (pc.rule == 0u) {
-        float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
-        first[i] = m;
-        samples[i] = wrap01(x + pc.p0 * scale * m);
-    } else {
-        float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
+    // The samples and the first moment stored once for both rules: a SIMD
+    // driver runs both sides of a branch, stores included (each a loop over
+    // the lanes).
+    float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
+    first[i] = m;
+    // The step is p0 scale m (momentum) or p0 scale mh / (sqrt(vh) + p3) (Adam),
+    // in src/step_rule.rs's order of operations (a division by 1 is exact).
+    float moment = m;
+    float divisor = 1.0;
+    if (pc.rule != 0u) {
         float v = pc.p2 * fsot_second(i) + (1.0 - pc.p2) * g * g;
-        first[i] = m;
         second[i] = v;
-        float mh = m / pc.bias1;
-        float vh = v / pc.bias2;
-        samples[i] = wrap01(x + pc.p0 * scale * mh / (sqrt(vh) + pc.p3));
+        moment = m / pc.bias1;
+        divisor = sqrt(v / pc.bias2) + pc.p3;
     }
+    samples[i] = wrap01(x + pc.p0 * scale * moment / divisor);
 }

@@ -177,13 +177,14 @@ impl TransportShape {
 
     /// Upper bound on one per-lane invocation's loop iterations for a class of
     /// `n` (n <= LANE_MAX): clear, count, prefix and place (n each), the sort's
-    /// worst case (insertion moves or the heap-sort fallback), then the targets
-    /// (n for d <= 2; for d >= 3 the walk over n / 2 ranks, each at its worst).
+    /// worst case (the insertion's listing pass, its list and its moves, at
+    /// most n + n + 4n; or the heap-sort fallback), then the targets (n for
+    /// d <= 2; for d >= 3 the walk over n / 2 ranks, each at its worst).
     pub fn lane_iterations(n: u32, dims: usize) -> u32 {
         let n = n.max(2);
         let heap = 3 * n / 2 + (3 * n / 2) * n.ilog2();
         let targets = if dims <= 2 { n } else { Self::walk_worst(n / 2, dims) };
-        4 * n + (5 * n).max(heap) + targets
+        4 * n + (6 * n).max(heap) + targets
     }
 
     /// Upper bound on one workgroup invocation's loop iterations for a class of
@@ -321,14 +322,15 @@ mod tests {
             assert!(spg * worst <= LOOP_BUDGET, "{max_class}: {spg} x {worst}");
         }
         // Per lane, one invocation sorts a whole class: clear, count, prefix and
-        // place (one loop over n each), then either insertion moves (n + at most
-        // 4n, FSOT_INSERTION_BUDGET) or the heap-sort fallback (3n/2 sift-downs
-        // of at most log2 n steps each), then targets and scatter (n). At
-        // LANE_MAX the fallback is the worst case, about 47k: under lavapipe's
-        // 65535 for all loops of an invocation.
+        // place (one loop over n each), then either the insertion (a listing
+        // pass of n, a list of at most n, and at most 4n moves,
+        // FSOT_INSERTION_BUDGET) or the heap-sort fallback (3n/2 sift-downs of
+        // at most log2 n steps each), then targets and scatter (n). At LANE_MAX
+        // the fallback is the worst case, about 47k: under lavapipe's 65535 for
+        // all loops of an invocation.
         let n = LANE_MAX;
         let log = n.ilog2();
-        let insertion = n + 4 * n;
+        let insertion = n + n + 4 * n;
         let heap = 3 * n / 2 + (3 * n / 2) * log;
         let per_lane = 5 * n + insertion.max(heap);
         assert!(per_lane < 50_000, "{per_lane}");
