@@ -31,15 +31,11 @@ pub const BATCH: u32 = 32;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct VulkanOptions {
     /// Fixed-point int64 atomics: bit-identical run to run. Otherwise float
-    /// atomic add where a GPU has it (faster on some GPUs, not reproducible bit
-    /// for bit); CPU implementations (lavapipe) take fixed point either way
-    /// unless `float_atomics` says otherwise: there the two cost the same within
-    /// the timings' spread (`bench/results/issue16-lane-*-transport.txt`), and
-    /// fixed point is reproducible.
+    /// atomic add where the device has it, GPUs and CPU implementations
+    /// (lavapipe) alike: faster (on lavapipe about 13% a run since the texel
+    /// views: `bench/results/issue16-float-default.txt`), not reproducible bit
+    /// for bit.
     pub deterministic: bool,
-    /// Float atomics also on a CPU implementation that has them (ignored with
-    /// `deterministic`): for tests and comparisons.
-    pub float_atomics: bool,
     /// Time each pass with timestamp queries.
     pub profile: bool,
     /// Which transport pass to use: None picks by device (per lane on CPU

@@ -85,8 +85,7 @@ impl VulkanRun {
         let kernel = Kernel::new(settings.kernel, &tile);
         let (slices, hits_per_value) = slices_and_hits(&tile, &kernel, &settings)?;
         let samples = initial_samples(&tile, &settings, init)?;
-        let float_acc =
-            !options.deterministic && info.float_atomic_add && (!info.is_cpu() || options.float_atomics);
+        let float_acc = !options.deterministic && info.float_atomic_add;
         let max_class = (kernel.taps.len() * tile.spp) as u32;
         // The per-lane transport's texel views: the samples, and the taps.
         let texels = (tile.values() as u64).max(kernel.taps.len() as u64);

@@ -21,12 +21,6 @@ pub(crate) fn float_pair_targets() -> bool {
     std::env::var("FSOT_FLOAT_PAIRS").map(|v| v == "1").unwrap_or(false)
 }
 
-/// `FSOT_FLOAT_ATOMICS=1`: float atomics also on a CPU implementation
-/// (lavapipe), whose default is fixed point (to compare the two).
-pub(crate) fn float_atomics() -> bool {
-    std::env::var("FSOT_FLOAT_ATOMICS").map(|v| v == "1").unwrap_or(false)
-}
-
 /// `FSOT_HOST_RULE=1`: a stopping rule evaluated by the host once per window
 /// even where the device could evaluate it (to compare the two).
 pub(crate) fn host_stopping_rule() -> bool {

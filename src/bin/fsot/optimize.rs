@@ -155,7 +155,6 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
     let backend = args.backend.choice();
     let vulkan = VulkanOptions {
         deterministic: args.deterministic,
-        float_atomics: env::float_atomics(),
         profile: args.profile,
         transport: None,
         transport_shape: env::transport_shape(),
