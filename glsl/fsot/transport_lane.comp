@@ -162,14 +162,16 @@ void main() {
     // (degenerate samples), a heap sort instead: O(n log n) whatever the keys,
     // so no class pushes an invocation past the driver's loop budget.
     if (pairs <= FSOT_INSERTION_BUDGET * n) {
-        // In two loops, because a SIMD driver runs every branch of a loop's
-        // body for all its lanes (masked): first the keys smaller than the
-        // largest before them, found with that largest in registers and listed
-        // in `member` (free after the placing pass); then only those, in order,
-        // each moved down past the larger keys (the same moves as one insertion
-        // loop: a key's predecessors are in order when its turn comes). About a
-        // fifth of the keys are listed, so the loop with the moves runs a fifth
-        // as often.
+        // In two loops, because a SIMD driver (llvmpipe) runs both sides of a
+        // branch for all its lanes, masked, and a store under a mask is a loop
+        // over the lanes: first the keys smaller than the largest before them,
+        // found with that largest in registers and listed in `member` (free
+        // after the placing pass) without a branch (every lane stores, the slot
+        // is kept only where counted); then only those, in order, each moved
+        // down past the larger keys (the same moves as one insertion loop: a
+        // key's predecessors are in order when its turn comes). About a fifth
+        // of the keys are listed, so the loop with the moves runs a fifth as
+        // often (bench/results/issue16-branch-free.txt).
         uint64_t last = sorted[0];
         uint listed = 0u;
         for (uint i = 1u; i < n; ++i) {
