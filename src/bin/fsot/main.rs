@@ -302,7 +302,8 @@ struct OptimizeArgs {
     /// per iteration].
     #[arg(long, allow_negative_numbers = true)]
     slices: Option<u32>,
-    /// Random seed: the same seed gives a bit-identical mask.
+    /// Random seed: the same seed gives a bit-identical mask (on Vulkan with
+    /// --deterministic).
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
     seed: u64,
     /// Where to run.
