@@ -99,10 +99,10 @@ impl RunPipelines {
             }
             false => None,
         };
+        let views: Vec<(u32, &TexelView)> = texels.iter().flatten().map(|(b, v)| (*b, v)).collect();
         let bound = |p: ComputePipeline, set: usize, table: Option<&Buffer>| -> Result<ComputePipeline> {
             p.bind(set, &all)?;
-            if let Some(views) = &texels {
-                let views: Vec<(u32, &TexelView)> = views.iter().map(|(b, v)| (*b, v)).collect();
+            if !views.is_empty() {
                 p.bind_texels(set, &views)?;
             }
             if let Some(t) = table {
