@@ -97,6 +97,12 @@ impl CancelFlag {
     }
 }
 
+/// A step (one submission on the GPU) is sized from the pace of the step before
+/// it to last about this long, so that cancelling and the progress report answer
+/// within it even where an iteration takes seconds (a large tile on lavapipe).
+/// A GPU's batch (32 iterations) lasts far less.
+const STEP_SECONDS: f64 = 0.5;
+
 /// An optimization in progress, on whichever backend it was given.
 pub struct Run {
     tile: Tile,
@@ -118,6 +124,9 @@ pub struct Run {
     /// Seconds spent stepping this run (a step shared with other runs counts in
     /// full for each).
     busy: f64,
+    /// Seconds per iteration of the last step; None before the first step,
+    /// which then takes one iteration.
+    pace: Option<f64>,
 }
 
 impl Run {
@@ -151,6 +160,7 @@ impl Run {
             stopped: false,
             rule_on_backend: false,
             busy: 0.0,
+            pace: None,
         };
         run.hand_over_rule()?;
         Ok(run)
@@ -238,9 +248,11 @@ impl Run {
     fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
         let count = self.next_step(to);
         let start = std::time::Instant::now();
-        let costs = self.backend.step_up_to(count);
-        self.busy += start.elapsed().as_secs_f64();
-        self.stepped(&costs?, on)
+        let costs = self.backend.step_up_to(count)?;
+        let seconds = start.elapsed().as_secs_f64();
+        self.busy += seconds;
+        self.paced(seconds, costs.len());
+        self.stepped(&costs, on)
     }
 
     /// Seconds spent stepping this run (a step shared with other runs, in
@@ -249,9 +261,17 @@ impl Run {
         self.busy
     }
 
+    /// Notes the pace of a step of `iterations` that took `seconds`.
+    fn paced(&mut self, seconds: f64, iterations: usize) {
+        if iterations > 0 {
+            self.pace = Some(seconds / iterations as f64);
+        }
+    }
+
     /// The iterations the next step may take towards `to`: up to the next
-    /// checkpoint, and under a stopping rule to the end of its window (where
-    /// the rule decides); sets the step scale the rule's schedule gives.
+    /// checkpoint, under a stopping rule to the end of its window (where the
+    /// rule decides), and as many as last about `STEP_SECONDS` at the last
+    /// step's pace; sets the step scale the rule's schedule gives.
     fn next_step(&mut self, to: u32) -> u32 {
         let mut stop = match &self.options.checkpoint {
             Some(_) => to.min(self.next_checkpoint),
@@ -267,7 +287,7 @@ impl Run {
             }
             None => {}
         }
-        stop.saturating_sub(self.iteration()).max(1)
+        stop.saturating_sub(self.iteration()).max(1).min(paced_iterations(self.pace))
     }
 
     /// After a step that gave `costs`: the stopping rule, progress, and the
@@ -377,8 +397,11 @@ impl Run {
                 }
                 VulkanRun::step_together(&mut members, &counts)
             };
+            let seconds = start.elapsed().as_secs_f64();
+            let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));
             for &r in &group {
-                runs[r].busy += start.elapsed().as_secs_f64();
+                runs[r].busy += seconds;
+                runs[r].paced(seconds, most);
             }
             match result {
                 Ok(costs) => {
@@ -448,6 +471,7 @@ impl Run {
         }
         self.plateau = schedule(&self.settings, saved.as_ref());
         self.backend = Box::new(cpu);
+        self.pace = None;
         self.hand_over_rule()?;
         self.note = self.backend.describe();
         let from = self.iteration();
@@ -455,6 +479,17 @@ impl Run {
         self.next_checkpoint = from.saturating_add(every);
         on(Event::FellBack { error: e, at, backend: &self.note, from, checkpoint: checkpoint.as_deref() });
         Ok(())
+    }
+}
+
+/// The iterations a step may take at `pace` seconds per iteration (the last
+/// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
+/// known.
+fn paced_iterations(pace: Option<f64>) -> u32 {
+    match pace {
+        Some(pace) if pace > 0.0 => (STEP_SECONDS / pace).clamp(1.0, u32::MAX as f64) as u32,
+        Some(_) => u32::MAX,
+        None => 1,
     }
 }
 
@@ -586,4 +621,20 @@ pub fn optimize(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<M
     let mut run = Run::start(tile, settings, init, options)?;
     run.run(&CancelFlag::new(), &mut |_| {})?;
     run.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{paced_iterations, STEP_SECONDS};
+
+    #[test]
+    fn a_step_takes_one_iteration_until_the_pace_is_known_then_about_step_seconds_worth() {
+        assert_eq!(paced_iterations(None), 1);
+        assert_eq!(paced_iterations(Some(STEP_SECONDS / 32.0)), 32);
+        assert_eq!(paced_iterations(Some(0.001)), (STEP_SECONDS / 0.001) as u32);
+        // Slower than a step's worth: still one iteration at a time.
+        assert_eq!(paced_iterations(Some(3.0 * STEP_SECONDS)), 1);
+        // A step too quick to time does not limit the next.
+        assert_eq!(paced_iterations(Some(0.0)), u32::MAX);
+    }
 }

@@ -106,6 +106,33 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
     common::assert_no_validation_messages(&ctx);
 }
 
+/// A Vulkan run paces its steps (one submission each) to last about half a second
+/// at the last step's pace, so that the flag and the progress report answer
+/// within that much even on a slow device: the first step is one iteration; on a
+/// device that is fast for the tile, the steps after it are whole batches.
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_are_fast() {
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
+    let options =
+        RunOptions { backend: BackendChoice::Vulkan, context: Some(ctx.clone()), ..RunOptions::default() };
+    let mut run = Run::start(tile, settings(80), None, options).unwrap();
+    let mut seen = Vec::new();
+    let outcome = run
+        .run(&CancelFlag::new(), &mut |event| {
+            if let Event::Progress { iteration, .. } = event {
+                seen.push(iteration)
+            }
+        })
+        .unwrap();
+    assert_eq!(outcome, Outcome::Reached);
+    // 8x8x2 takes well under a millisecond per iteration even on lavapipe in CI
+    // (a batch of 32 well under the half second).
+    assert_eq!(seen, [1, 33, 65, 80], "steps: {seen:?}");
+    common::assert_no_validation_messages(&ctx);
+}
+
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {

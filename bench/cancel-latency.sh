@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# How soon a run stops on Ctrl-C, and what pacing its steps costs a whole run: two
+# fsot binaries on the same problems, alternating. For each case a run is started,
+# sent SIGINT after WAIT seconds (past the set-up), and the seconds from the signal
+# to its exit are taken; then whole runs (no signal) of the quick problems.
+# Usage: bench/cancel-latency.sh OLD_FSOT NEW_FSOT OUT_FILE   (lavapipe unless
+# VK_DRIVER_FILES says otherwise)
+set -euo pipefail
+old=$(realpath "$1"); new=$(realpath "$2"); out=$3
+cd "$(dirname "$0")/.."
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+WAIT=${WAIT:-20}
+ROUNDS=${ROUNDS:-3}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# Seconds from SIGINT (sent WAIT s after the start) to the exit of `BIN optimize ARGS`.
+latency() {
+  local bin=$1; shift
+  "$bin" optimize "$@" --out "$work/m.exr" >"$work/log" 2>&1 &
+  local pid=$!
+  sleep "$WAIT"
+  local t0=$EPOCHREALTIME
+  kill -INT "$pid" 2>/dev/null || true
+  wait "$pid" || true
+  awk -v a="$t0" -v b="$EPOCHREALTIME" 'BEGIN {printf "%.2f", b - a}'
+  rm -f "$work"/m.*
+}
+# Seconds of a whole run, as the run reports them.
+whole() {
+  local bin=$1; shift
+  "$bin" optimize "$@" --out "$work/m.exr" 2>&1 | grep -o 'iterations in [0-9.]* s' | awk '{print $3}'
+  rm -f "$work"/m.*
+}
+{
+  echo "# bench/cancel-latency.sh: old $old ($("$old" --version | head -1)), new $new; commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F); SIGINT after $WAIT s"
+  echo "case | build | seconds from SIGINT to exit (each round)"
+  echo "---|---|---"
+  for case in "--backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa" \
+    "--backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa" \
+    "--backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa"; do
+    for b in old new; do
+      bin=$old; [ $b = new ] && bin=$new
+      row=""
+      for _ in $(seq "$ROUNDS"); do row="$row $(latency "$bin" $case)"; done
+      echo "$case | $b |$row"
+    done
+  done
+  echo
+  echo "case | build | whole run, s (each round, alternating)"
+  echo "---|---|---"
+  for case in "--backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 192" \
+    "--backend vulkan --size 64x64x16 --dims 2 --kernel perceptual-taa --iterations 300"; do
+    o=""; n=""
+    for _ in $(seq "$ROUNDS"); do o="$o $(whole "$old" $case)"; n="$n $(whole "$new" $case)"; done
+    echo "$case | old |$o"
+    echo "$case | new |$n"
+  done
+} | tee "$out"
