@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Prepares what bench/gpu/run-lent-gpu.sh carries to a lent GPU machine, on the
+# development machine (no GPU needed), so that the lent time goes to measuring:
+#   .gl/*.deb          the Vulkan loader, vulkaninfo and the validation layer
+# packed in .gl/bin.tar.gz:
+#   .gl/bin/fsot       this build's command line (and .gl/bin/fsot-NAME for other
+#                      builds to compare: OLD_FSOT="NAME=path ..." copies them in)
+#   .gl/t/deps/NAME    the test binaries that use a device, .gl/t/examples/ the
+#                      example renderer their test runs
+# all stripped, and .gl/commit naming the build. Then it checks that what travels
+# fits the device tool's 64 MiB (the tracked and untracked files, and .gl/) and
+# prints the `run` call to make.
+# Usage: [OLD_FSOT="base=/tmp/fsot-base"] bench/gpu/prepare.sh
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+export PATH="$HOME/.cargo/bin:$PATH"
+
+if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then ../shared/gpu/fetch-vulkan-loader.sh; fi
+if ! ls .gl/vulkan-validationlayers_*.deb >/dev/null 2>&1; then
+  mkdir -p /tmp/amd64/partial
+  (cd .gl && apt-get -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64 \
+    download vulkan-validationlayers 2>&1 | grep -v 'unsandboxed' || true)
+fi
+ls .gl/vulkan-validationlayers_*.deb >/dev/null
+
+# The tests that open a device (the others gain nothing from a GPU).
+tests=(gpu_toolchain gpu_sort gpu_sort_look_back gpu_scatter gpu_optimizer gpu_plan gpu_stopping_rule
+  gpu_slice_order gpu_loop_cap gpu_swap gpu_failures vk_layer host_image taa_renderer run stress bench)
+rm -rf .gl/bin .gl/t
+mkdir -p .gl/bin .gl/t/deps .gl/t/examples
+cargo build --release --quiet --bin fsot --example taa_renderer
+cp target/release/fsot .gl/bin/fsot
+cp target/release/examples/taa_renderer .gl/t/examples/
+for pair in ${OLD_FSOT:-}; do cp "${pair#*=}" ".gl/bin/fsot-${pair%%=*}"; done
+args=()
+for t in "${tests[@]}"; do args+=(--test "$t"); done
+cargo test --release --no-run --message-format=json "${args[@]}" 2>/dev/null |
+  jq -r 'select(.reason == "compiler-artifact" and .executable != null and .profile.test) | "\(.target.name) \(.executable)"' |
+  while read -r name exe; do cp "$exe" ".gl/t/deps/$name"; done
+for t in "${tests[@]}"; do [ -x ".gl/t/deps/$t" ] || { echo "prepare: test binary $t is missing" >&2; exit 1; }; done
+strip .gl/bin/* .gl/t/deps/* .gl/t/examples/*
+echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl tests examples || echo -dirty)" > .gl/commit
+# Packed (gzip: about a third of the size; every machine has it); the run unpacks.
+tar -czf .gl/bin.tar.gz -C .gl bin t commit
+rm -rf .gl/bin .gl/t .gl/commit
+
+tracked=$(git ls-files -z --cached --others --exclude-standard | xargs -0 stat -c %s 2>/dev/null | awk '{s += $1} END {print s}')
+carried=$(du -sb .gl | cut -f1)
+total=$((tracked + carried))
+awk -v a="$total" -v b="$tracked" -v c="$carried" \
+  'BEGIN {printf "travels: %.1f MiB (tree %.1f, .gl %.1f) of 64 MiB\n", a / 1048576, b / 1048576, c / 1048576}'
+if [ "$total" -gt $((60 * 1048576)) ]; then echo "prepare: over 60 MiB; the call would be refused" >&2; exit 1; fi
+echo 'run: carry [".gl"], command "OUT=$OUT bash bench/gpu/run-lent-gpu.sh", timeout_s 540'
