@@ -39,7 +39,7 @@ elapsed() { awk -v a="$START" -v b="$EPOCHREALTIME" 'BEGIN {printf "%.1f", b - a
 if [ "$DRY_RUN" != 1 ]; then
   for f in .gl/*.deb; do dpkg -x "$f" / >/dev/null 2>&1; done
   ldconfig
-  if [ ! -f /usr/share/vulkan/icd.d/nvidia_icd.json ] && [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
+  if [ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
   fi
 fi
@@ -75,7 +75,7 @@ optimize() {
 }
 
 {
-  echo "# bench/gpu/run-lent-gpu.sh, build $(cat .gl/commit 2>/dev/null || echo unknown), $(date -u '+%F %T') UTC, budget $BUDGET_S s, step timeout $STEP_TIMEOUT s${DRY_RUN/#1/, dry run}"
+  echo "# bench/gpu/run-lent-gpu.sh, build $(cat .gl/commit 2>/dev/null || echo unknown), $(date -u '+%F %T') UTC, budget $BUDGET_S s, step timeout $STEP_TIMEOUT s$([ "$DRY_RUN" = 1 ] && echo ', dry run')"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv 2>&1
   lscpu | grep -E "Model name|^CPU\(s\)"
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
