@@ -1,8 +1,8 @@
 //! The compiled SPIR-V agrees with its Rust mirror: every storage block's and
 //! texel buffer's binding index, every push-constant struct's member names and
-//! offsets, and the layout
-//! of the structs inside buffers, read from the shaders build.rs compiled (with
-//! rspirv, an independent SPIR-V reader). GLSL and Rust cannot drift apart.
+//! offsets, and the layout of the structs inside buffers, read from the shaders
+//! build.rs compiled (with rspirv, an independent SPIR-V reader). GLSL and Rust
+//! cannot drift apart.
 
 use std::collections::HashMap;
 
