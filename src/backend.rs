@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::mask::Mask;
 use crate::settings::RunState;
 use crate::step_rule::{Plateau, PlateauState};
+use crate::vk::PathChoice;
 
 /// Where a run may go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -66,6 +67,9 @@ pub struct Report {
     pub skipped_large_classes: u64,
     /// What the Vulkan validation layer reported (empty with the layer off).
     pub validation_messages: Vec<String>,
+    /// The large-class stage's sort path and how it was chosen (Vulkan, where
+    /// the run has that stage and the path was timed or set).
+    pub large_sort: Option<PathChoice>,
 }
 
 /// A run of the optimizer on one backend: step, save, restore, read.

@@ -25,7 +25,8 @@ ls .gl/vulkan-validationlayers_*.deb >/dev/null
 
 # The tests that open a device (the others gain nothing from a GPU).
 tests=(gpu_toolchain gpu_sort gpu_sort_look_back gpu_scatter gpu_optimizer gpu_plan gpu_stopping_rule
-  gpu_slice_order gpu_loop_cap gpu_swap gpu_failures vk_layer host_image taa_renderer run stress bench)
+  gpu_slice_order gpu_loop_cap gpu_swap gpu_failures vk_layer host_image taa_renderer run stress bench
+  gpu_sort_choice)
 rm -rf .gl/bin .gl/t
 mkdir -p .gl/bin .gl/t/deps .gl/t/examples
 cargo build --release --quiet --bin fsot --example taa_renderer

@@ -95,6 +95,9 @@ optimize() {
   if want optimize; then
     # Issue 16, item 5: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
     optimize gpu-128x128x30-ptaa --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    # The large-class stage's sort: chosen at run time above (the log says which,
+    # and both paths' times); here the block passes kept, to compare.
+    FSOT_SORT=blocks optimize gpu-128x128x30-ptaa-blocks --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
     # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile

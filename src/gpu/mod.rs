@@ -15,6 +15,8 @@ pub mod swap;
 pub use run::VulkanRun;
 pub use shape::{TransportKind, TransportShape};
 
+use crate::vk::SortPath;
+
 pub mod shaders {
     //! SPIR-V of `glsl/fsot/*.comp` and their variants, compiled by `build.rs`.
     include!(concat!(env!("OUT_DIR"), "/fsot_shaders.rs"));
@@ -59,4 +61,11 @@ pub struct VulkanOptions {
     /// (at most a batch), as where one binding cannot hold a batch's orders:
     /// for tests.
     pub slice_order_slots: Option<u32>,
+    /// The large-class stage's sort path. None: chosen at run time
+    /// (`vk::choose_sort_path`: on GPUs the faster of the look-back path and
+    /// the block passes, timed on the device at the stage's expected size;
+    /// the block passes on CPU implementations). Set: that path, untimed (for
+    /// tests and comparisons; the command line reads `FSOT_SORT`). The look-back
+    /// path must not be set on a CPU implementation that runs several threads.
+    pub large_sort: Option<SortPath>,
 }

@@ -30,7 +30,7 @@ use crate::slice::{level_thresholds, slice_key};
 use crate::step_rule::{schedule, Plateau, PlateauState, StepRule};
 use crate::vk::buffer::{download_batch, upload_batch};
 use crate::vk::commands::{barrier, copy, zero};
-use crate::vk::{Buffer, Context, RadixSort, Timer};
+use crate::vk::{choose_sort_path, Buffer, Context, PathChoice, RadixSort, SortPath, Timer};
 
 pub struct VulkanRun {
     pub tile: Tile,
@@ -56,6 +56,8 @@ pub struct VulkanRun {
     // Pipelines and the sort before the buffers they are bound to: dropped first.
     pipelines: RunPipelines,
     sort: Option<RadixSort>,
+    /// How the large-class sort's path was chosen (None without that stage).
+    sort_choice: Option<PathChoice>,
     timer: Option<Timer>,
     buffers: RunBuffers,
     ctx: Context,
@@ -116,7 +118,15 @@ impl VulkanRun {
             local_max,
             order_words,
         )?;
-        let sort = buffers.large_sort(ctx, &large)?;
+        let mut sort = buffers.large_sort(ctx, &large)?;
+        let sort_choice = match sort.as_mut() {
+            Some(sort) => {
+                let choice = large_sort_path(ctx, &large, options.large_sort)?;
+                sort.path = choice.path;
+                Some(choice)
+            }
+            None => None,
+        };
         let pipelines = RunPipelines::new(ctx, &shape, targets, float_acc, &buffers, sort.as_ref())?;
         let timer = if options.profile { Some(Timer::new(ctx, 4 * BATCH)?) } else { None };
         Ok(Self {
@@ -137,6 +147,7 @@ impl VulkanRun {
             rule: None,
             pipelines,
             sort,
+            sort_choice,
             timer,
             buffers,
             ctx: ctx.clone(),
@@ -503,6 +514,16 @@ impl VulkanRun {
     }
 }
 
+/// The large-class sort's path: `set`, else chosen on the device
+/// (`choose_sort_path`) for the stage's 32-bit sort (the projection keys: four
+/// of its ten or so passes) at the expected count of an iteration.
+fn large_sort_path(ctx: &Context, large: &LargePlan, set: Option<SortPath>) -> Result<PathChoice> {
+    match set {
+        Some(path) => Ok(PathChoice::forced(path)),
+        None => choose_sort_path(ctx, (large.expected.round() as u32).clamp(1, large.capacity.max(1)), 32),
+    }
+}
+
 /// The transport shape for this device and kernel, or why the asked one cannot be.
 fn transport_shape(
     ctx: &Context,
@@ -682,6 +703,9 @@ impl Backend for VulkanRun {
             }),
             skipped_large_classes: self.overflowed,
             validation_messages: self.ctx.validation_messages(),
+            // Said where it was timed or set (on CPU implementations, untimed
+            // block passes, as always).
+            large_sort: self.sort_choice.filter(|c| c.times.is_some() || self.options.large_sort.is_some()),
         }
     }
 }

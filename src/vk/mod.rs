@@ -16,7 +16,8 @@
 //!   nearest sampler;
 //! - `pipeline`: compute pipelines with their descriptor sets;
 //! - `timer`: timestamp queries;
-//! - `sort`: a reusable radix sort of 32-bit keys with 32-bit payloads.
+//! - `sort`: a reusable radix sort of 32-bit keys with 32-bit payloads;
+//! - `sort_choice`: its path chosen at run time, timed on the device.
 //!
 //! Every handle is destroyed in `Drop` and holds the context alive. Errors are
 //! the crate's one `Error`; `FSOT_FAULT` injects failures for tests (`fault`).
@@ -30,6 +31,7 @@ pub mod image;
 pub mod instance;
 pub mod pipeline;
 pub mod sort;
+pub mod sort_choice;
 pub mod texel_view;
 pub mod timer;
 
@@ -39,6 +41,7 @@ pub use device::DeviceInfo;
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 pub use pipeline::{ComputeDesc, ComputePipeline};
 pub use sort::{RadixSort, SortCount, SortPath};
+pub use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes};
 pub use texel_view::TexelView;
 pub use timer::Timer;
 

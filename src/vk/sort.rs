@@ -13,8 +13,9 @@
 //! path (`SortPath::LookBack`: one read of the keys for every pass's digit counts,
 //! then one dispatch per pass, five in all for 32-bit keys, against sixteen) is
 //! there for GPUs, where a started workgroup goes on running while another waits
-//! on it; it is chosen only when asked until a GPU has measured it (`fsot bench
-//! sort` times it there). Equal keys keep their input order (stable), so a sort by several
+//! on it; a caller sets it, or has it chosen at run time where it sorts faster
+//! than the block passes on the device (`sort_choice`: timed there). Equal keys
+//! keep their input order (stable), so a sort by several
 //! keys is a sequence of sorts, least significant first. The element count is
 //! set by the host (`SortCount::Host`) or read on the GPU from the first word of
 //! a buffer a producer pass writes (`SortCount::Device`): then the sort sizes its
@@ -101,10 +102,11 @@ pub enum SortPath {
     /// (`radix_digits.comp`), then one dispatch per pass (`radix_onesweep.comp`),
     /// in which a workgroup waits on the blocks that started before it. Only for
     /// devices on which a started workgroup goes on running while another waits
-    /// (GPUs; not lavapipe with several threads: `../shared/notes`). Never chosen
-    /// by `Auto` until a GPU has measured it against the block passes (`fsot
-    /// bench sort` times it on GPUs); tested on lavapipe with one thread
-    /// (`tests/gpu_sort_look_back.rs`).
+    /// (GPUs; not lavapipe with several threads: `../shared/notes`). `Auto`
+    /// never takes it; `sort_choice::choose_sort_path` picks it on a GPU where it
+    /// was timed faster there (the optimizer's large-class stage does so).
+    /// Tested on lavapipe with one thread (`tests/gpu_sort_look_back.rs`,
+    /// `tests/gpu_sort_choice.rs`).
     LookBack,
 }
 

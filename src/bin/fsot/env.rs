@@ -1,9 +1,9 @@
 //! The environment variables the command line reads and hands to the library as
 //! options (the library reads none but the documented `FSOT_FAULT` test switch).
 
-use fsot::vk::{Context, ContextOptions};
+use fsot::vk::{Context, ContextOptions, SortPath};
 
-use super::Result;
+use super::{Error, Result};
 
 /// The Vulkan device: the flag, else `FSOT_DEVICE`.
 pub(crate) fn device(flag: Option<String>) -> Option<String> {
@@ -34,6 +34,20 @@ pub(crate) fn transport_shape() -> Option<(u32, u32)> {
     match f[..] {
         [wg, spg] if wg > 0 && spg > 0 => Some((wg, spg)),
         _ => None,
+    }
+}
+
+/// `FSOT_SORT=blocks`: the large-class stage sorts by the block passes even
+/// where the look-back path was timed faster (to compare the two); unset: the
+/// path is chosen at run time. The look-back path cannot be forced from here: on
+/// a CPU implementation with several threads it could wait forever.
+pub(crate) fn large_sort() -> Result<Option<SortPath>> {
+    match std::env::var("FSOT_SORT").ok().as_deref() {
+        None | Some("") => Ok(None),
+        Some("blocks") => Ok(Some(SortPath::Auto)),
+        Some(other) => Err(Error::invalid(format!(
+            "FSOT_SORT={other}: it takes `blocks` (the block passes), or is unset (the path chosen at run time)"
+        ))),
     }
 }
 

@@ -162,6 +162,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         host_stopping_rule: env::host_stopping_rule(),
         unchecked_lane_limit: None,
         slice_order_slots: None,
+        large_sort: env::large_sort()?,
     };
     Ok(RunOptions {
         backend,
@@ -218,6 +219,9 @@ fn backend_report(report: &Report) -> Result<()> {
             rate(p.large_bytes, p.large_ns),
             rate(p.update_bytes, p.update_ns)
         );
+    }
+    if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
+        println!("  large-class sort: {}", choice.describe());
     }
     let messages = &report.validation_messages;
     if !messages.is_empty() {

@@ -1,0 +1,132 @@
+//! Choosing a radix sort's path at run time. The decoupled look-back path
+//! (`SortPath::LookBack`) needs a device on which a started workgroup goes on
+//! running while another waits on it: GPUs do, CPU implementations with several
+//! threads (lavapipe) do not promise it. Where it may run, whether it beats the
+//! block passes depends on the device and the size, so the two are timed on the
+//! device itself, with timestamp queries, on pairs of the size to be sorted,
+//! and the faster is kept. Both sort stably: the choice changes how long a sort
+//! takes, never its result.
+
+use super::buffer::{Buffer, Location};
+use super::commands::{barrier, copy};
+use super::context::Context;
+use super::sort::{RadixSort, SortCount, SortPath};
+use super::timer::Timer;
+use crate::error::Result;
+
+/// Timed sorts per path, alternating, after one untimed sort of each; the
+/// fastest of each path counts.
+const ROUNDS: u32 = 3;
+
+/// One sort of the same pairs by each path, GPU time from timestamps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathTimes {
+    /// Pairs sorted, by their low `bits` bits.
+    pub n: u32,
+    pub bits: u32,
+    /// `SortPath::Auto` without the look-back path: one workgroup per pass, the
+    /// histogram's tail scan or the block passes, by size.
+    pub blocks_ms: f64,
+    pub look_back_ms: f64,
+}
+
+impl PathTimes {
+    /// The faster path (the block passes on a tie).
+    pub fn faster(&self) -> SortPath {
+        if self.look_back_ms < self.blocks_ms {
+            SortPath::LookBack
+        } else {
+            SortPath::Auto
+        }
+    }
+}
+
+/// A sort path and how it was chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathChoice {
+    pub path: SortPath,
+    /// The times it was chosen by; None where nothing was timed (a CPU
+    /// implementation, a device without timestamps, or a path the caller set).
+    pub times: Option<PathTimes>,
+}
+
+impl PathChoice {
+    /// A path the caller set, untimed.
+    pub fn forced(path: SortPath) -> Self {
+        Self { path, times: None }
+    }
+
+    /// In words, for logs.
+    pub fn describe(&self) -> String {
+        let name = match self.path {
+            SortPath::LookBack => "look-back",
+            _ => "block passes",
+        };
+        match self.times {
+            Some(t) => format!(
+                "{name} (timed here on {} pairs by {} bits: look-back {:.3} ms, block passes {:.3} ms)",
+                t.n, t.bits, t.look_back_ms, t.blocks_ms
+            ),
+            None => format!("{name} (set, not timed)"),
+        }
+    }
+}
+
+/// The path for sorts of about `n` pairs by their low `bits` bits on `ctx`'s
+/// device: the faster of the look-back path and the block passes, timed here
+/// (`time_sort_paths`), on devices that are not CPU implementations and have
+/// timestamps; `SortPath::Auto`, untimed, elsewhere.
+pub fn choose_sort_path(ctx: &Context, n: u32, bits: u32) -> Result<PathChoice> {
+    let info = ctx.info();
+    if info.is_cpu() || info.timestamp_period_ns <= 0.0 {
+        return Ok(PathChoice { path: SortPath::Auto, times: None });
+    }
+    let times = time_sort_paths(ctx, n, bits)?;
+    Ok(PathChoice { path: times.faster(), times: Some(times) })
+}
+
+/// Times a sort of the same `n` (at least 1) pseudo-random pairs by their low
+/// `bits` bits by each path, in a sort of its own (the input restored before
+/// each, outside the timed span). The caller makes sure the device may run the
+/// look-back path (on lavapipe: one thread, `LP_NUM_THREADS=1`).
+pub fn time_sort_paths(ctx: &Context, n: u32, bits: u32) -> Result<PathTimes> {
+    let n = n.max(1);
+    let bits = bits.clamp(1, 32);
+    let mut sort = RadixSort::new(ctx, n, SortCount::Host)?;
+    sort.set_count(n)?;
+    // xorshift32: keys spread over every digit, the same on every run.
+    let mut x = 0x9e37_79b9u32 ^ n;
+    let keys: Vec<u32> = (0..n)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            x
+        })
+        .collect();
+    let vals: Vec<u32> = (0..n).collect();
+    let pristine_keys = Buffer::with_data(ctx, &keys, Location::Device, "sort-choice-keys")?;
+    let pristine_vals = Buffer::with_data(ctx, &vals, Location::Device, "sort-choice-vals")?;
+    let bytes = n as u64 * 4;
+    let timer = Timer::new(ctx, 2)?;
+    let mut best = [f64::INFINITY; 2];
+    for round in 0..=ROUNDS {
+        for (i, path) in [SortPath::Auto, SortPath::LookBack].into_iter().enumerate() {
+            sort.path = path;
+            ctx.submit(|cmd| {
+                timer.reset(cmd);
+                copy(ctx, cmd, &pristine_keys, &sort.keys[0], bytes, 0);
+                copy(ctx, cmd, &pristine_vals, &sort.vals[0], bytes, 0);
+                barrier(ctx, cmd);
+                timer.stamp(cmd, 0);
+                sort.record(cmd, bits, Some(n));
+                timer.stamp(cmd, 1);
+            })?;
+            let ns = timer.read_ns(2)?;
+            if round > 0 {
+                best[i] = best[i].min((ns[1] - ns[0]) * 1e-6);
+            }
+        }
+    }
+    Ok(PathTimes { n, bits, blocks_ms: best[0], look_back_ms: best[1] })
+}
