@@ -86,18 +86,19 @@ void process_slice(uint slice) {
         }
     }
     sync();
+    // Each invocation takes pairs, not elements: pair t joins i (bit j clear)
+    // and i + j, so no invocation idles on the upper half of a pair.
     for (uint k = 2u; k <= p2; k <<= 1) {
         for (uint j = k >> 1; j > 0u; j >>= 1) {
-            for (uint i = tid; i < p2; i += wg) {
-                uint l = i ^ j;
-                if (l > i) {
-                    bool ascending = (i & k) == 0u;
-                    float ka = s_key[i], kb = s_key[l];
-                    uint va = s_val[i], vb = s_val[l];
-                    if (fsot_before(kb, vb, ka, va) == ascending) {
-                        s_key[i] = kb; s_key[l] = ka;
-                        s_val[i] = vb; s_val[l] = va;
-                    }
+            for (uint t = tid; t < p2 / 2u; t += wg) {
+                uint i = ((t & ~(j - 1u)) << 1) | (t & (j - 1u));
+                uint l = i | j;
+                bool ascending = (i & k) == 0u;
+                float ka = s_key[i], kb = s_key[l];
+                uint va = s_val[i], vb = s_val[l];
+                if (fsot_before(kb, vb, ka, va) == ascending) {
+                    s_key[i] = kb; s_key[l] = ka;
+                    s_val[i] = vb; s_val[l] = va;
                 }
             }
             sync();

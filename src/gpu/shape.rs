@@ -143,14 +143,16 @@ impl TransportShape {
     }
 
     /// Upper bound on the loop iterations one invocation spends on a class of
-    /// `n` samples (n <= LOCAL_MAX) in a workgroup of `wg`: gather, bitonic
-    /// stages, targets, reduction.
+    /// `n` samples (n <= LOCAL_MAX) in a workgroup of `wg`: gather (an element
+    /// per iteration), bitonic stages (a pair per iteration), targets,
+    /// reduction.
     pub fn slice_iterations(n: u32, wg: u32) -> u32 {
         let p = n.max(2).next_power_of_two();
         let log = p.trailing_zeros();
         let per_stage = p.div_ceil(wg);
+        let pairs_per_stage = (p / 2).div_ceil(wg);
         let stages = log * (log + 1) / 2;
-        stages * (per_stage + 1) + 3 * per_stage + 2 * log + 64
+        stages * (pairs_per_stage + 1) + 3 * per_stage + 2 * log + 64
     }
 
     /// Loop iterations of the f64 targets (d >= 3) for a walk over `ranks`
@@ -388,7 +390,8 @@ mod tests {
         let small_views = DeviceInfo { max_texel_buffer_elements: 65536, ..lavapipe.clone() };
         assert!(TransportShape::choose(&small_views, 744, 2, 65536, None, None).per_lane);
         assert!(!TransportShape::choose(&small_views, 744, 2, 65537, None, None).per_lane);
-        // A bitonic network of 2048 on 8 invocations: 66 stages of 256 pairs.
-        assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 256);
+        // A bitonic network of 2048 on 8 invocations: 66 stages of 1024 pairs,
+        // 128 for each invocation.
+        assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 128);
     }
 }
