@@ -597,3 +597,32 @@ fn profile_prints_each_pass_s_time_and_the_bytes_it_must_move() {
     let mb: f64 = line.split("transport ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
     assert!(mb * 1e6 >= 8.0 * (8 * 8 * 4 * 16 * 2) as f64, "{line}");
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let run = |value: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"])
+            .args(["--kernel", "perceptual-taa", "--profile", "--out", out])
+            .env("FSOT_VALIDATION", "1")
+            .env("FSOT_SORT", value)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    // 16 spp: classes past the transport's limit, so the run has a large-class stage.
+    let o = run("blocks", "m.exr");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{out}", stderr(&o));
+    assert!(out.contains("large-class sort: block passes (set, not timed)"), "{out}");
+    for bad in ["look-back", "fast", "Blocks"] {
+        let o = run(bad, "existing.exr");
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
+        assert!(err.contains(&format!("FSOT_SORT={bad}")), "{bad}: {err}");
+        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+    }
+}
