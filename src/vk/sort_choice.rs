@@ -13,6 +13,7 @@ use super::context::Context;
 use super::sort::{RadixSort, SortCount, SortPath};
 use super::timer::Timer;
 use crate::error::Result;
+use crate::rng::mix32;
 
 /// Timed sorts per path, alternating, after one untimed sort of each; the
 /// fastest of each path counts.
@@ -94,16 +95,8 @@ pub fn time_sort_paths(ctx: &Context, n: u32, bits: u32) -> Result<PathTimes> {
     let bits = bits.clamp(1, 32);
     let mut sort = RadixSort::new(ctx, n, SortCount::Host)?;
     sort.set_count(n)?;
-    // xorshift32: keys spread over every digit, the same on every run.
-    let mut x = 0x9e37_79b9u32 ^ n;
-    let keys: Vec<u32> = (0..n)
-        .map(|_| {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            x
-        })
-        .collect();
+    // Hashed indices: keys spread over every digit, the same on every run.
+    let keys: Vec<u32> = (0..n).map(mix32).collect();
     let vals: Vec<u32> = (0..n).collect();
     let pristine_keys = Buffer::with_data(ctx, &keys, Location::Device, "sort-choice-keys")?;
     let pristine_vals = Buffer::with_data(ctx, &vals, Location::Device, "sort-choice-vals")?;
