@@ -2,7 +2,7 @@
 # The workgroup transport pass (glsl/fsot/transport.comp: GPUs take it, and
 # lavapipe for d >= 3) per iteration from timestamps (--profile), an old binary
 # against a new one, on lavapipe: the GPU's shape forced (FSOT_TRANSPORT=128,1) at
-# d = 2, and lavapipe's own choice at d = 3 and 8; deterministic mode, where the
+# d = 2, and lavapipe's own choice at d = 3, 4 and 8; deterministic mode, where the
 # masks of the two builds must be the same bits (checked). One untimed run of
 # each binary per problem first (llvmpipe compiles a pass at its first dispatch,
 # inside the timestamps), then ROUNDS alternating rounds; medians at the end.
@@ -22,6 +22,7 @@ trap 'rm -rf "$work"' EXIT
 problems=(
   "FSOT_TRANSPORT=128,1|--size 32x32x16 --dims 2 --kernel taa --iterations 30"
   "FSOT_TRANSPORT=|--size 32x32x16 --dims 3 --kernel perceptual-taa --iterations 60"
+  "FSOT_TRANSPORT=|--size 32x32x16 --dims 4 --kernel perceptual-taa --iterations 30"
   "FSOT_TRANSPORT=|--size 16x16x8 --dims 8 --kernel perceptual-taa --iterations 30"
 )
 head="old $old, new $new, commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"

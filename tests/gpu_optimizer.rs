@@ -126,6 +126,34 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
+    // The workgroup transport as a GPU runs it (128 invocations: on lavapipe 16
+    // subgroups, so the bucket sort's scan crosses subgroups), and in a shape
+    // whose last subgroup is partial (100 invocations), two slices a workgroup;
+    // on distinct keys (the bucket sort, insertion within buckets), on keys that
+    // all tie (every member in one bucket: the bitonic fallback), and in three
+    // dimensions (the walk's targets over the sorted class).
+    let Some(ctx) = common::gpu_context() else { return };
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let mut tied = Mask::white(tile, 3);
+    tied.samples.iter_mut().for_each(|v| *v = 0.375);
+    let masks = [Mask::white(tile, 21), tied, Mask::white(Tile::new(16, 16, 8, 1, 3).unwrap(), 21)];
+    for shape in [(128, 1), (100, 2)] {
+        for mask in &masks {
+            let options = VulkanOptions {
+                deterministic: true,
+                transport: Some(TransportKind::Workgroup),
+                transport_shape: Some(shape),
+                ..VulkanOptions::default()
+            };
+            compare_with_options(mask, "taa", options);
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
         large_classes_with(transport, 2);

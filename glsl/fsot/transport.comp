@@ -1,8 +1,8 @@
 #version 450
 // The transport pass for GPUs, one workgroup per slice: draw the slice, gather
 // its class, project it after the toroidal shift, sort it in shared memory
-// (bitonic, ties by point index: the CPU's order), send the sample of rank r
-// towards the exact target of rank r, and add the displacements into the
+// (a bucket sort: ties by point index, the CPU's order), send the sample of rank
+// r towards the exact target of rank r, and add the displacements into the
 // per-coordinate accumulators. Classes larger than FSOT_LOCAL_MAX are written out
 // for the global radix sort (transport_large.comp finishes them). Included by
 // build.rs as TRANSPORT (fixed point, deterministic) and TRANSPORT_FLOAT, and
@@ -13,6 +13,7 @@
 // variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #define FSOT_SHARED_BREAKS
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
@@ -35,8 +36,18 @@ void sync() {
     }
 }
 
+// Pairs sharing a bucket in one invocation's run of buckets, per bucket of the
+// run plus sixteen, above which the bucket sort leaves the class to the bitonic
+// network (src/gpu/shape.rs: GROUP_INSERTION_BUDGET).
+#define FSOT_INSERTION_BUDGET 4u
+// Members one invocation gathers: at most ceil(FSOT_LOCAL_MAX / workgroup).
+const uint FSOT_PER_INVOCATION = (FSOT_LOCAL_MAX + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
+
 shared float s_key[FSOT_LOCAL_MAX];
 shared uint s_val[FSOT_LOCAL_MAX];
+shared uint s_count[FSOT_LOCAL_MAX]; // per bucket: members, then first position
+shared uint s_sub[gl_WorkGroupSize.x]; // per subgroup: its invocations' members
+shared uint s_fallback;
 shared FsotSlice s_slice;
 shared uint s_n;
 shared int s_large;
@@ -47,6 +58,138 @@ float send(FsotSlice s, uint i, float target) {
     float delta = target - s_key[i];
     fsot_add_displacement(s_val[i], pc.dims, delta, s.theta);
     return delta * delta;
+}
+
+// Bucket of a projection: n equal buckets over the projections' range
+// [low, low + width], clamped. Monotone in the key, so equal keys share a
+// bucket and the buckets come in key order.
+uint class_bucket(float key, float low, float scale, uint n) {
+    return min(uint(min(max(key - low, 0.0) * scale, float(n - 1u))), n - 1u);
+}
+
+// Exclusive prefix of `value` over the workgroup: a subgroup scan, then the
+// totals of the subgroups before this one.
+uint group_exclusive(uint value) {
+    uint total = subgroupAdd(value);
+    if (subgroupElect()) {
+        s_sub[gl_SubgroupID] = total;
+    }
+    sync();
+    uint before = 0u;
+    for (uint k = 0u; k < gl_SubgroupID; ++k) {
+        before += s_sub[k];
+    }
+    return before + subgroupExclusiveAdd(value);
+}
+
+// Bitonic network over s_key / s_val[0, n), padded with +inf to a power of two:
+// the bucket sort's fallback where keys pile into few buckets. Each invocation
+// takes pairs, not elements: pair t joins i (bit j clear) and i + j.
+void bitonic_sort(uint n, uint tid, uint wg) {
+    uint p2 = 2u;
+    while (p2 < n) { p2 <<= 1; }
+    for (uint i = n + tid; i < p2; i += wg) {
+        s_key[i] = uintBitsToFloat(0x7f800000u); // +inf pads sort last
+        s_val[i] = 0xffffffffu;
+    }
+    sync();
+    for (uint k = 2u; k <= p2; k <<= 1) {
+        for (uint j = k >> 1; j > 0u; j >>= 1) {
+            for (uint t = tid; t < p2 / 2u; t += wg) {
+                uint i = ((t & ~(j - 1u)) << 1) | (t & (j - 1u));
+                uint l = i | j;
+                bool ascending = (i & k) == 0u;
+                float ka = s_key[i], kb = s_key[l];
+                uint va = s_val[i], vb = s_val[l];
+                if (fsot_before(kb, vb, ka, va) == ascending) {
+                    s_key[i] = kb; s_key[l] = ka;
+                    s_val[i] = vb; s_val[l] = va;
+                }
+            }
+            sync();
+        }
+    }
+}
+
+// Sorts the class into s_key / s_val[0, n) by projection, ties by point (the
+// CPU's order). A bucket sort: each member's projection and bucket computed
+// once (n buckets over the projections' range, which the members fill about
+// evenly), its place in the bucket taken by a shared atomic, the buckets' first
+// positions by a workgroup scan, the members written there; then each
+// invocation sorts its run of buckets by insertion, where only keys within a
+// bucket can be out of order. The result is the one total order whatever
+// order the atomics took, so the same as a comparison sort's, in a handful of
+// barriers where a bitonic network takes log2(n) (log2(n) + 1) / 2. Where keys
+// pile into few buckets (degenerate samples), the bitonic network instead.
+void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
+    float low = fsot_targets_low(z);
+    float scale = float(n) / max(fsot_targets_width(z), 1e-30);
+    for (uint b = tid; b < n; b += wg) {
+        s_count[b] = 0u;
+    }
+    if (tid == 0u) {
+        s_fallback = 0u;
+    }
+    sync();
+    float key[FSOT_PER_INVOCATION];
+    uint point[FSOT_PER_INVOCATION];
+    uint slot[FSOT_PER_INVOCATION]; // bucket, and place within it above bit 16
+    uint mine = 0u;
+    for (uint i = tid; i < n; i += wg) {
+        uint p = fsot_class_point(s, i);
+        float k = fsot_project(s, p);
+        uint b = class_bucket(k, low, scale, n);
+        key[mine] = k;
+        point[mine] = p;
+        slot[mine] = b | (atomicAdd(s_count[b], 1u) << 16);
+        mine += 1u;
+    }
+    sync();
+    // Invocation tid owns buckets [b0, b1): their members, then (from the
+    // scan) each one's first position.
+    uint chunk = (n + wg - 1u) / wg;
+    uint b0 = min(tid * chunk, n), b1 = min(b0 + chunk, n);
+    uint members = 0u;
+    uint pairs = 0u; // pairs sharing a bucket: at most this many insertion moves
+    for (uint b = b0; b < b1; ++b) {
+        uint c = s_count[b];
+        members += c;
+        pairs += c * (c - min(c, 1u)) / 2u;
+    }
+    uint first = group_exclusive(members);
+    uint at = first;
+    for (uint b = b0; b < b1; ++b) {
+        uint c = s_count[b];
+        s_count[b] = at;
+        at += c;
+    }
+    if (pairs > FSOT_INSERTION_BUDGET * (chunk + 16u)) {
+        atomicOr(s_fallback, 1u);
+    }
+    sync();
+    for (uint m = 0u; m < mine; ++m) {
+        uint at_m = s_count[slot[m] & 0xffffu] + (slot[m] >> 16);
+        s_key[at_m] = key[m];
+        s_val[at_m] = point[m];
+    }
+    sync();
+    if (s_fallback != 0u) {
+        bitonic_sort(n, tid, wg);
+        return;
+    }
+    for (uint i = first + 1u; i < first + members; ++i) {
+        float k = s_key[i];
+        uint v = s_val[i];
+        uint j = i;
+        while (j > first && fsot_before(k, v, s_key[j - 1u], s_val[j - 1u])) {
+            s_key[j] = s_key[j - 1u];
+            s_val[j] = s_val[j - 1u];
+            --j;
+        }
+        s_key[j] = k;
+        s_val[j] = v;
+    }
+    sync();
 }
 
 void process_slice(uint slice) {
@@ -73,38 +216,8 @@ void process_slice(uint slice) {
         }
         return;
     }
-    uint p2 = 2u;
-    while (p2 < n) { p2 <<= 1; }
-    for (uint i = tid; i < p2; i += wg) {
-        if (i < n) {
-            uint point = fsot_class_point(s, i);
-            s_key[i] = fsot_project(s, point);
-            s_val[i] = point;
-        } else {
-            s_key[i] = uintBitsToFloat(0x7f800000u); // +inf pads sort last
-            s_val[i] = 0xffffffffu;
-        }
-    }
-    sync();
-    // Each invocation takes pairs, not elements: pair t joins i (bit j clear)
-    // and i + j, so no invocation idles on the upper half of a pair.
-    for (uint k = 2u; k <= p2; k <<= 1) {
-        for (uint j = k >> 1; j > 0u; j >>= 1) {
-            for (uint t = tid; t < p2 / 2u; t += wg) {
-                uint i = ((t & ~(j - 1u)) << 1) | (t & (j - 1u));
-                uint l = i | j;
-                bool ascending = (i & k) == 0u;
-                float ka = s_key[i], kb = s_key[l];
-                uint va = s_val[i], vb = s_val[l];
-                if (fsot_before(kb, vb, ka, va) == ascending) {
-                    s_key[i] = kb; s_key[l] = ka;
-                    s_val[i] = vb; s_val[l] = va;
-                }
-            }
-            sync();
-        }
-    }
     FsotTargets z = fsot_targets(s);
+    sort_class(s, z, n, tid, wg);
     float local_cost = 0.0;
 #ifdef FSOT_ANY_DIMS
     // Each invocation walks a run of the lower half's ranks (each quantile from

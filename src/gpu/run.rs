@@ -4,7 +4,7 @@
 //! round trip between them.
 //!
 //! Per iteration: transport (one workgroup per slice: draw, gather, project,
-//! bitonic sort in shared memory, exact targets, scatter) -> for classes larger
+//! bucket sort in shared memory, exact targets, scatter) -> for classes larger
 //! than shared memory holds, three passes of the global radix sort (by point, by
 //! projection, then stably by class) and a finishing transport pass -> update.
 

@@ -17,6 +17,11 @@ pub const LOOP_BUDGET: u32 = 30_000;
 /// worst case (the heap-sort fallback, about 47k at LANE_MAX) fits, as do the
 /// f64 targets of small classes.
 pub const LANE_BUDGET: u32 = 60_000;
+/// Pairs of members sharing a bucket that one invocation of the workgroup
+/// transport may sort by insertion, per bucket of its run plus sixteen
+/// (`FSOT_INSERTION_BUDGET` of transport.comp); past it, the class takes the
+/// bitonic network.
+pub const GROUP_INSERTION_BUDGET: u32 = 4;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
 
@@ -38,7 +43,7 @@ const NEWTON_MAX: u32 = 60;
 /// The two transport passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransportKind {
-    /// One workgroup per slice, bitonic sort in shared memory (GPUs).
+    /// One workgroup per slice, bucket sort in shared memory (GPUs).
     Workgroup,
     /// One invocation per slice, bucket sort in private memory (CPU implementations).
     PerLane,
@@ -143,16 +148,23 @@ impl TransportShape {
     }
 
     /// Upper bound on the loop iterations one invocation spends on a class of
-    /// `n` samples (n <= LOCAL_MAX) in a workgroup of `wg`: gather (an element
-    /// per iteration), bitonic stages (a pair per iteration), targets,
+    /// `n` samples (n <= LOCAL_MAX) in a workgroup of `wg`: the bucket sort
+    /// (clearing, gathering and counting, its run of buckets' counts and first
+    /// positions, the scan's subgroups, placing: an element or bucket per
+    /// iteration), then either the insertion within its run (at most the run's
+    /// members and twice GROUP_INSERTION_BUDGET moves) or the bitonic fallback
+    /// (padding, then a pair per iteration per stage), then targets and
     /// reduction.
     pub fn slice_iterations(n: u32, wg: u32) -> u32 {
         let p = n.max(2).next_power_of_two();
         let log = p.trailing_zeros();
-        let per_stage = p.div_ceil(wg);
+        let per = n.max(2).div_ceil(wg);
+        let bucket = 5 * per + wg;
+        let insertion = per + 2 * GROUP_INSERTION_BUDGET * (per + 16);
         let pairs_per_stage = (p / 2).div_ceil(wg);
         let stages = log * (log + 1) / 2;
-        stages * (pairs_per_stage + 1) + 3 * per_stage + 2 * log + 64
+        let bitonic = p.div_ceil(wg) + stages * (pairs_per_stage + 1);
+        bucket + insertion.max(bitonic) + per + 2 * log + 64
     }
 
     /// Loop iterations of the f64 targets (d >= 3) for a walk over `ranks`
