@@ -13,6 +13,16 @@ use fsot::problem::Tile;
 use fsot::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 use fsot::settings::Settings;
 
+/// The test of the run's pacing times its iterations: it runs alone (write),
+/// the others of this file together (read), so that their work on the same
+/// cores (llvmpipe compiling a pass for seconds, say) does not slow its first
+/// iteration and so change its steps.
+static PACING: std::sync::RwLock<()> = std::sync::RwLock::new(());
+
+fn others() -> std::sync::RwLockReadGuard<'static, ()> {
+    PACING.read().unwrap_or_else(|e| e.into_inner())
+}
+
 fn settings(iterations: u32) -> Settings {
     let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 11);
     s.iterations = iterations;
@@ -75,6 +85,7 @@ fn checkpointed(options: RunOptions, dir: &tempfile::TempDir) -> RunOptions {
 
 #[test]
 fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
+    let _others = others();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let s = settings(60);
     let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
@@ -88,6 +99,7 @@ fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one() {
+    let _others = others();
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let s = settings(60);
@@ -113,6 +125,7 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_are_fast() {
+    let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
     let options =
@@ -136,6 +149,7 @@ fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_ar
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
+    let _others = others();
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(8, 8, 2, 1, 3).unwrap();
     if ctx.info().is_cpu() {
@@ -162,6 +176,7 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
 
 #[test]
 fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
+    let _others = others();
     let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
     let mut run = Run::start(
         tile,
@@ -178,6 +193,7 @@ fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
 
 #[test]
 fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would_have() {
+    let _others = others();
     use fsot::settings::Until;
     use fsot::step_rule::Plateau;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
@@ -218,6 +234,7 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
 
 #[test]
 fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
+    let _others = others();
     use fsot::settings::Until;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
