@@ -70,6 +70,8 @@ pub struct Report {
     /// The large-class stage's sort path and how it was chosen (Vulkan, where
     /// the run has that stage and the path was timed or set).
     pub large_sort: Option<PathChoice>,
+    /// The transport pass, its shape and its class sort, in words (Vulkan).
+    pub transport: Option<String>,
 }
 
 /// A run of the optimizer on one backend: step, save, restore, read.

@@ -626,3 +626,41 @@ fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
         assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
     }
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_class_sort_bitonic_makes_the_same_mask_and_any_other_value_is_refused() {
+    // d = 3: the workgroup transport on every device (lavapipe included), whose
+    // classes the bucket sort orders by default and the bitonic network when
+    // asked; the same total order either way, so the same mask bit for bit in
+    // deterministic mode.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let run = |value: &str, out: &str| {
+        Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "4"])
+            .args(["--kernel", "taa", "--deterministic", "--profile", "--out", out])
+            .env("FSOT_VALIDATION", "1")
+            .env("FSOT_CLASS_SORT", value)
+            .current_dir(dir.path())
+            .output()
+            .unwrap()
+    };
+    let mut masks = Vec::new();
+    for (value, said) in [("", "sorted by buckets"), ("bitonic", "sorted by the bitonic network (set)")] {
+        let out = format!("m{}.exr", masks.len());
+        let o = run(value, &out);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{value}: {}{text}", stderr(&o));
+        assert!(text.contains("  transport: workgroups of") && text.contains(said), "{value}: {text}");
+        masks.push(read_samples(&dir.path().join(out)));
+    }
+    assert!(masks[0] == masks[1], "the two sorts made different masks");
+    for bad in ["radix", "Bitonic"] {
+        let o = run(bad, "existing.exr");
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
+        assert!(err.contains(&format!("FSOT_CLASS_SORT={bad}")), "{bad}: {err}");
+        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+    }
+}

@@ -98,6 +98,9 @@ optimize() {
     # The large-class stage's sort: chosen at run time above (the log says which,
     # and both paths' times); here the block passes kept, to compare.
     FSOT_SORT=blocks optimize gpu-128x128x30-ptaa-blocks --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    # The classes' sort in the transport: buckets above; here the bitonic network
+    # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
+    FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
     # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile

@@ -27,6 +27,9 @@ layout(constant_id = 1) const uint SLICES_PER_GROUP = 1u;
 layout(constant_id = 2) const bool ONE_SUBGROUP = false;
 // Largest class sorted in shared memory (src/gpu/shape.rs: LOCAL_MAX).
 layout(constant_id = 3) const uint FSOT_LOCAL_MAX = 2048u;
+// Classes sorted by buckets (false: every class by the bitonic network, the
+// fallback, to compare the two; src/gpu/shape.rs: TransportShape::bitonic).
+layout(constant_id = 4) const bool FSOT_BUCKET_SORT = true;
 
 void sync() {
     if (ONE_SUBGROUP) {
@@ -122,6 +125,15 @@ void bitonic_sort(uint n, uint tid, uint wg) {
 // barriers where a bitonic network takes log2(n) (log2(n) + 1) / 2. Where keys
 // pile into few buckets (degenerate samples), the bitonic network instead.
 void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
+    if (!FSOT_BUCKET_SORT) {
+        for (uint i = tid; i < n; i += wg) {
+            uint p = fsot_class_point(s, i);
+            s_key[i] = fsot_project(s, p);
+            s_val[i] = p;
+        }
+        bitonic_sort(n, tid, wg);
+        return;
+    }
     float low = fsot_targets_low(z);
     float scale = float(n) / max(fsot_targets_width(z), 1e-30);
     for (uint b = tid; b < n; b += wg) {
@@ -134,15 +146,22 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
     float key[FSOT_PER_INVOCATION];
     uint point[FSOT_PER_INVOCATION];
     uint slot[FSOT_PER_INVOCATION]; // bucket, and place within it above bit 16
+    // Loops bounded by the constant FSOT_PER_INVOCATION (known when the
+    // pipeline is made, so a GPU's compiler can unroll them and keep the
+    // arrays in registers) and left at the class's end.
     uint mine = 0u;
-    for (uint i = tid; i < n; i += wg) {
+    for (uint m = 0u; m < FSOT_PER_INVOCATION; ++m) {
+        uint i = tid + m * wg;
+        if (i >= n) {
+            break;
+        }
         uint p = fsot_class_point(s, i);
         float k = fsot_project(s, p);
         uint b = class_bucket(k, low, scale, n);
-        key[mine] = k;
-        point[mine] = p;
-        slot[mine] = b | (atomicAdd(s_count[b], 1u) << 16);
-        mine += 1u;
+        key[m] = k;
+        point[m] = p;
+        slot[m] = b | (atomicAdd(s_count[b], 1u) << 16);
+        mine = m + 1u;
     }
     sync();
     // Invocation tid owns buckets [b0, b1): their members, then (from the
@@ -167,7 +186,10 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
         atomicOr(s_fallback, 1u);
     }
     sync();
-    for (uint m = 0u; m < mine; ++m) {
+    for (uint m = 0u; m < FSOT_PER_INVOCATION; ++m) {
+        if (m >= mine) {
+            break;
+        }
         uint at_m = s_count[slot[m] & 0xffffu] + (slot[m] >> 16);
         s_key[at_m] = key[m];
         s_val[at_m] = point[m];

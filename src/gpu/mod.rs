@@ -68,4 +68,9 @@ pub struct VulkanOptions {
     /// tests and comparisons; the command line reads `FSOT_SORT`). The look-back
     /// path must not be set on a CPU implementation that runs several threads.
     pub large_sort: Option<SortPath>,
+    /// The workgroup transport sorts every class by the bitonic network (what
+    /// it did before the bucket sort, which keeps it as its fallback) instead
+    /// of by buckets: to compare the two on a device (the command line reads
+    /// `FSOT_CLASS_SORT=bitonic`). The masks are the same either way.
+    pub bitonic_classes: bool,
 }

@@ -131,7 +131,13 @@ impl RunPipelines {
         // its first dispatch (seconds for this pass) and keeps it by its
         // constants, so a constant that changed with the tile would cost every
         // run that compilation (what changes goes in TransportPush).
-        let spec = [shape.workgroup, shape.slices_per_group, shape.one_subgroup as u32, shape.local_max];
+        let spec = [
+            shape.workgroup,
+            shape.slices_per_group,
+            shape.one_subgroup as u32,
+            shape.local_max,
+            !shape.bitonic as u32,
+        ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let update_spv = match (texels.is_some(), float_acc) {
             (false, false) => shaders::UPDATE,

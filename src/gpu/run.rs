@@ -556,6 +556,7 @@ fn transport_shape(
     }
     let mut shape =
         TransportShape::choose(info, max_class, dims, texels, options.transport, options.transport_shape);
+    shape.bitonic = options.bitonic_classes;
     if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);
@@ -706,6 +707,7 @@ impl Backend for VulkanRun {
             // Said where it was timed or set (on CPU implementations, untimed
             // block passes, as always).
             large_sort: self.sort_choice.filter(|c| c.times.is_some() || self.options.large_sort.is_some()),
+            transport: Some(self.shape.describe()),
         }
     }
 }

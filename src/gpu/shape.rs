@@ -66,6 +66,10 @@ pub struct TransportShape {
     /// `FSOT_LOCAL_MAX`); larger classes go to the large-class stage's global
     /// sort. Per lane: LANE_MAX, less for d >= 3 (`lane_limit`).
     pub local_max: u32,
+    /// The workgroup transport sorts every class by the bitonic network, the
+    /// bucket sort's fallback, instead of by buckets: to compare the two (set
+    /// from `VulkanOptions::bitonic_classes`; the per-lane transport ignores it).
+    pub bitonic: bool,
 }
 
 impl TransportShape {
@@ -116,7 +120,14 @@ impl TransportShape {
         let local_max = if per_lane { Self::lane_limit(dims) } else { LOCAL_MAX };
         let mut shape = if info.is_cpu() {
             let wg = info.subgroup_size.clamp(1, 128);
-            Self { workgroup: wg, slices_per_group: 16, one_subgroup: true, per_lane, local_max }
+            Self {
+                workgroup: wg,
+                slices_per_group: 16,
+                one_subgroup: true,
+                per_lane,
+                local_max,
+                bitonic: false,
+            }
         } else {
             Self {
                 workgroup: 128.min(info.max_workgroup_invocations),
@@ -124,6 +135,7 @@ impl TransportShape {
                 one_subgroup: false,
                 per_lane,
                 local_max,
+                bitonic: false,
             }
         };
         let local = max_class.min(LOCAL_MAX);
@@ -145,6 +157,24 @@ impl TransportShape {
             shape.one_subgroup = shape.workgroup <= info.subgroup_size;
         }
         shape
+    }
+
+    /// The pass, its shape and how it sorts a class, in words.
+    pub fn describe(&self) -> String {
+        if self.per_lane {
+            return format!(
+                "per lane ({} invocations a workgroup, a slice each), classes up to {} by a bucket sort",
+                self.workgroup, self.local_max
+            );
+        }
+        let sort = if self.bitonic { "the bitonic network (set)" } else { "buckets" };
+        format!(
+            "workgroups of {} invocations, {} slice{} each, classes up to {} sorted by {sort}",
+            self.workgroup,
+            self.slices_per_group,
+            if self.slices_per_group == 1 { "" } else { "s" },
+            self.local_max
+        )
     }
 
     /// Upper bound on the loop iterations one invocation spends on a class of

@@ -51,6 +51,19 @@ pub(crate) fn large_sort() -> Result<Option<SortPath>> {
     }
 }
 
+/// `FSOT_CLASS_SORT=bitonic`: the workgroup transport (GPUs; lavapipe for d >= 3)
+/// sorts every class by the bitonic network instead of by buckets, to compare
+/// the two; unset: by buckets.
+pub(crate) fn bitonic_classes() -> Result<bool> {
+    match std::env::var("FSOT_CLASS_SORT").ok().as_deref() {
+        None | Some("") | Some("buckets") => Ok(false),
+        Some("bitonic") => Ok(true),
+        Some(other) => Err(Error::invalid(format!(
+            "FSOT_CLASS_SORT={other}: it takes `bitonic` (the bitonic network) or `buckets` (the default)"
+        ))),
+    }
+}
+
 /// A Vulkan context on the device the flag or the environment names.
 pub(crate) fn context(flag: Option<String>) -> Result<Context> {
     Context::new(&ContextOptions { validation: validation(), device: device(flag) })

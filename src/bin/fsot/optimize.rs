@@ -163,6 +163,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         unchecked_lane_limit: None,
         slice_order_slots: None,
         large_sort: env::large_sort()?,
+        bitonic_classes: env::bitonic_classes()?,
     };
     Ok(RunOptions {
         backend,
@@ -219,6 +220,9 @@ fn backend_report(report: &Report) -> Result<()> {
             rate(p.large_bytes, p.large_ns),
             rate(p.update_bytes, p.update_ns)
         );
+    }
+    if let (Some(_), Some(transport)) = (&report.profile, &report.transport) {
+        println!("  transport: {transport}");
     }
     if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
         println!("  large-class sort: {}", choice.describe());
