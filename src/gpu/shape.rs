@@ -142,6 +142,7 @@ impl TransportShape {
         if info.is_cpu() && !per_lane {
             while shape.workgroup < info.max_workgroup_invocations.min(1024)
                 && Self::group_iterations(local, shape.workgroup, dims) > LOOP_BUDGET
+                && Self::shared_bytes(shape.workgroup * 2, LOCAL_MAX) <= info.max_shared_memory
             {
                 shape.workgroup *= 2;
             }
@@ -157,6 +158,15 @@ impl TransportShape {
             shape.one_subgroup = shape.workgroup <= info.subgroup_size;
         }
         shape
+    }
+
+    /// Shared memory the workgroup transport (transport.comp) takes with
+    /// `workgroup` invocations and classes up to `local_max`: the class's keys,
+    /// points and bucket counts (4 bytes each a member), two words an
+    /// invocation (the scan's subgroup totals, the cost's reduction), the f64
+    /// subset sums of d = 8 (256 x 8 bytes) and the slice (256 bytes allowed).
+    pub fn shared_bytes(workgroup: u32, local_max: u32) -> u32 {
+        12 * local_max + 8 * workgroup + 2048 + 256
     }
 
     /// The pass, its shape and how it sorts a class, in words.
@@ -432,6 +442,16 @@ mod tests {
         let small_views = DeviceInfo { max_texel_buffer_elements: 65536, ..lavapipe.clone() };
         assert!(TransportShape::choose(&small_views, 744, 2, 65536, None, None).per_lane);
         assert!(!TransportShape::choose(&small_views, 744, 2, 65537, None, None).per_lane);
+        // Every shape lavapipe gets fits its 32 KiB of shared memory; 1024
+        // invocations would not.
+        for dims in 1..=8 {
+            for max_class in [2u32, 744, 2048, 100_000] {
+                let shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
+                let bytes = TransportShape::shared_bytes(shape.workgroup, LOCAL_MAX);
+                assert!(bytes <= lavapipe.max_shared_memory, "d = {dims}, {max_class}: {shape:?}");
+            }
+        }
+        assert!(TransportShape::shared_bytes(1024, LOCAL_MAX) > lavapipe.max_shared_memory);
         // A bitonic network of 2048 on 8 invocations: 66 stages of 1024 pairs,
         // 128 for each invocation.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 128);
