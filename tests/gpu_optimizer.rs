@@ -154,28 +154,6 @@ fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
-fn a_workgroup_past_the_devices_shared_memory_is_refused_clearly() {
-    let Some(ctx) = common::gpu_context() else { return };
-    let limit = ctx.info().max_shared_memory;
-    let too_many = (256u32..=ctx.info().max_workgroup_invocations)
-        .find(|&wg| TransportShape::shared_bytes(wg, 2048) > limit);
-    let Some(wg) = too_many else {
-        eprintln!("skipped: every workgroup this device allows fits its {limit} bytes of shared memory");
-        return;
-    };
-    let options = VulkanOptions {
-        transport: Some(TransportKind::Workgroup),
-        transport_shape: Some((wg, 1)),
-        ..VulkanOptions::default()
-    };
-    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
-    let err = VulkanRun::new(&ctx, tile, settings("taa", 5, 1), None, options).err().expect("refused");
-    assert!(err.to_string().contains("maxComputeSharedMemorySize"), "{err}");
-    common::assert_no_validation_messages(&ctx);
-}
-
-#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
-#[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
         large_classes_with(transport, 2);

@@ -48,7 +48,11 @@ const uint FSOT_PER_INVOCATION = (FSOT_LOCAL_MAX + gl_WorkGroupSize.x - 1u) / gl
 
 shared float s_key[FSOT_LOCAL_MAX];
 shared uint s_val[FSOT_LOCAL_MAX];
-shared uint s_count[FSOT_LOCAL_MAX]; // per bucket: members, then first position
+// Per bucket, 16 bits, two a word (bucket b in word b / 2, the odd one above):
+// its members, then its first position (both at most FSOT_LOCAL_MAX). Half the
+// words of one counter a word: shared memory is what bounds how many
+// workgroups a GPU keeps resident.
+shared uint s_count[(FSOT_LOCAL_MAX + 1u) / 2u];
 shared uint s_sub[gl_WorkGroupSize.x]; // per subgroup: its invocations' members
 shared uint s_fallback;
 shared FsotSlice s_slice;
@@ -136,8 +140,9 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
     }
     float low = fsot_targets_low(z);
     float scale = float(n) / max(fsot_targets_width(z), 1e-30);
-    for (uint b = tid; b < n; b += wg) {
-        s_count[b] = 0u;
+    uint words = (n + 1u) / 2u;
+    for (uint w = tid; w < words; w += wg) {
+        s_count[w] = 0u;
     }
     if (tid == 0u) {
         s_fallback = 0u;
@@ -160,27 +165,30 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
         uint b = class_bucket(k, low, scale, n);
         key[m] = k;
         point[m] = p;
-        slot[m] = b | (atomicAdd(s_count[b], 1u) << 16);
+        uint shift = (b & 1u) * 16u;
+        uint place = (atomicAdd(s_count[b >> 1], 1u << shift) >> shift) & 0xffffu;
+        slot[m] = b | (place << 16);
         mine = m + 1u;
     }
     sync();
-    // Invocation tid owns buckets [b0, b1): their members, then (from the
-    // scan) each one's first position.
-    uint chunk = (n + wg - 1u) / wg;
-    uint b0 = min(tid * chunk, n), b1 = min(b0 + chunk, n);
+    // Invocation tid owns a run of `chunk` buckets, an even number so that it
+    // owns whole words [w0, w1): their members, then (from the scan) each
+    // one's first position.
+    uint chunk = ((n + wg - 1u) / wg + 1u) & ~1u;
+    uint w0 = min(tid * chunk / 2u, words), w1 = min(w0 + chunk / 2u, words);
     uint members = 0u;
     uint pairs = 0u; // pairs sharing a bucket: at most this many insertion moves
-    for (uint b = b0; b < b1; ++b) {
-        uint c = s_count[b];
-        members += c;
-        pairs += c * (c - min(c, 1u)) / 2u;
+    for (uint w = w0; w < w1; ++w) {
+        uint c0 = s_count[w] & 0xffffu, c1 = s_count[w] >> 16;
+        members += c0 + c1;
+        pairs += c0 * (c0 - min(c0, 1u)) / 2u + c1 * (c1 - min(c1, 1u)) / 2u;
     }
     uint first = group_exclusive(members);
     uint at = first;
-    for (uint b = b0; b < b1; ++b) {
-        uint c = s_count[b];
-        s_count[b] = at;
-        at += c;
+    for (uint w = w0; w < w1; ++w) {
+        uint c0 = s_count[w] & 0xffffu, c1 = s_count[w] >> 16;
+        s_count[w] = at | ((at + c0) << 16);
+        at += c0 + c1;
     }
     if (pairs > FSOT_INSERTION_BUDGET * (chunk + 16u)) {
         atomicOr(s_fallback, 1u);
@@ -190,7 +198,8 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
         if (m >= mine) {
             break;
         }
-        uint at_m = s_count[slot[m] & 0xffffu] + (slot[m] >> 16);
+        uint b = slot[m] & 0xffffu;
+        uint at_m = ((s_count[b >> 1] >> ((b & 1u) * 16u)) & 0xffffu) + (slot[m] >> 16);
         s_key[at_m] = key[m];
         s_val[at_m] = point[m];
     }

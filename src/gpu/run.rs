@@ -561,14 +561,7 @@ fn transport_shape(
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);
     }
-    let shared = TransportShape::shared_bytes(shape.workgroup, shape.local_max);
-    if !shape.per_lane && shared > info.max_shared_memory {
-        return Err(Error::invalid(format!(
-            "the workgroup transport with {} invocations takes {shared} bytes of shared memory; {} has {} \
-             (maxComputeSharedMemorySize): use fewer invocations",
-            shape.workgroup, info.name, info.max_shared_memory
-        )));
-    }
+    shape.fits_shared_memory(info)?;
     if !shape.fits_loop_budget(info, max_class, dims) {
         return Err(Error::invalid(format!(
             "classes of up to {max_class} samples in d = {dims} would take {} past its loop budget \

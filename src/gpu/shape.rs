@@ -1,5 +1,6 @@
 //! How the transport pass is launched on a device, within lavapipe's loop cap.
 
+use crate::error::{Error, Result};
 use crate::vk::DeviceInfo;
 
 /// Classes up to this many samples are sorted in shared memory (the
@@ -161,12 +162,27 @@ impl TransportShape {
     }
 
     /// Shared memory the workgroup transport (transport.comp) takes with
-    /// `workgroup` invocations and classes up to `local_max`: the class's keys,
-    /// points and bucket counts (4 bytes each a member), two words an
-    /// invocation (the scan's subgroup totals, the cost's reduction), the f64
-    /// subset sums of d = 8 (256 x 8 bytes) and the slice (256 bytes allowed).
+    /// `workgroup` invocations and classes up to `local_max`: the class's keys
+    /// and points (4 bytes each a member) and bucket counts (2 bytes), two
+    /// words an invocation (the scan's subgroup totals, the cost's reduction),
+    /// the f64 subset sums of d = 8 (256 x 8 bytes) and the slice (256 bytes
+    /// allowed).
     pub fn shared_bytes(workgroup: u32, local_max: u32) -> u32 {
-        12 * local_max + 8 * workgroup + 2048 + 256
+        10 * local_max + 8 * workgroup + 2048 + 256
+    }
+
+    /// Whether the workgroup transport in this shape fits the device's shared
+    /// memory (the per-lane transport takes none); if not, why.
+    pub fn fits_shared_memory(&self, info: &DeviceInfo) -> Result<()> {
+        let bytes = Self::shared_bytes(self.workgroup, self.local_max);
+        if self.per_lane || bytes <= info.max_shared_memory {
+            return Ok(());
+        }
+        Err(Error::invalid(format!(
+            "the workgroup transport with {} invocations takes {bytes} bytes of shared memory; {} has {} \
+             (maxComputeSharedMemorySize): use fewer invocations",
+            self.workgroup, info.name, info.max_shared_memory
+        )))
     }
 
     /// The pass, its shape and how it sorts a class, in words.
@@ -200,7 +216,8 @@ impl TransportShape {
         let log = p.trailing_zeros();
         let per = n.max(2).div_ceil(wg);
         let bucket = 5 * per + wg;
-        let insertion = per + 2 * GROUP_INSERTION_BUDGET * (per + 16);
+        let run = per + (per & 1); // buckets an invocation owns: whole words of two
+        let insertion = run + 2 * GROUP_INSERTION_BUDGET * (run + 16);
         let pairs_per_stage = (p / 2).div_ceil(wg);
         let stages = log * (log + 1) / 2;
         let bitonic = p.div_ceil(wg) + stages * (pairs_per_stage + 1);
@@ -442,7 +459,7 @@ mod tests {
         let small_views = DeviceInfo { max_texel_buffer_elements: 65536, ..lavapipe.clone() };
         assert!(TransportShape::choose(&small_views, 744, 2, 65536, None, None).per_lane);
         assert!(!TransportShape::choose(&small_views, 744, 2, 65537, None, None).per_lane);
-        // Every shape lavapipe gets fits its 32 KiB of shared memory; 1024
+        // Every shape lavapipe gets fits its 32 KiB of shared memory; 2048
         // invocations would not.
         for dims in 1..=8 {
             for max_class in [2u32, 744, 2048, 100_000] {
@@ -451,7 +468,15 @@ mod tests {
                 assert!(bytes <= lavapipe.max_shared_memory, "d = {dims}, {max_class}: {shape:?}");
             }
         }
-        assert!(TransportShape::shared_bytes(1024, LOCAL_MAX) > lavapipe.max_shared_memory);
+        assert!(TransportShape::shared_bytes(2048, LOCAL_MAX) > lavapipe.max_shared_memory);
+        // A device with Vulkan's least shared memory (16 KiB) refuses the shape
+        // by name; the per-lane transport, which takes none, passes.
+        let small = DeviceInfo { max_shared_memory: 16384, ..lavapipe.clone() };
+        let gpu_shape = TransportShape::choose(&small, 744, 2, 1 << 15, Some(TransportKind::Workgroup), None);
+        let err = gpu_shape.fits_shared_memory(&small).unwrap_err().to_string();
+        assert!(err.contains("maxComputeSharedMemorySize") && err.contains("16384"), "{err}");
+        let lane = TransportShape::choose(&small, 744, 2, 1 << 15, Some(TransportKind::PerLane), None);
+        assert!(lane.fits_shared_memory(&small).is_ok());
         // A bitonic network of 2048 on 8 invocations: 66 stages of 1024 pairs,
         // 128 for each invocation.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 128);
