@@ -664,3 +664,31 @@ fn fsot_class_sort_bitonic_makes_the_same_mask_and_any_other_value_is_refused() 
         assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
     }
 }
+
+#[test]
+fn fsot_defer_takes_0_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    for bad in ["1", "4096", "off"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args([
+                "optimize",
+                "--backend",
+                "cpu",
+                "--size",
+                "8x8x4",
+                "--iterations",
+                "2",
+                "--out",
+                "existing.exr",
+            ])
+            .env("FSOT_DEFER", bad)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
+        assert!(err.contains(&format!("FSOT_DEFER={bad}")), "{bad}: {err}");
+        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+    }
+}

@@ -154,6 +154,74 @@ fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
+    // GPUs take a second pass of the workgroup transport for the classes past
+    // its limit that shared memory still holds (the paper's tile: 2049 to
+    // 2326), one workgroup per listed slice. Lavapipe's 32 KiB holds it with a
+    // first pass limited to 1024 and a second up to 2048: classes of 1025 to
+    // 2048 then take the second pass; at 4 spp the larger ones still take the
+    // large-class stage, beside it.
+    let Some(ctx) = common::gpu_context() else { return };
+    let cases =
+        [(Tile::new(16, 16, 8, 3, 2).unwrap(), "gaussian"), (Tile::new(16, 16, 8, 4, 2).unwrap(), "taa")];
+    for (tile, kernel) in cases {
+        let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
+        let largest = Kernel::new(spec, &tile).taps.len() * tile.spp;
+        assert!(largest > 1024, "{kernel} {tile:?}: no class for the second pass ({largest})");
+        let options = VulkanOptions {
+            deterministic: true,
+            transport: Some(TransportKind::Workgroup),
+            local_max: Some(1024),
+            defer: Some(2048),
+            ..VulkanOptions::default()
+        };
+        let run = VulkanRun::new(&ctx, tile, settings(kernel, 5, 1), None, options).unwrap();
+        let said = run.report().transport.unwrap_or_default();
+        assert!(said.contains("up to 1024") && said.contains("up to 2048 in a second pass"), "{said}");
+        assert_eq!(run.large_capacity() > 0, largest > 2048, "{kernel} {tile:?}: {largest}");
+        drop(run);
+        compare_with_options(&Mask::white(tile, 21), kernel, options);
+    }
+    // Class by class, near-ties allowed their neighbour's target, in two and
+    // three dimensions.
+    let options = VulkanOptions {
+        deterministic: true,
+        transport: Some(TransportKind::Workgroup),
+        local_max: Some(1024),
+        defer: Some(2048),
+        ..VulkanOptions::default()
+    };
+    for dims in [2, 3] {
+        classes_past(options, 1024, dims);
+    }
+    // Asked for what the device or the shape cannot give: a clear error.
+    let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
+    for (local_max, defer) in [(Some(1000), Some(2048)), (Some(1024), Some(1024)), (None, Some(3000))] {
+        let options = VulkanOptions {
+            transport: Some(TransportKind::Workgroup),
+            local_max,
+            defer,
+            ..VulkanOptions::default()
+        };
+        let err =
+            VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, options).err().expect("refused");
+        assert!(err.to_string().contains("power of two"), "{err}");
+    }
+    let too_large = VulkanOptions {
+        transport: Some(TransportKind::Workgroup),
+        defer: Some(4096),
+        ..VulkanOptions::default()
+    };
+    if ctx.info().max_shared_memory < TransportShape::shared_bytes(256, 4096) {
+        let err =
+            VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, too_large).err().expect("refused");
+        assert!(err.to_string().contains("maxComputeSharedMemorySize"), "{err}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
         large_classes_with(transport, 2);
@@ -170,11 +238,21 @@ fn large_classes_in_three_dimensions_give_the_cpu_displacements() {
 }
 
 fn large_classes_with(transport: TransportKind, dims: usize) {
-    // One slice per iteration, so each read-back is one class. In classes of
-    // thousands of points some projections lie within float32 rounding of each
-    // other and may rank the other way round on the GPU; such a point must then
-    // get exactly its neighbour's target.
+    let options =
+        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    let limit = if transport == TransportKind::PerLane { TransportShape::lane_limit(dims) } else { 2048 };
+    classes_past(options, limit, dims);
+}
+
+/// The classes past `limit` (which the transport with `options` leaves to the
+/// large-class stage, or to its second pass) against the CPU's, one slice per
+/// iteration, so each read-back is one class. In classes of thousands of points
+/// some projections lie within float32 rounding of each other and may rank the
+/// other way round on the GPU; such a point must then get exactly its
+/// neighbour's target.
+fn classes_past(options: VulkanOptions, limit: u32, dims: usize) {
     let Some(ctx) = common::gpu_context() else { return };
+    let transport = options.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
@@ -185,14 +263,11 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
     assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
     let mask = Mask::white(tile, 5);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let options =
-        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     assert!(gpu.large_capacity() > 1024);
     let (mut checked, mut ties) = (0, 0);
     for iteration in 0..400 {
         let slice = sampler.draw(iteration, 0);
-        let limit = if transport == TransportKind::PerLane { TransportShape::lane_limit(dims) } else { 2048 };
         if slice.len * 4 <= limit {
             continue;
         }
@@ -230,7 +305,7 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
             break;
         }
     }
-    eprintln!("{transport:?}, d = {dims}: checked {checked} large classes, {ties} near-tie rank swaps");
+    eprintln!("{options:?}, d = {dims}: checked {checked} classes past {limit}, {ties} near-tie rank swaps");
     assert!(checked >= 3, "too few large classes drawn");
     assert_eq!(gpu.overflowed(), 0);
     drop(gpu);

@@ -101,6 +101,9 @@ optimize() {
     # The classes' sort in the transport: buckets above; here the bitonic network
     # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
     FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    # The classes past 2048 (2049 to 2326 here): a second workgroup pass above;
+    # here the large-class stage's global sorts instead (before 2026-12-01), to compare.
+    FSOT_DEFER=0 optimize gpu-128x128x30-ptaa-nodefer --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
     # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile

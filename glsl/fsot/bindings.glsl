@@ -40,7 +40,8 @@
 #define FSOT_BINDING_ACC_TEXELS 22
 #define FSOT_BINDING_FIRST_TEXELS 23
 #define FSOT_BINDING_SECOND_TEXELS 24
-#define FSOT_BINDINGS 25
+#define FSOT_BINDING_DEFERRED 25
+#define FSOT_BINDINGS 26
 
 // Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
@@ -64,6 +65,7 @@ struct TransportPush {
     uint large_capacity; // elements the large-class buffers hold
     uint order_slot;     // where the per-lane transport finds this iteration's slice order
     uint lane_stride;    // the per-lane transport's stride through its groups of ranks (src/gpu/shape.rs: group_stride)
+    uint deferred_capacity; // slices the deferred list holds (transport.comp's second pass)
 };
 
 // The update pass.
@@ -173,6 +175,15 @@ layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleS
 // The per-lane transport's slice orders, in slots of one iteration each
 // (slice_order.glsl says where each part lies): per slot, the slices in each
 // class-size bin, each slice's bin, and the slices in order of decreasing class size.
+// Classes the workgroup transport defers to its second pass (transport.comp,
+// FSOT_FROM_LIST): that pass's indirect dispatch (workgroups x, y, z: x the
+// slices listed, reset each iteration; y and z 1), a word unused, then the
+// slices.
+layout(std430, set = 0, binding = FSOT_BINDING_DEFERRED) buffer Deferred {
+    uint deferred_groups[3];
+    uint deferred_pad;
+    uint deferred_slices[];
+};
 layout(std430, set = 0, binding = FSOT_BINDING_SLICE_ORDER) buffer SliceOrder { uint slice_order[]; };
 
 // Views of the samples, the taps, the accumulators and the optimizer's state as

@@ -30,6 +30,14 @@ layout(constant_id = 3) const uint FSOT_LOCAL_MAX = 2048u;
 // Classes sorted by buckets (false: every class by the bitonic network, the
 // fallback, to compare the two; src/gpu/shape.rs: TransportShape::bitonic).
 layout(constant_id = 4) const bool FSOT_BUCKET_SORT = true;
+// Classes larger than FSOT_LOCAL_MAX and at most FSOT_DEFER_MAX are listed for a
+// second pass (0: none) instead of the large-class stage's global sorts: the
+// same shader made with FSOT_FROM_LIST, a larger FSOT_LOCAL_MAX and more
+// invocations, one workgroup per listed slice (src/gpu/shape.rs: defer_max).
+// The few classes past the first pass's limit then cost neither the global
+// sorts nor the first pass's occupancy (its shared memory).
+layout(constant_id = 5) const uint FSOT_DEFER_MAX = 0u;
+layout(constant_id = 6) const bool FSOT_FROM_LIST = false;
 
 void sync() {
     if (ONE_SUBGROUP) {
@@ -223,6 +231,23 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
     sync();
 }
 
+// Lists `slice` for the second pass; false when the list is full (the class is
+// then counted as dropped, as a large class without room). A compare-and-swap,
+// so the dispatch's count never passes the list's capacity.
+bool defer_slice(uint slice) {
+    uint at = atomicOr(deferred_groups[0], 0u);
+    for (uint tries = 0u; tries < 64u && at < pc.deferred_capacity; ++tries) {
+        uint seen = atomicCompSwap(deferred_groups[0], at, at + 1u);
+        if (seen == at) {
+            deferred_slices[at] = slice;
+            return true;
+        }
+        at = seen;
+    }
+    atomicAdd(large_overflow, 1u);
+    return false;
+}
+
 void process_slice(uint slice) {
     uint tid = gl_LocalInvocationID.x;
     uint wg = gl_WorkGroupSize.x;
@@ -231,7 +256,13 @@ void process_slice(uint slice) {
         uint n = fsot_class_size(s);
         s_slice = s;
         s_n = n;
-        s_large = n > FSOT_LOCAL_MAX ? fsot_reserve_large(slice, n) : -1;
+        s_large = -1;
+        if (n > FSOT_LOCAL_MAX && n <= FSOT_DEFER_MAX) {
+            defer_slice(slice);
+            s_large = -2; // listed (or dropped): nothing to write out
+        } else if (n > FSOT_LOCAL_MAX) {
+            s_large = fsot_reserve_large(slice, n);
+        }
     }
     sync();
     FsotSlice s = s_slice;
@@ -290,6 +321,13 @@ void main() {
         return; // the stopping rule ended the run (the same for every invocation)
     }
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    if (FSOT_FROM_LIST) {
+        // The second pass: workgroup p takes the p-th listed slice (the
+        // dispatch's count is the list's, at most its capacity).
+        process_slice(deferred_slices[group]);
+        fsot_check_loop_cap();
+        return;
+    }
     for (uint k = 0u; k < SLICES_PER_GROUP; ++k) {
         uint slice = group * SLICES_PER_GROUP + k;
         if (slice >= pc.slices) {

@@ -81,6 +81,9 @@ pub struct RunBuffers {
     /// The per-lane transport's slice order (`SliceOrder`; a placeholder for
     /// the other transport).
     pub slice_order: Buffer,
+    /// The workgroup transport's deferred slices (`Deferred`): the second
+    /// pass's indirect dispatch, then the list (a placeholder without one).
+    pub deferred: Buffer,
     /// Bound as the large keys and payloads when there is no sort (never written).
     pub placeholders: Option<[Buffer; 2]>,
     /// Host-visible: iteration costs, counters and state come back through it.
@@ -102,6 +105,7 @@ impl RunBuffers {
         large: &LargePlan,
         local_max: u32,
         order_words: u64,
+        deferred_capacity: u32,
     ) -> Result<Self> {
         let info = ctx.info();
         let values = tile.values() as u64;
@@ -160,12 +164,18 @@ impl RunBuffers {
             large_args: device(32, "large-indirect-args")?,
             schedule: device(std::mem::size_of::<RuleState>() as u64, "stopping-rule")?,
             slice_order: device(fits("the slice order", order_words.max(4) * 4)?, "slice-order")?,
+            deferred: device(16 + 4 * deferred_capacity.max(1) as u64, "deferred-slices")?,
             placeholders,
             readback: Buffer::new(ctx, readback_len, Location::Readback, "readback")?,
             taps,
         };
-        let uploads =
-            [(&me.samples, bytemuck::cast_slice(samples)), (&me.taps, bytemuck::cast_slice(&table))];
+        // The second pass's dispatch: no workgroups yet, y and z 1.
+        let dispatch = [0u32, 1, 1, 0];
+        let uploads = [
+            (&me.samples, bytemuck::cast_slice(samples)),
+            (&me.taps, bytemuck::cast_slice(&table)),
+            (&me.deferred, bytemuck::cast_slice(&dispatch)),
+        ];
         upload_batch(ctx, &uploads, |cmd| {
             for b in [&me.first, &me.second, &me.acc, &me.costs, &me.large_meta, &me.schedule] {
                 zero(ctx, cmd, b, 0, ash::vk::WHOLE_SIZE);
@@ -208,6 +218,7 @@ impl RunBuffers {
             (binding::LARGE_ARGS, &self.large_args),
             (binding::SCHEDULE, &self.schedule),
             (binding::SLICE_ORDER, &self.slice_order),
+            (binding::DEFERRED, &self.deferred),
         ])
     }
 }

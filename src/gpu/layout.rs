@@ -33,8 +33,9 @@ pub mod binding {
     pub const ACC_TEXELS: u32 = 22;
     pub const FIRST_TEXELS: u32 = 23;
     pub const SECOND_TEXELS: u32 = 24;
+    pub const DEFERRED: u32 = 25;
     /// Bindings in the layout (`FSOT_BINDINGS`).
-    pub const BINDINGS: u32 = 25;
+    pub const BINDINGS: u32 = 26;
     /// Every uniform texel buffer with the name of its variable in GLSL.
     pub const TEXEL_VARIABLES: [(&str, u32); 5] = [
         ("sample_texels", SAMPLE_TEXELS),
@@ -56,7 +57,7 @@ pub mod binding {
     };
 
     /// Every storage buffer with the name of its block in GLSL.
-    pub const BLOCKS: [(&str, u32); 20] = [
+    pub const BLOCKS: [(&str, u32); 21] = [
         ("Samples", SAMPLES),
         ("Taps", TAPS),
         ("Acc", ACC),
@@ -77,6 +78,7 @@ pub mod binding {
         ("HashValues", HASH_VALUES),
         ("Schedule", SCHEDULE),
         ("SliceOrder", SLICE_ORDER),
+        ("Deferred", DEFERRED),
     ];
 }
 
@@ -211,6 +213,8 @@ pub struct TransportPush {
     /// The per-lane transport's stride through its groups of ranks
     /// (`shape::group_stride`).
     pub lane_stride: u32,
+    /// Slices the workgroup transport's deferred list holds (its second pass).
+    pub deferred_capacity: u32,
 }
 
 /// `UpdatePush`.

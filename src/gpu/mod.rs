@@ -73,4 +73,16 @@ pub struct VulkanOptions {
     /// of by buckets: to compare the two on a device (the command line reads
     /// `FSOT_CLASS_SORT=bitonic`). The masks are the same either way.
     pub bitonic_classes: bool,
+    /// The workgroup transport's second pass, for classes past its limit (2048)
+    /// that shared memory can still hold: None, on GPUs up to the smallest
+    /// power of two holding the kernel's largest class, as the device's shared
+    /// memory allows (none on CPU implementations); Some(0) none (those
+    /// classes go to the large-class stage's global sorts, as before; the
+    /// command line reads `FSOT_DEFER=0`, to compare); Some(m) up to m, a power
+    /// of two (for tests).
+    pub defer: Option<u32>,
+    /// The workgroup transport's class limit (a power of two from 64 to 2048)
+    /// in place of 2048: for tests, which give lavapipe's shared memory a
+    /// second pass to run.
+    pub local_max: Option<u32>,
 }

@@ -26,6 +26,9 @@ pub enum Targets {
 
 pub struct RunPipelines {
     pub transport: ComputePipeline,
+    /// The workgroup transport's second pass over the slices it deferred
+    /// (`TransportShape::defer_max`), where there is one.
+    pub deferred: Option<ComputePipeline>,
     pub update: ComputePipeline,
     /// The large-class stage, when the kernel makes large classes.
     pub large: Option<LargePipelines>,
@@ -137,8 +140,17 @@ impl RunPipelines {
             shape.one_subgroup as u32,
             shape.local_max,
             !shape.bitonic as u32,
+            shape.defer_max,
+            0,
         ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
+        let deferred = match shape.defer_max {
+            0 => None,
+            max => {
+                let spec = [shape.defer_workgroup, 1, 0, max, !shape.bitonic as u32, 0, 1];
+                Some(bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?)
+            }
+        };
         let update_spv = match (texels.is_some(), float_acc) {
             (false, false) => shaders::UPDATE,
             (false, true) => shaders::UPDATE_FLOAT,
@@ -176,6 +188,6 @@ impl RunPipelines {
             ]),
             false => None,
         };
-        Ok(Self { transport, update, large, plateau, order, texels })
+        Ok(Self { transport, deferred, update, large, plateau, order, texels })
     }
 }

@@ -16,7 +16,10 @@ use super::layout::{
     UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
-use super::shape::{group_stride, two_d, TransportKind, TransportShape, LANE_MAX, LOOP_BUDGET};
+use super::shape::{
+    group_stride, two_d, TransportKind, TransportShape, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX, LOCAL_MAX,
+    LOOP_BUDGET,
+};
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
 use crate::cpu_backend::FIXED_SCALE;
@@ -42,6 +45,9 @@ pub struct VulkanRun {
     iteration: u32,
     float_acc: bool,
     shape: TransportShape,
+    /// Slices the workgroup transport's second pass can take per iteration (0:
+    /// no second pass).
+    deferred_capacity: u32,
     large: LargePlan,
     /// Iterations whose slice orders the per-lane transport's buffer holds (0:
     /// the other transport, which takes slices in index order).
@@ -92,9 +98,11 @@ impl VulkanRun {
         // The per-lane transport's texel views: the samples, and the taps.
         let texels = (tile.values() as u64).max(kernel.taps.len() as u64);
         let shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
-        let local_max = shape.local_max;
+        // Classes past both passes' limits go to the large-class stage.
+        let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
+        let deferred_capacity = if shape.defer_max > 0 { slices.min(65535) } else { 0 };
         let adam = matches!(settings.rule, StepRule::Adam { .. });
         // The per-lane transport's slice orders: a batch's worth at a time where
         // one binding holds them, fewer otherwise (at least one).
@@ -117,6 +125,7 @@ impl VulkanRun {
             &large,
             local_max,
             order_words,
+            deferred_capacity,
         )?;
         let mut sort = buffers.large_sort(ctx, &large)?;
         let sort_choice = match sort.as_mut() {
@@ -140,6 +149,7 @@ impl VulkanRun {
             float_acc,
             shape,
             large,
+            deferred_capacity,
             order_slots,
             profile: Profile::default(),
             overflowed: 0,
@@ -236,6 +246,9 @@ impl VulkanRun {
     /// classes (a barrier must follow); the batch's counts stay.
     fn record_reset_large(&self, cmd: vk::CommandBuffer) {
         zero(&self.ctx, cmd, &self.buffers.large_meta, 0, 8);
+        if self.pipelines.deferred.is_some() {
+            zero(&self.ctx, cmd, &self.buffers.deferred, 0, 4);
+        }
     }
 
     /// The transport dispatch alone (barriers are the caller's).
@@ -264,6 +277,12 @@ impl VulkanRun {
     /// class; so each class ends in projection order with ties in point order,
     /// the CPU's), the gathers between them, and the finishing pass.
     fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+        // The workgroup transport's second pass, over the slices it listed
+        // (as many workgroups as listed: the indirect dispatch's count).
+        if let Some(deferred) = &self.pipelines.deferred {
+            deferred.dispatch_indirect(cmd, 0, &self.buffers.deferred, 0, bytemuck::bytes_of(push));
+            barrier(&self.ctx, cmd);
+        }
         let (Some(sort), Some(large)) = (&self.sort, &self.pipelines.large) else { return };
         let args = &self.buffers.large_args;
         large.args.dispatch(cmd, 0, [1, 1, 1], &[]);
@@ -304,6 +323,7 @@ impl VulkanRun {
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
             lane_stride: group_stride(self.shape.groups(self.slices)),
+            deferred_capacity: self.deferred_capacity,
         }
     }
 
@@ -560,6 +580,30 @@ fn transport_shape(
     if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);
+    }
+    if let (Some(limit), false) = (options.local_max, shape.per_lane) {
+        if !limit.is_power_of_two() || !(64..=LOCAL_MAX).contains(&limit) {
+            return Err(Error::invalid(format!(
+                "the workgroup transport's class limit must be a power of two from 64 to {LOCAL_MAX}, not {limit}"
+            )));
+        }
+        shape.local_max = limit;
+    }
+    match options.defer {
+        None => shape.defer_auto(info, max_class),
+        Some(0) => {}
+        Some(max) if shape.per_lane || !max.is_power_of_two() || max <= shape.local_max || max > DEFER_LIMIT => {
+            return Err(Error::invalid(format!(
+                "the workgroup transport's second pass takes classes up to a power of two above {} and at most \
+                 {DEFER_LIMIT}, not {max}{}",
+                shape.local_max,
+                if shape.per_lane { " (and the per-lane transport has none)" } else { "" }
+            )))
+        }
+        Some(max) => {
+            shape.defer_max = max;
+            shape.defer_workgroup = DEFER_WORKGROUP.min(info.max_workgroup_invocations);
+        }
     }
     shape.fits_shared_memory(info)?;
     if !shape.fits_loop_budget(info, max_class, dims) {

@@ -23,6 +23,11 @@ pub const LANE_BUDGET: u32 = 60_000;
 /// (`FSOT_INSERTION_BUDGET` of transport.comp); past it, the class takes the
 /// bitonic network.
 pub const GROUP_INSERTION_BUDGET: u32 = 4;
+/// Invocations of the workgroup transport's second pass, which sorts the classes
+/// past LOCAL_MAX in shared memory (`defer_max`).
+pub const DEFER_WORKGROUP: u32 = 256;
+/// Largest class the second pass may sort in shared memory.
+pub const DEFER_LIMIT: u32 = 8192;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
 
@@ -71,6 +76,14 @@ pub struct TransportShape {
     /// bucket sort's fallback, instead of by buckets: to compare the two (set
     /// from `VulkanOptions::bitonic_classes`; the per-lane transport ignores it).
     pub bitonic: bool,
+    /// Classes past `local_max` and at most this are sorted by a second pass of
+    /// the workgroup transport (`FSOT_DEFER_MAX`: one workgroup of
+    /// `defer_workgroup` invocations per listed slice) instead of the
+    /// large-class stage's global sorts; 0: none (CPU implementations, the
+    /// per-lane transport, kernels whose classes fit `local_max`).
+    pub defer_max: u32,
+    /// Invocations of that second pass.
+    pub defer_workgroup: u32,
 }
 
 impl TransportShape {
@@ -128,6 +141,8 @@ impl TransportShape {
                 per_lane,
                 local_max,
                 bitonic: false,
+                defer_max: 0,
+                defer_workgroup: 0,
             }
         } else {
             Self {
@@ -137,6 +152,8 @@ impl TransportShape {
                 per_lane,
                 local_max,
                 bitonic: false,
+                defer_max: 0,
+                defer_workgroup: 0,
             }
         };
         let local = max_class.min(LOCAL_MAX);
@@ -171,18 +188,47 @@ impl TransportShape {
         10 * local_max + 8 * workgroup + 2048 + 256
     }
 
-    /// Whether the workgroup transport in this shape fits the device's shared
-    /// memory (the per-lane transport takes none); if not, why.
+    /// Whether the workgroup transport in this shape, and its second pass,
+    /// fit the device's shared memory (the per-lane transport takes none); if
+    /// not, why.
     pub fn fits_shared_memory(&self, info: &DeviceInfo) -> Result<()> {
-        let bytes = Self::shared_bytes(self.workgroup, self.local_max);
-        if self.per_lane || bytes <= info.max_shared_memory {
-            return Ok(());
+        let mut passes = vec![(self.workgroup, self.local_max)];
+        if self.defer_max > 0 {
+            passes.push((self.defer_workgroup, self.defer_max));
         }
-        Err(Error::invalid(format!(
-            "the workgroup transport with {} invocations takes {bytes} bytes of shared memory; {} has {} \
-             (maxComputeSharedMemorySize): use fewer invocations",
-            self.workgroup, info.name, info.max_shared_memory
-        )))
+        for (wg, max) in passes {
+            let bytes = Self::shared_bytes(wg, max);
+            if !self.per_lane && bytes > info.max_shared_memory {
+                return Err(Error::invalid(format!(
+                    "the workgroup transport with {wg} invocations and classes up to {max} takes {bytes} \
+                     bytes of shared memory; {} has {} (maxComputeSharedMemorySize): use fewer \
+                     invocations",
+                    info.name, info.max_shared_memory
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The second pass for classes past `local_max`, on GPUs: up to the
+    /// smallest power of two that holds `max_class` (at most DEFER_LIMIT), or
+    /// the largest that fits the device's shared memory with DEFER_WORKGROUP
+    /// invocations; none on CPU implementations (lavapipe: its classes past the
+    /// limit stay with the large-class stage, which the per-lane transport
+    /// shares), per lane, or where every class fits `local_max`.
+    pub fn defer_auto(&mut self, info: &DeviceInfo, max_class: u32) {
+        if info.is_cpu() || self.per_lane || max_class <= self.local_max {
+            return;
+        }
+        let wg = DEFER_WORKGROUP.min(info.max_workgroup_invocations);
+        let mut max = max_class.next_power_of_two().min(DEFER_LIMIT);
+        while max > self.local_max && Self::shared_bytes(wg, max) > info.max_shared_memory {
+            max /= 2;
+        }
+        if max > self.local_max {
+            self.defer_max = max;
+            self.defer_workgroup = wg;
+        }
     }
 
     /// The pass, its shape and how it sorts a class, in words.
@@ -194,8 +240,12 @@ impl TransportShape {
             );
         }
         let sort = if self.bitonic { "the bitonic network (set)" } else { "buckets" };
+        let deferred = match self.defer_max {
+            0 => String::new(),
+            m => format!(", those up to {m} in a second pass of {} invocations", self.defer_workgroup),
+        };
         format!(
-            "workgroups of {} invocations, {} slice{} each, classes up to {} sorted by {sort}",
+            "workgroups of {} invocations, {} slice{} each, classes up to {} sorted by {sort}{deferred}",
             self.workgroup,
             self.slices_per_group,
             if self.slices_per_group == 1 { "" } else { "s" },
@@ -278,7 +328,12 @@ impl TransportShape {
             self.slices_per_group * Self::group_iterations(max_class.min(local), self.workgroup, dims)
                 <= LOOP_BUDGET
         };
-        fits_small && Self::large_fits(max_class, local, dims)
+        // The second pass: one slice a workgroup (and its slot's compare-and-swap
+        // loop, at most 64, in the first pass: within the 64 of slack).
+        let fits_deferred = self.defer_max == 0
+            || Self::group_iterations(max_class.min(self.defer_max), self.defer_workgroup, dims)
+                <= LOOP_BUDGET;
+        fits_small && fits_deferred && Self::large_fits(max_class, local.max(self.defer_max), dims)
     }
 
     /// Whether the large-class stage's invocations stay within LOOP_BUDGET for
@@ -477,6 +532,36 @@ mod tests {
         assert!(err.contains("maxComputeSharedMemorySize") && err.contains("16384"), "{err}");
         let lane = TransportShape::choose(&small, 744, 2, 1 << 15, Some(TransportKind::PerLane), None);
         assert!(lane.fits_shared_memory(&small).is_ok());
+        // The second pass: on a GPU with 48 KiB of shared memory, classes past
+        // 2048 up to 4096 (the paper's tile: 2326; 256x256x64: 3372); past
+        // 4096 the rest go to the large-class stage; none where every class
+        // fits, and none on lavapipe (a CPU implementation).
+        let gpu = DeviceInfo {
+            device_type: ash::vk::PhysicalDeviceType::DISCRETE_GPU,
+            subgroup_size: 32,
+            max_shared_memory: 49152,
+            ..lavapipe.clone()
+        };
+        for (max_class, defer) in [(1408u32, 0u32), (2326, 4096), (3372, 4096), (5000, 4096)] {
+            let mut shape = TransportShape::choose(&gpu, max_class, 2, 1 << 15, None, None);
+            shape.defer_auto(&gpu, max_class);
+            assert_eq!((shape.local_max, shape.defer_max), (LOCAL_MAX, defer), "{max_class}");
+            assert!(shape.fits_shared_memory(&gpu).is_ok(), "{shape:?}");
+            assert!(defer == 0 || shape.describe().contains("up to 4096 in a second pass of 256"));
+            let mut cpu = TransportShape::choose(
+                &lavapipe,
+                max_class,
+                2,
+                1 << 15,
+                Some(TransportKind::Workgroup),
+                None,
+            );
+            cpu.defer_auto(&lavapipe, max_class);
+            assert_eq!(cpu.defer_max, 0);
+        }
+        let mut small = TransportShape::choose(&gpu, 3000, 2, 1 << 15, None, None);
+        small.defer_auto(&DeviceInfo { max_shared_memory: 32768, ..gpu.clone() }, 3000);
+        assert_eq!(small.defer_max, 0, "4096 does not fit 32 KiB with 256 invocations");
         // A bitonic network of 2048 on 8 invocations: 66 stages of 1024 pairs,
         // 128 for each invocation.
         assert!(TransportShape::slice_iterations(2048, 8) >= 66 * 128);

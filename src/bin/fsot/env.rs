@@ -64,6 +64,19 @@ pub(crate) fn bitonic_classes() -> Result<bool> {
     }
 }
 
+/// `FSOT_DEFER=0`: no second pass of the workgroup transport (GPUs); the classes
+/// past its limit go to the large-class stage's global sorts, to compare; unset:
+/// the second pass where the device's shared memory holds those classes.
+pub(crate) fn defer() -> Result<Option<u32>> {
+    match std::env::var("FSOT_DEFER").ok().as_deref() {
+        None | Some("") => Ok(None),
+        Some("0") => Ok(Some(0)),
+        Some(other) => Err(Error::invalid(format!(
+            "FSOT_DEFER={other}: it takes 0 (no second pass), or is unset (the second pass where it fits)"
+        ))),
+    }
+}
+
 /// A Vulkan context on the device the flag or the environment names.
 pub(crate) fn context(flag: Option<String>) -> Result<Context> {
     Context::new(&ContextOptions { validation: validation(), device: device(flag) })

@@ -164,6 +164,8 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         slice_order_slots: None,
         large_sort: env::large_sort()?,
         bitonic_classes: env::bitonic_classes()?,
+        defer: env::defer()?,
+        local_max: None,
     };
     Ok(RunOptions {
         backend,
