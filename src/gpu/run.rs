@@ -4,9 +4,11 @@
 //! round trip between them.
 //!
 //! Per iteration: transport (one workgroup per slice: draw, gather, project,
-//! bucket sort in shared memory, exact targets, scatter) -> for classes larger
-//! than shared memory holds, three passes of the global radix sort (by point, by
-//! projection, then stably by class) and a finishing transport pass -> update.
+//! bucket sort in shared memory, exact targets, scatter) -> on GPUs, a second
+//! transport pass over the slices whose classes passed the first's limit but fit
+//! a larger workgroup's shared memory -> for classes larger still, three passes
+//! of the global radix sort (by point, by projection, then stably by class) and a
+//! finishing transport pass -> update.
 
 use ash::vk;
 
