@@ -270,6 +270,26 @@ fn a_run_killed_mid_way_leaves_the_existing_output_untouched_and_nothing_else() 
     assert_eq!(names, vec!["existing.exr".to_string()], "files left behind");
 }
 
+/// `fsot ARGS` in `dir` with the validation layer on and `var` set.
+fn fsot_with(dir: &Path, var: (&str, &str), args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(args)
+        .env("FSOT_VALIDATION", "1")
+        .env(var.0, var.1)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// A run refused for the environment variable `named` (`NAME=value`): a
+/// non-zero exit naming it, no panic, and the existing output in `dir` kept.
+fn assert_refused_keeping_output(o: &Output, named: &str, dir: &Path) {
+    let err = stderr(o);
+    assert!(!o.status.success() && !err.contains("panicked"), "{named}: {err}");
+    assert!(err.contains(named), "{named}: {err}");
+    assert_eq!(std::fs::read(dir.join("existing.exr")).unwrap(), b"keep me", "{named}");
+}
+
 fn read_samples(path: &Path) -> Vec<u32> {
     fsot::io::exr::read(path).unwrap().samples.iter().map(|v| v.to_bits()).collect()
 }
@@ -604,14 +624,9 @@ fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     let run = |value: &str, out: &str| {
-        Command::new(env!("CARGO_BIN_EXE_fsot"))
-            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"])
-            .args(["--kernel", "perceptual-taa", "--profile", "--out", out])
-            .env("FSOT_VALIDATION", "1")
-            .env("FSOT_SORT", value)
-            .current_dir(dir.path())
-            .output()
-            .unwrap()
+        let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"];
+        let more = ["--kernel", "perceptual-taa", "--profile", "--out", out];
+        fsot_with(dir.path(), ("FSOT_SORT", value), &[&args[..], &more[..]].concat())
     };
     // 16 spp: classes past the transport's limit, so the run has a large-class stage.
     let o = run("blocks", "m.exr");
@@ -619,11 +634,7 @@ fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
     assert!(o.status.success(), "{}{out}", stderr(&o));
     assert!(out.contains("large-class sort: block passes (set, not timed)"), "{out}");
     for bad in ["look-back", "fast", "Blocks"] {
-        let o = run(bad, "existing.exr");
-        let err = stderr(&o);
-        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
-        assert!(err.contains(&format!("FSOT_SORT={bad}")), "{bad}: {err}");
-        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+        assert_refused_keeping_output(&run(bad, "existing.exr"), &format!("FSOT_SORT={bad}"), dir.path());
     }
 }
 
@@ -637,14 +648,9 @@ fn fsot_class_sort_bitonic_makes_the_same_mask_and_any_other_value_is_refused() 
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     let run = |value: &str, out: &str| {
-        Command::new(env!("CARGO_BIN_EXE_fsot"))
-            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "4"])
-            .args(["--kernel", "taa", "--deterministic", "--profile", "--out", out])
-            .env("FSOT_VALIDATION", "1")
-            .env("FSOT_CLASS_SORT", value)
-            .current_dir(dir.path())
-            .output()
-            .unwrap()
+        let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "4"];
+        let more = ["--kernel", "taa", "--deterministic", "--profile", "--out", out];
+        fsot_with(dir.path(), ("FSOT_CLASS_SORT", value), &[&args[..], &more[..]].concat())
     };
     let mut masks = Vec::new();
     for (value, said) in [("", "sorted by buckets"), ("bitonic", "sorted by the bitonic network (set)")] {
@@ -657,11 +663,8 @@ fn fsot_class_sort_bitonic_makes_the_same_mask_and_any_other_value_is_refused() 
     }
     assert!(masks[0] == masks[1], "the two sorts made different masks");
     for bad in ["radix", "Bitonic"] {
-        let o = run(bad, "existing.exr");
-        let err = stderr(&o);
-        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
-        assert!(err.contains(&format!("FSOT_CLASS_SORT={bad}")), "{bad}: {err}");
-        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+        let named = format!("FSOT_CLASS_SORT={bad}");
+        assert_refused_keeping_output(&run(bad, "existing.exr"), &named, dir.path());
     }
 }
 
@@ -670,25 +673,9 @@ fn fsot_defer_takes_0_or_nothing() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     for bad in ["1", "4096", "off"] {
-        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
-            .args([
-                "optimize",
-                "--backend",
-                "cpu",
-                "--size",
-                "8x8x4",
-                "--iterations",
-                "2",
-                "--out",
-                "existing.exr",
-            ])
-            .env("FSOT_DEFER", bad)
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
-        let err = stderr(&o);
-        assert!(!o.status.success() && !err.contains("panicked"), "{bad}: {err}");
-        assert!(err.contains(&format!("FSOT_DEFER={bad}")), "{bad}: {err}");
-        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{bad}");
+        let args =
+            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
+        let o = fsot_with(dir.path(), ("FSOT_DEFER", bad), &args);
+        assert_refused_keeping_output(&o, &format!("FSOT_DEFER={bad}"), dir.path());
     }
 }
