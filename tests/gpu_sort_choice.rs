@@ -42,15 +42,20 @@ fn the_sort_path_is_timed_on_gpus_only_and_either_path_makes_the_same_mask() {
     }
 
     // The optimizer's large-class stage (4 spp: classes past the transport's
-    // limit) with each path set: the same samples bit for bit, and the report
-    // says which path ran.
+    // limit; on a GPU the second pass would take them, so it is turned off)
+    // with each path set: the same samples bit for bit, and the report says
+    // which path ran.
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let mut settings = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 3);
     settings.iterations = 24;
     let mask = Mask::white(tile, 3);
     let run = |path: SortPath| {
-        let options =
-            VulkanOptions { deterministic: true, large_sort: Some(path), ..VulkanOptions::default() };
+        let options = VulkanOptions {
+            deterministic: true,
+            large_sort: Some(path),
+            defer: Some(0),
+            ..VulkanOptions::default()
+        };
         let mut run = VulkanRun::new(&ctx, tile, settings, Some(&mask), options).unwrap();
         assert!(run.large_capacity() > 0, "the tile must reach the large-class stage");
         while !run.finished() {

@@ -95,15 +95,15 @@ optimize() {
   if want optimize; then
     # Issue 16, item 5: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
     optimize gpu-128x128x30-ptaa --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
-    # The large-class stage's sort: chosen at run time above (the log says which,
-    # and both paths' times); here the block passes kept, to compare.
-    FSOT_SORT=blocks optimize gpu-128x128x30-ptaa-blocks --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     # The classes' sort in the transport: buckets above; here the bitonic network
     # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
     FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     # The classes past 2048 (2049 to 2326 here): a second workgroup pass above;
-    # here the large-class stage's global sorts instead (before 2026-12-01), to compare.
+    # here the large-class stage's global sorts instead (before 2026-12-01), to
+    # compare, with the sort's path chosen at run time (the log says which, and
+    # both paths' times), and then with the block passes kept.
     FSOT_DEFER=0 optimize gpu-128x128x30-ptaa-nodefer --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    FSOT_DEFER=0 FSOT_SORT=blocks optimize gpu-128x128x30-ptaa-blocks --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
     # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile
