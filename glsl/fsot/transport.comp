@@ -75,13 +75,6 @@ float send(FsotSlice s, uint i, float target) {
     return delta * delta;
 }
 
-// Bucket of a projection: n equal buckets over the projections' range
-// [low, low + width], clamped. Monotone in the key, so equal keys share a
-// bucket and the buckets come in key order.
-uint class_bucket(float key, float low, float scale, uint n) {
-    return min(uint(min(max(key - low, 0.0) * scale, float(n - 1u))), n - 1u);
-}
-
 // Exclusive prefix of `value` over the workgroup: a subgroup scan, then the
 // totals of the subgroups before this one.
 uint group_exclusive(uint value) {
@@ -170,7 +163,7 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
         }
         uint p = fsot_class_point(s, i);
         float k = fsot_project(s, p);
-        uint b = class_bucket(k, low, scale, n);
+        uint b = fsot_bucket(k, low, scale, n);
         key[m] = k;
         point[m] = p;
         uint shift = (b & 1u) * 16u;

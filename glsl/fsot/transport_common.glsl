@@ -107,6 +107,14 @@ void fsot_write_large(FsotSlice s, uint off, uint i) {
     large_pkey[e] = fsot_float_key(proj);
 }
 
+// Bucket of a projection for the transports' bucket sorts: n equal buckets over
+// the projections' range [offset, offset + a1 + a2] (`scale` = n / width),
+// clamped. Monotone in the key, so equal keys share a bucket and the buckets
+// come in key order.
+uint fsot_bucket(float key_value, float offset, float scale, uint n) {
+    return min(uint(max(key_value - offset, 0.0) * scale), n - 1u);
+}
+
 bool fsot_before(float ka, uint va, float kb, uint vb) {
     return ka < kb || (ka == kb && va < vb);
 }

@@ -45,13 +45,6 @@ uint member_point(uint64_t m) {
     return uint(m);
 }
 
-// Bucket of a projection: n equal buckets over the projections' range
-// [offset, offset + a1 + a2]. Monotone in the key, so equal keys share a bucket
-// and only keys within one bucket can be out of order after the placing pass.
-uint lane_bucket(float key_value, float offset, float scale, uint n) {
-    return min(uint(max(key_value - offset, 0.0) * scale), n - 1u);
-}
-
 // Heap sort of `sorted` in place: the fallback when keys pile into few buckets.
 void sift_down(uint root, uint end) {
     while (2u * root + 1u < end) {
@@ -136,7 +129,7 @@ void main() {
         uint point = fsot_class_point(s, i);
         float p = fsot_project(s, point);
         member[i] = pack_member(p, point);
-        uint b = lane_bucket(p, low, scale, n);
+        uint b = fsot_bucket(p, low, scale, n);
         bucket_pair[b >> 1u] += 1u << ((b & 1u) * 16u);
     }
     uint total = 0u;
@@ -151,7 +144,7 @@ void main() {
     }
     for (uint i = 0u; i < n; ++i) {
         uint64_t m = member[i];
-        uint b = lane_bucket(member_key(m), low, scale, n);
+        uint b = fsot_bucket(member_key(m), low, scale, n);
         uint shift = (b & 1u) * 16u;
         uint word = bucket_pair[b >> 1u];
         bucket_pair[b >> 1u] = word + (1u << shift);

@@ -47,9 +47,6 @@ pub struct VulkanRun {
     iteration: u32,
     float_acc: bool,
     shape: TransportShape,
-    /// Slices the workgroup transport's second pass can take per iteration (0:
-    /// no second pass).
-    deferred_capacity: u32,
     large: LargePlan,
     /// Iterations whose slice orders the per-lane transport's buffer holds (0:
     /// the other transport, which takes slices in index order).
@@ -104,7 +101,6 @@ impl VulkanRun {
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
         let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
-        let deferred_capacity = if shape.defer_max > 0 { slices.min(65535) } else { 0 };
         let adam = matches!(settings.rule, StepRule::Adam { .. });
         // The per-lane transport's slice orders: a batch's worth at a time where
         // one binding holds them, fewer otherwise (at least one).
@@ -127,7 +123,7 @@ impl VulkanRun {
             &large,
             local_max,
             order_words,
-            deferred_capacity,
+            shape.deferred_capacity(slices),
         )?;
         let mut sort = buffers.large_sort(ctx, &large)?;
         let sort_choice = match sort.as_mut() {
@@ -151,7 +147,6 @@ impl VulkanRun {
             float_acc,
             shape,
             large,
-            deferred_capacity,
             order_slots,
             profile: Profile::default(),
             overflowed: 0,
@@ -273,11 +268,13 @@ impl VulkanRun {
         self.pipelines.update.dispatch(cmd, 0, groups, bytemuck::bytes_of(&update));
     }
 
-    /// Records the large-class stage, when the kernel can make classes too large
-    /// for the transport pass: the dispatch sizes from the counts the transport
-    /// left on the GPU, then three stable sorts (by point, by projection, by
-    /// class; so each class ends in projection order with ties in point order,
-    /// the CPU's), the gathers between them, and the finishing pass.
+    /// Records what follows the transport pass for the classes too large for it:
+    /// its second pass over the slices it listed, where the shape has one; then
+    /// the large-class stage, when the kernel can make classes larger still: the
+    /// dispatch sizes from the counts the transport left on the GPU, then three
+    /// stable sorts (by point, by projection, by class; so each class ends in
+    /// projection order with ties in point order, the CPU's), the gathers between
+    /// them, and the finishing pass.
     fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
         // The workgroup transport's second pass, over the slices it listed
         // (as many workgroups as listed: the indirect dispatch's count).
@@ -325,7 +322,7 @@ impl VulkanRun {
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
             lane_stride: group_stride(self.shape.groups(self.slices)),
-            deferred_capacity: self.deferred_capacity,
+            deferred_capacity: self.shape.deferred_capacity(self.slices),
         }
     }
 

@@ -192,13 +192,13 @@ impl TransportShape {
     /// fit the device's shared memory (the per-lane transport takes none); if
     /// not, why.
     pub fn fits_shared_memory(&self, info: &DeviceInfo) -> Result<()> {
-        let mut passes = vec![(self.workgroup, self.local_max)];
-        if self.defer_max > 0 {
-            passes.push((self.defer_workgroup, self.defer_max));
+        if self.per_lane {
+            return Ok(());
         }
-        for (wg, max) in passes {
+        let second = (self.defer_max > 0).then_some((self.defer_workgroup, self.defer_max));
+        for (wg, max) in std::iter::once((self.workgroup, self.local_max)).chain(second) {
             let bytes = Self::shared_bytes(wg, max);
-            if !self.per_lane && bytes > info.max_shared_memory {
+            if bytes > info.max_shared_memory {
                 return Err(Error::invalid(format!(
                     "the workgroup transport with {wg} invocations and classes up to {max} takes {bytes} \
                      bytes of shared memory; {} has {} (maxComputeSharedMemorySize): use fewer \
@@ -228,6 +228,17 @@ impl TransportShape {
         if max > self.local_max {
             self.defer_max = max;
             self.defer_workgroup = wg;
+        }
+    }
+
+    /// Slices the second pass's list holds per iteration of `slices` slices: all
+    /// of them, at most 65535 (one dispatch's workgroups along x); 0 without a
+    /// second pass.
+    pub fn deferred_capacity(&self, slices: u32) -> u32 {
+        if self.defer_max > 0 {
+            slices.min(65535)
+        } else {
+            0
         }
     }
 
