@@ -154,6 +154,53 @@ fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn each_iterations_objective_estimate_is_the_cpu_paths() {
+    // The estimate the stopping rule reads (the classes' squared distances to
+    // their targets over their members, summed on the device) against the CPU
+    // path's, iteration by iteration from the same samples: in each transport,
+    // in a GPU's shape (the cost summed over 16 subgroups on lavapipe) and in
+    // one whose last subgroup is partial, in two and three dimensions.
+    let Some(ctx) = common::gpu_context() else { return };
+    let shapes = [
+        (TransportKind::Workgroup, Some((128, 1))),
+        (TransportKind::Workgroup, Some((100, 2))),
+        (TransportKind::PerLane, None),
+    ];
+    for dims in [2, 3] {
+        let mask = Mask::white(Tile::new(16, 16, 8, 1, dims).unwrap(), 21);
+        let s = settings("taa", 4, 21);
+        let mut cpu = fsot::cpu_backend::CpuRun::new(mask.tile, s, Some(&mask)).unwrap();
+        let expected: Vec<f64> = (0..3).map(|_| cpu.step()).collect();
+        for (transport, shape) in shapes {
+            if refused_here(&ctx, transport) {
+                continue;
+            }
+            let options = VulkanOptions {
+                deterministic: true,
+                transport: Some(transport),
+                transport_shape: shape,
+                ..VulkanOptions::default()
+            };
+            let mut gpu = VulkanRun::new(&ctx, mask.tile, s, Some(&mask), options).unwrap();
+            let mut got = Vec::new();
+            while got.len() < expected.len() {
+                got.extend(gpu.step_up_to((expected.len() - got.len()) as u32).unwrap());
+            }
+            for (i, (g, c)) in got.iter().zip(&expected).enumerate() {
+                let relative = (g - c).abs() / c;
+                eprintln!("d = {dims} {transport:?} {shape:?} iteration {i}: {g:.6e} against {c:.6e}");
+                assert!(
+                    relative < 1e-4,
+                    "d = {dims} {transport:?} {shape:?} iteration {i}: {g} against the CPU path's {c}"
+                );
+            }
+        }
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
     // GPUs take a second pass of the workgroup transport for the classes past
     // its limit that shared memory still holds (the paper's tile: 2049 to

@@ -181,8 +181,8 @@ impl TransportShape {
     /// Shared memory the workgroup transport (transport.comp) takes with
     /// `workgroup` invocations and classes up to `local_max`: the class's keys
     /// and points (4 bytes each a member) and bucket counts (2 bytes), two
-    /// words an invocation (the scan's subgroup totals, the cost's reduction),
-    /// the f64 subset sums of d = 8 (256 x 8 bytes) and the slice (256 bytes
+    /// words an invocation (the scan's and the cost's subgroup totals), the f64
+    /// subset sums of d = 8 (256 x 8 bytes) and a few flags (256 bytes
     /// allowed).
     pub fn shared_bytes(workgroup: u32, local_max: u32) -> u32 {
         10 * local_max + 8 * workgroup + 2048 + 256
