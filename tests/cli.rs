@@ -682,3 +682,28 @@ fn fsot_defer_takes_0_or_nothing() {
         assert_refused_keeping_output(&o, &format!("FSOT_DEFER={bad}"), dir.path());
     }
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_refused() {
+    // d = 3: the workgroup transport on every device. At 64 the classes past it
+    // leave the first pass (for the second pass on a GPU, the large-class stage
+    // on lavapipe); the profile names the limit.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "2"];
+    let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
+    let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", "64")], &[&args[..], &more[..]].concat());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{text}", stderr(&o));
+    assert!(
+        text.contains("  transport: workgroups of") && text.contains("classes up to 64 sorted"),
+        "{text}"
+    );
+    for bad in ["100", "32", "4096", "off"] {
+        let args =
+            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
+        let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", bad)], &args);
+        assert_refused_keeping_output(&o, &format!("FSOT_LOCAL_MAX={bad}"), dir.path());
+    }
+}

@@ -115,12 +115,17 @@ optimize() {
     FSOT_HOST_RULE=1 optimize gpu-128x128x30-ptaa-plateau-host --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
     optimize gpu-128x128x30-ptaa-det --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-32x32x16-taa --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile
-    # The transport's launch shape at the paper's tile (invocations, slices per
-    # workgroup; the default first), 200 iterations each, for tuning.
-    for shape in default 32,1 32,4 64,2 128,1 256,1; do
-      if [ "$shape" = default ]; then env=(); else env=(FSOT_TRANSPORT=$shape); fi
+    # The transport's launch shape at the paper's tile, 200 iterations each, for
+    # tuning: invocations and slices per workgroup (FSOT_TRANSPORT), and the first
+    # pass's class limit (FSOT_LOCAL_MAX; the classes past it go to the second
+    # pass, 256 invocations): a smaller limit takes less shared memory and fewer
+    # registers, so more workgroups stay resident. Past 512: 7.7% of the slices,
+    # 47% of the members; past 1024: 2.1% and 20% (examples/class_sizes.rs).
+    for shape in default 32,1 32,4 64,2 128,1 256,1 128,1:1024 128,1:512 64,1:1024 64,1:512 32,1:512 32,1:256; do
+      env=()
+      case $shape in default) ;; *:*) env=(FSOT_TRANSPORT=${shape%:*} FSOT_LOCAL_MAX=${shape#*:});; *) env=(FSOT_TRANSPORT=$shape);; esac
       step env "${env[@]}" $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa \
-        --iterations 200 --profile --out "$WORK/shape-$shape.exr"
+        --iterations 200 --profile --out "$WORK/shape-${shape/:/-}.exr"
     done
   fi
 

@@ -83,6 +83,7 @@ pub struct VulkanOptions {
     pub defer: Option<u32>,
     /// The workgroup transport's class limit (a power of two from 64 to 2048)
     /// in place of 2048: for tests, which give lavapipe's shared memory a
-    /// second pass to run.
+    /// second pass to run, and for tuning (the command line reads
+    /// `FSOT_LOCAL_MAX`). The per-lane transport ignores it.
     pub local_max: Option<u32>,
 }

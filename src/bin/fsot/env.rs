@@ -1,6 +1,7 @@
 //! The environment variables the command line reads and hands to the library as
 //! options (the library reads none but the documented `FSOT_FAULT` test switch).
 
+use fsot::gpu::shape::LOCAL_MAX;
 use fsot::vk::{Context, ContextOptions, SortPath};
 
 use super::{Error, Result};
@@ -74,6 +75,23 @@ pub(crate) fn defer() -> Result<Option<u32>> {
         Some(other) => Err(Error::invalid(format!(
             "FSOT_DEFER={other}: it takes 0 (no second pass), or is unset (the second pass where it fits)"
         ))),
+    }
+}
+
+/// `FSOT_LOCAL_MAX=N`: the workgroup transport's first pass sorts classes up to N
+/// (a power of two from 64 to 2048) instead of 2048,
+/// handing the larger ones to its second pass (GPUs) or to the large-class
+/// stage: less shared memory and fewer registers a workgroup, for tuning; unset:
+/// 2048.
+pub(crate) fn local_max() -> Result<Option<u32>> {
+    match std::env::var("FSOT_LOCAL_MAX").ok().as_deref() {
+        None | Some("") => Ok(None),
+        Some(v) => match v.parse::<u32>() {
+            Ok(n) if n.is_power_of_two() && (64..=LOCAL_MAX).contains(&n) => Ok(Some(n)),
+            _ => Err(Error::invalid(format!(
+                "FSOT_LOCAL_MAX={v}: it takes a power of two from 64 to {LOCAL_MAX}, or is unset ({LOCAL_MAX})"
+            ))),
+        },
     }
 }
 

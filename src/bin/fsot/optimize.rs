@@ -165,7 +165,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         large_sort: env::large_sort()?,
         bitonic_classes: env::bitonic_classes()?,
         defer: env::defer()?,
-        local_max: None,
+        local_max: env::local_max()?,
     };
     Ok(RunOptions {
         backend,
