@@ -95,6 +95,11 @@ optimize() {
   if want optimize; then
     # Issue 16, item 5: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
     optimize gpu-128x128x30-ptaa --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    # The same with the other builds carried (.gl/bin/fsot-NAME), to compare.
+    for v in $B/fsot-*; do
+      [ -x "$v" ] && step "$v" optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile \
+        --out "$WORK/gpu-128x128x30-ptaa-${v##*/}.exr"
+    done
     # The classes' sort in the transport: buckets above; here the bitonic network
     # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
     FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
