@@ -177,11 +177,11 @@ layout(std430, set = 0, binding = FSOT_BINDING_SCHEDULE) buffer Schedule { RuleS
 // class-size bin, each slice's bin, and the slices in order of decreasing class size.
 // Classes the workgroup transport defers to its second pass (transport.comp,
 // FSOT_FROM_LIST): that pass's indirect dispatch (workgroups x, y, z: x the
-// slices listed, reset each iteration; y and z 1), a word unused, then the
-// slices.
+// slices listed up to FSOT_DEFER_GROUPS; y and z 1), the slices listed, then
+// the slices; x and the count are reset each iteration.
 layout(std430, set = 0, binding = FSOT_BINDING_DEFERRED) buffer Deferred {
     uint deferred_groups[3];
-    uint deferred_pad;
+    uint deferred_count;
     uint deferred_slices[];
 };
 layout(std430, set = 0, binding = FSOT_BINDING_SLICE_ORDER) buffer SliceOrder { uint slice_order[]; };

@@ -38,6 +38,10 @@ layout(constant_id = 4) const bool FSOT_BUCKET_SORT = true;
 // sorts nor the first pass's occupancy (its shared memory).
 layout(constant_id = 5) const uint FSOT_DEFER_MAX = 0u;
 layout(constant_id = 6) const bool FSOT_FROM_LIST = false;
+// Workgroups of the second pass at most (65535, the least maxComputeWorkGroupCount
+// a device gives; less in tests): past it, each workgroup takes several listed
+// slices (src/gpu/shape.rs: DEFER_GROUPS).
+layout(constant_id = 7) const uint FSOT_DEFER_GROUPS = 65535u;
 
 void sync() {
     if (ONE_SUBGROUP) {
@@ -222,21 +226,20 @@ void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
     sync();
 }
 
-// Lists `slice` for the second pass; false when the list is full (the class is
-// then counted as dropped, as a large class without room). A compare-and-swap,
-// so the dispatch's count never passes the list's capacity.
-bool defer_slice(uint slice) {
-    uint at = atomicOr(deferred_groups[0], 0u);
-    for (uint tries = 0u; tries < 64u && at < pc.deferred_capacity; ++tries) {
-        uint seen = atomicCompSwap(deferred_groups[0], at, at + 1u);
-        if (seen == at) {
-            deferred_slices[at] = slice;
-            return true;
-        }
-        at = seen;
+// Lists `slice` for the second pass, one more workgroup of its dispatch while
+// they are fewer than FSOT_DEFER_GROUPS. The list holds every slice of an
+// iteration, so it is never full; were it, the class would be counted as
+// dropped, as a large class without room.
+void defer_slice(uint slice) {
+    uint at = atomicAdd(deferred_count, 1u);
+    if (at >= pc.deferred_capacity) {
+        atomicAdd(large_overflow, 1u);
+        return;
     }
-    atomicAdd(large_overflow, 1u);
-    return false;
+    deferred_slices[at] = slice;
+    if (at < FSOT_DEFER_GROUPS) {
+        atomicAdd(deferred_groups[0], 1u);
+    }
 }
 
 // Every invocation draws the slice and finds its class size itself (the same
@@ -324,9 +327,17 @@ void main() {
     }
     uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     if (FSOT_FROM_LIST) {
-        // The second pass: workgroup p takes the p-th listed slice (the
-        // dispatch's count is the list's, at most its capacity).
-        process_slice(deferred_slices[group]);
+        // The second pass: workgroup p takes the listed slices p, p + G, ...
+        // (G the dispatch's workgroups: as many as listed, at most
+        // FSOT_DEFER_GROUPS).
+        uint listed = min(deferred_count, pc.deferred_capacity);
+        uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y;
+        for (uint k = group; k < listed; k += groups) {
+            if (k != group) {
+                sync(); // shared memory is reused by the next slice
+            }
+            process_slice(deferred_slices[k]);
+        }
         fsot_check_loop_cap();
         return;
     }

@@ -164,7 +164,10 @@ impl RunBuffers {
             large_args: device(32, "large-indirect-args")?,
             schedule: device(std::mem::size_of::<RuleState>() as u64, "stopping-rule")?,
             slice_order: device(fits("the slice order", order_words.max(4) * 4)?, "slice-order")?,
-            deferred: device(16 + 4 * deferred_capacity.max(1) as u64, "deferred-slices")?,
+            deferred: device(
+                fits("the deferred slices", 16 + 4 * deferred_capacity.max(1) as u64)?,
+                "deferred-slices",
+            )?,
             placeholders,
             readback: Buffer::new(ctx, readback_len, Location::Readback, "readback")?,
             taps,

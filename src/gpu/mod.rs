@@ -86,4 +86,7 @@ pub struct VulkanOptions {
     /// second pass to run, and for tuning (the command line reads
     /// `FSOT_LOCAL_MAX`). The per-lane transport ignores it.
     pub local_max: Option<u32>,
+    /// Workgroups of the second pass at most, in place of 65535 (`DEFER_GROUPS`):
+    /// for tests, which then see each workgroup take several listed slices.
+    pub defer_groups: Option<u32>,
 }

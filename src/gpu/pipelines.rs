@@ -142,12 +142,14 @@ impl RunPipelines {
             !shape.bitonic as u32,
             shape.defer_max,
             0,
+            shape.defer_groups,
         ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let deferred = match shape.defer_max {
             0 => None,
             max => {
-                let spec = [shape.defer_workgroup, 1, 0, max, !shape.bitonic as u32, 0, 1];
+                let spec =
+                    [shape.defer_workgroup, 1, 0, max, !shape.bitonic as u32, 0, 1, shape.defer_groups];
                 Some(bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?)
             }
         };

@@ -19,8 +19,8 @@ use super::layout::{
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
-    group_stride, two_d, TransportKind, TransportShape, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX, LOCAL_MAX,
-    LOOP_BUDGET,
+    group_stride, two_d, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX,
+    LOCAL_MAX, LOOP_BUDGET,
 };
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -244,7 +244,9 @@ impl VulkanRun {
     fn record_reset_large(&self, cmd: vk::CommandBuffer) {
         zero(&self.ctx, cmd, &self.buffers.large_meta, 0, 8);
         if self.pipelines.deferred.is_some() {
+            // The dispatch's x and the count of slices listed (Deferred).
             zero(&self.ctx, cmd, &self.buffers.deferred, 0, 4);
+            zero(&self.ctx, cmd, &self.buffers.deferred, 12, 4);
         }
     }
 
@@ -603,6 +605,14 @@ fn transport_shape(
             shape.defer_max = max;
             shape.defer_workgroup = DEFER_WORKGROUP.min(info.max_workgroup_invocations);
         }
+    }
+    if let Some(groups) = options.defer_groups {
+        if !(1..=DEFER_GROUPS).contains(&groups) {
+            return Err(Error::invalid(format!(
+                "the second pass's workgroups must be from 1 to {DEFER_GROUPS}, not {groups}"
+            )));
+        }
+        shape.defer_groups = groups;
     }
     shape.fits_shared_memory(info)?;
     if !shape.fits_loop_budget(info, max_class, dims) {

@@ -28,6 +28,10 @@ pub const GROUP_INSERTION_BUDGET: u32 = 4;
 pub const DEFER_WORKGROUP: u32 = 256;
 /// Largest class the second pass may sort in shared memory.
 pub const DEFER_LIMIT: u32 = 8192;
+/// Workgroups of the second pass at most (`FSOT_DEFER_GROUPS`): the least
+/// maxComputeWorkGroupCount a device gives. Past it, each takes several listed
+/// slices.
+pub const DEFER_GROUPS: u32 = 65535;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
 
@@ -84,6 +88,8 @@ pub struct TransportShape {
     pub defer_max: u32,
     /// Invocations of that second pass.
     pub defer_workgroup: u32,
+    /// Workgroups of that second pass at most (DEFER_GROUPS; less in tests).
+    pub defer_groups: u32,
 }
 
 impl TransportShape {
@@ -143,6 +149,7 @@ impl TransportShape {
                 bitonic: false,
                 defer_max: 0,
                 defer_workgroup: 0,
+                defer_groups: DEFER_GROUPS,
             }
         } else {
             Self {
@@ -154,6 +161,7 @@ impl TransportShape {
                 bitonic: false,
                 defer_max: 0,
                 defer_workgroup: 0,
+                defer_groups: DEFER_GROUPS,
             }
         };
         let local = max_class.min(LOCAL_MAX);
@@ -232,11 +240,11 @@ impl TransportShape {
     }
 
     /// Slices the second pass's list holds per iteration of `slices` slices: all
-    /// of them, at most 65535 (one dispatch's workgroups along x); 0 without a
-    /// second pass.
+    /// of them (its workgroups take several each past `defer_groups`); 0 without
+    /// a second pass.
     pub fn deferred_capacity(&self, slices: u32) -> u32 {
         if self.defer_max > 0 {
-            slices.min(65535)
+            slices
         } else {
             0
         }

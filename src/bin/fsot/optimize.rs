@@ -166,6 +166,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         bitonic_classes: env::bitonic_classes()?,
         defer: env::defer()?,
         local_max: env::local_max()?,
+        defer_groups: None,
     };
     Ok(RunOptions {
         backend,
