@@ -236,6 +236,20 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
             VulkanOptions { defer_groups: Some(2), ..options },
         );
     }
+    // A first pass of one small subgroup with a small limit, as the lent-GPU
+    // script's shape sweep runs it (FSOT_TRANSPORT=32,1 FSOT_LOCAL_MAX=512 on a
+    // GPU): most classes then take the second pass.
+    for dims in [2, 3] {
+        let options = VulkanOptions {
+            deterministic: true,
+            transport: Some(TransportKind::Workgroup),
+            transport_shape: Some((8, 1)),
+            local_max: Some(64),
+            defer: Some(1024),
+            ..VulkanOptions::default()
+        };
+        compare_with_options(&Mask::white(Tile::new(16, 16, 8, 1, dims).unwrap(), 21), "taa", options);
+    }
     // Class by class, near-ties allowed their neighbour's target, in two and
     // three dimensions.
     let options = VulkanOptions {
