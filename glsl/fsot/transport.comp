@@ -242,6 +242,45 @@ void defer_slice(uint slice) {
     }
 }
 
+#ifndef FSOT_ANY_DIMS
+// A class that fits one subgroup (d <= 2: its targets in closed form), by the
+// first subgroup alone, with no workgroup barrier: each lane takes one member,
+// its rank is the count of members before it in the total order (projection,
+// ties by point: the CPU's), read from shared memory behind a subgroup
+// barrier, and its target that rank's. The other subgroups have nothing to do.
+// The same ranks as the sort's, so the same displacements.
+void subgroup_class(FsotSlice s, uint n) {
+    if (gl_SubgroupID != 0u) {
+        return;
+    }
+    uint lane = gl_SubgroupInvocationID;
+    bool mine = lane < n;
+    uint point = 0u;
+    float key = 0.0;
+    if (mine) {
+        point = fsot_class_point(s, lane);
+        key = fsot_project(s, point);
+        s_key[lane] = key;
+        s_val[lane] = point;
+    }
+    subgroupBarrier();
+    float cost = 0.0;
+    if (mine) {
+        uint rank = 0u;
+        for (uint j = 0u; j < n; ++j) {
+            rank += fsot_before(s_key[j], s_val[j], key, point) ? 1u : 0u;
+        }
+        float delta = fsot_target(fsot_targets(s), rank, n) - key;
+        fsot_add_displacement(point, pc.dims, delta, s.theta);
+        cost = delta * delta;
+    }
+    float total = subgroupAdd(cost);
+    if (subgroupElect()) {
+        fsot_add_cost(pc.cost_slot, total, n);
+    }
+}
+#endif
+
 // Every invocation draws the slice and finds its class size itself (the same
 // arithmetic, so the same values), where one invocation drawing it for the
 // others through shared memory would cost a barrier.
@@ -271,6 +310,13 @@ void process_slice(uint slice) {
         }
         return;
     }
+#ifndef FSOT_ANY_DIMS
+    // (A workgroup smaller than a subgroup has only that many lanes.)
+    if (n <= min(gl_SubgroupSize, gl_WorkGroupSize.x) && FSOT_BUCKET_SORT) {
+        subgroup_class(s, n);
+        return;
+    }
+#endif
     FsotTargets z = fsot_targets(s);
 #ifdef FSOT_ANY_DIMS
     // The subset sums, before the sort, whose barriers then cover them.
