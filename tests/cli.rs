@@ -643,31 +643,45 @@ fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
-fn fsot_class_sort_bitonic_makes_the_same_mask_and_any_other_value_is_refused() {
-    // d = 3: the workgroup transport on every device (lavapipe included), whose
-    // classes the bucket sort orders by default and the bitonic network when
-    // asked; the same total order either way, so the same mask bit for bit in
-    // deterministic mode.
+fn fsot_class_sort_makes_the_same_mask_every_way_and_any_other_value_is_refused() {
+    // The workgroup transport forced (FSOT_TRANSPORT: 32 invocations, on
+    // lavapipe four subgroups of 8), d = 2: by default its classes that fit a
+    // subgroup go by the subgroup alone and the rest by buckets; `buckets` sorts
+    // every class by buckets, `bitonic` by the network. The same total order
+    // each way, so the same mask bit for bit in deterministic mode. At d = 3
+    // (no subgroup path: its targets are not closed forms) the profile says
+    // buckets.
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
-    let run = |value: &str, out: &str| {
-        let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "4"];
+    let run = |value: &str, dims: &str, out: &str| {
+        let args =
+            ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", dims, "--iterations", "4"];
         let more = ["--kernel", "taa", "--deterministic", "--profile", "--out", out];
-        fsot_with(dir.path(), &[("FSOT_CLASS_SORT", value)], &[&args[..], &more[..]].concat())
+        let vars = [("FSOT_CLASS_SORT", value), ("FSOT_TRANSPORT", "32,1")];
+        fsot_with(dir.path(), &vars, &[&args[..], &more[..]].concat())
     };
+    let subgroup = "sorted by buckets, those that fit a subgroup by the subgroup alone";
     let mut masks = Vec::new();
-    for (value, said) in [("", "sorted by buckets"), ("bitonic", "sorted by the bitonic network (set)")] {
+    for (value, said) in [
+        ("", subgroup),
+        ("subgroup", subgroup),
+        ("buckets", "sorted by buckets\n"),
+        ("bitonic", "sorted by the bitonic network (set)"),
+    ] {
         let out = format!("m{}.exr", masks.len());
-        let o = run(value, &out);
+        let o = run(value, "2", &out);
         let text = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{value}: {}{text}", stderr(&o));
         assert!(text.contains("  transport: workgroups of") && text.contains(said), "{value}: {text}");
         masks.push(read_samples(&dir.path().join(out)));
     }
-    assert!(masks[0] == masks[1], "the two sorts made different masks");
+    assert!(masks.iter().all(|m| *m == masks[0]), "the sorts made different masks");
+    let o = run("", "3", "d3.exr");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && text.contains("sorted by buckets\n"), "{}{text}", stderr(&o));
     for bad in ["radix", "Bitonic"] {
         let named = format!("FSOT_CLASS_SORT={bad}");
-        assert_refused_keeping_output(&run(bad, "existing.exr"), &named, dir.path());
+        assert_refused_keeping_output(&run(bad, "2", "existing.exr"), &named, dir.path());
     }
 }
 

@@ -103,6 +103,9 @@ optimize() {
     # The classes' sort in the transport: buckets above; here the bitonic network
     # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
     FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
+    # Every class by buckets: without the subgroup path for the classes that fit
+    # one subgroup (41% of this tile's slices have at most 32 members).
+    FSOT_CLASS_SORT=buckets optimize gpu-128x128x30-ptaa-buckets --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     # The classes past 2048 (2049 to 2326 here): a second workgroup pass above;
     # here the large-class stage's global sorts instead (before 2026-12-01), to
     # compare, with the sort's path chosen at run time (the log says which, and

@@ -28,7 +28,7 @@ layout(constant_id = 2) const bool ONE_SUBGROUP = false;
 // Largest class sorted in shared memory (src/gpu/shape.rs: LOCAL_MAX).
 layout(constant_id = 3) const uint FSOT_LOCAL_MAX = 2048u;
 // Classes sorted by buckets (false: every class by the bitonic network, the
-// fallback, to compare the two; src/gpu/shape.rs: TransportShape::bitonic).
+// fallback, to compare the two; src/gpu/shape.rs: ClassSort).
 layout(constant_id = 4) const bool FSOT_BUCKET_SORT = true;
 // Classes larger than FSOT_LOCAL_MAX and at most FSOT_DEFER_MAX are listed for a
 // second pass (0: none) instead of the large-class stage's global sorts: the
@@ -42,6 +42,9 @@ layout(constant_id = 6) const bool FSOT_FROM_LIST = false;
 // a device gives; less in tests): past it, each workgroup takes several listed
 // slices (src/gpu/shape.rs: DEFER_GROUPS).
 layout(constant_id = 7) const uint FSOT_DEFER_GROUPS = 65535u;
+// Classes that fit one subgroup (d <= 2) taken by the first subgroup alone
+// (subgroup_class; false: by buckets as the others, to compare; ClassSort).
+layout(constant_id = 8) const bool FSOT_SUBGROUP_CLASSES = true;
 
 void sync() {
     if (ONE_SUBGROUP) {
@@ -312,7 +315,7 @@ void process_slice(uint slice) {
     }
 #ifndef FSOT_ANY_DIMS
     // (A workgroup smaller than a subgroup has only that many lanes.)
-    if (n <= min(gl_SubgroupSize, gl_WorkGroupSize.x) && FSOT_BUCKET_SORT) {
+    if (FSOT_SUBGROUP_CLASSES && n <= min(gl_SubgroupSize, gl_WorkGroupSize.x)) {
         subgroup_class(s, n);
         return;
     }

@@ -13,7 +13,7 @@ pub mod shape;
 pub mod swap;
 
 pub use run::VulkanRun;
-pub use shape::{TransportKind, TransportShape};
+pub use shape::{ClassSort, TransportKind, TransportShape};
 
 use crate::vk::SortPath;
 
@@ -68,11 +68,12 @@ pub struct VulkanOptions {
     /// tests and comparisons; the command line reads `FSOT_SORT`). The look-back
     /// path must not be set on a CPU implementation that runs several threads.
     pub large_sort: Option<SortPath>,
-    /// The workgroup transport sorts every class by the bitonic network (what
-    /// it did before the bucket sort, which keeps it as its fallback) instead
-    /// of by buckets: to compare the two on a device (the command line reads
-    /// `FSOT_CLASS_SORT=bitonic`). The masks are the same either way.
-    pub bitonic_classes: bool,
+    /// How the workgroup transport sorts a class: by default by buckets, and
+    /// those that fit a subgroup by the subgroup alone; `Buckets` or `Bitonic`
+    /// (what it did before the bucket sort, which keeps it as its fallback) for
+    /// every class, to compare on a device (the command line reads
+    /// `FSOT_CLASS_SORT`). The masks are the same whichever.
+    pub class_sort: ClassSort,
     /// The workgroup transport's second pass, for classes past its limit (2048)
     /// that shared memory can still hold: None, on GPUs up to the smallest
     /// power of two holding the kernel's largest class, as the device's shared

@@ -19,8 +19,8 @@ use super::layout::{
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
-    group_stride, two_d, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX,
-    LOCAL_MAX, LOOP_BUDGET,
+    group_stride, two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT,
+    DEFER_WORKGROUP, LANE_MAX, LOCAL_MAX, LOOP_BUDGET,
 };
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -577,7 +577,11 @@ fn transport_shape(
     }
     let mut shape =
         TransportShape::choose(info, max_class, dims, texels, options.transport, options.transport_shape);
-    shape.bitonic = options.bitonic_classes;
+    // The subgroup path takes closed-form targets (d <= 2).
+    shape.class_sort = match options.class_sort {
+        ClassSort::Subgroup if dims > CLOSED_FORM_DIMS => ClassSort::Buckets,
+        sort => sort,
+    };
     if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);

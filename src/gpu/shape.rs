@@ -50,6 +50,22 @@ const COLD_EVALS: u32 = 24;
 /// targets came out as garbage).
 const NEWTON_MAX: u32 = 60;
 
+/// How the workgroup transport sorts a class (`VulkanOptions::class_sort`; the
+/// command line reads `FSOT_CLASS_SORT`). The same total order, so the same
+/// masks, whichever.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ClassSort {
+    /// By buckets, and a class that fits one subgroup (d <= 2) by the first
+    /// subgroup alone, each member ranked by counting (no workgroup barrier).
+    #[default]
+    Subgroup,
+    /// By buckets, every class (to compare).
+    Buckets,
+    /// By the bitonic network, every class: the bucket sort's fallback (to
+    /// compare).
+    Bitonic,
+}
+
 /// The two transport passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransportKind {
@@ -76,10 +92,10 @@ pub struct TransportShape {
     /// `FSOT_LOCAL_MAX`); larger classes go to the large-class stage's global
     /// sort. Per lane: LANE_MAX, less for d >= 3 (`lane_limit`).
     pub local_max: u32,
-    /// The workgroup transport sorts every class by the bitonic network, the
-    /// bucket sort's fallback, instead of by buckets: to compare the two (set
-    /// from `VulkanOptions::bitonic_classes`; the per-lane transport ignores it).
-    pub bitonic: bool,
+    /// How the workgroup transport sorts a class (`VulkanOptions::class_sort`,
+    /// Buckets where the subgroup path does not apply: d >= 3); the per-lane
+    /// transport ignores it.
+    pub class_sort: ClassSort,
     /// Classes past `local_max` and at most this are sorted by a second pass of
     /// the workgroup transport (`FSOT_DEFER_MAX`: one workgroup of
     /// `defer_workgroup` invocations per listed slice) instead of the
@@ -146,7 +162,7 @@ impl TransportShape {
                 one_subgroup: true,
                 per_lane,
                 local_max,
-                bitonic: false,
+                class_sort: ClassSort::Subgroup,
                 defer_max: 0,
                 defer_workgroup: 0,
                 defer_groups: DEFER_GROUPS,
@@ -158,7 +174,7 @@ impl TransportShape {
                 one_subgroup: false,
                 per_lane,
                 local_max,
-                bitonic: false,
+                class_sort: ClassSort::Subgroup,
                 defer_max: 0,
                 defer_workgroup: 0,
                 defer_groups: DEFER_GROUPS,
@@ -258,7 +274,11 @@ impl TransportShape {
                 self.workgroup, self.local_max
             );
         }
-        let sort = if self.bitonic { "the bitonic network (set)" } else { "buckets" };
+        let sort = match self.class_sort {
+            ClassSort::Subgroup => "buckets, those that fit a subgroup by the subgroup alone",
+            ClassSort::Buckets => "buckets",
+            ClassSort::Bitonic => "the bitonic network (set)",
+        };
         let deferred = match self.defer_max {
             0 => String::new(),
             m => format!(", those up to {m} in a second pass of {} invocations", self.defer_workgroup),

@@ -1,7 +1,7 @@
 //! The environment variables the command line reads and hands to the library as
 //! options (the library reads none but the documented `FSOT_FAULT` test switch).
 
-use fsot::gpu::shape::LOCAL_MAX;
+use fsot::gpu::shape::{ClassSort, LOCAL_MAX};
 use fsot::vk::{Context, ContextOptions, SortPath};
 
 use super::{Error, Result};
@@ -52,15 +52,17 @@ pub(crate) fn large_sort() -> Result<Option<SortPath>> {
     }
 }
 
-/// `FSOT_CLASS_SORT=bitonic`: the workgroup transport (GPUs; lavapipe for d >= 3)
-/// sorts every class by the bitonic network instead of by buckets, to compare
-/// the two; unset: by buckets.
-pub(crate) fn bitonic_classes() -> Result<bool> {
+/// `FSOT_CLASS_SORT`: how the workgroup transport (GPUs; lavapipe for d >= 3)
+/// sorts a class: `subgroup` (the default: by buckets, and at d <= 2 a class
+/// that fits a subgroup by the subgroup alone), `buckets` (every class by
+/// buckets) or `bitonic` (every class by the bitonic network), to compare.
+pub(crate) fn class_sort() -> Result<ClassSort> {
     match std::env::var("FSOT_CLASS_SORT").ok().as_deref() {
-        None | Some("") | Some("buckets") => Ok(false),
-        Some("bitonic") => Ok(true),
+        None | Some("") | Some("subgroup") => Ok(ClassSort::Subgroup),
+        Some("buckets") => Ok(ClassSort::Buckets),
+        Some("bitonic") => Ok(ClassSort::Bitonic),
         Some(other) => Err(Error::invalid(format!(
-            "FSOT_CLASS_SORT={other}: it takes `bitonic` (the bitonic network) or `buckets` (the default)"
+            "FSOT_CLASS_SORT={other}: it takes `subgroup` (the default), `buckets` or `bitonic`"
         ))),
     }
 }

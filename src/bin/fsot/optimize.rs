@@ -163,7 +163,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         unchecked_lane_limit: None,
         slice_order_slots: None,
         large_sort: env::large_sort()?,
-        bitonic_classes: env::bitonic_classes()?,
+        class_sort: env::class_sort()?,
         defer: env::defer()?,
         local_max: env::local_max()?,
         defer_groups: None,
