@@ -81,10 +81,9 @@ pub(crate) fn defer() -> Result<Option<u32>> {
 }
 
 /// `FSOT_LOCAL_MAX=N`: the workgroup transport's first pass sorts classes up to N
-/// (a power of two from 64 to 2048) instead of 2048,
-/// handing the larger ones to its second pass (GPUs) or to the large-class
-/// stage: less shared memory and fewer registers a workgroup, for tuning; unset:
-/// 2048.
+/// (a power of two from 64 to 2048) instead of 2048, handing the larger ones to
+/// its second pass (GPUs) or to the large-class stage: less shared memory and
+/// fewer registers a workgroup, for tuning; unset: 2048.
 pub(crate) fn local_max() -> Result<Option<u32>> {
     match std::env::var("FSOT_LOCAL_MAX").ok().as_deref() {
         None | Some("") => Ok(None),
