@@ -587,7 +587,7 @@ fn transport_shape(
         return Ok(shape);
     }
     if let (Some(limit), false) = (options.local_max, shape.per_lane) {
-        if !limit.is_power_of_two() || !(64..=LOCAL_MAX).contains(&limit) {
+        if !TransportShape::local_max_allowed(limit) {
             return Err(Error::invalid(format!(
                 "the workgroup transport's class limit must be a power of two from 64 to {LOCAL_MAX}, not {limit}"
             )));

@@ -154,31 +154,21 @@ impl TransportShape {
             }
         };
         let local_max = if per_lane { Self::lane_limit(dims) } else { LOCAL_MAX };
-        let mut shape = if info.is_cpu() {
-            let wg = info.subgroup_size.clamp(1, 128);
-            Self {
-                workgroup: wg,
-                slices_per_group: 16,
-                one_subgroup: true,
-                per_lane,
-                local_max,
-                class_sort: ClassSort::Subgroup,
-                defer_max: 0,
-                defer_workgroup: 0,
-                defer_groups: DEFER_GROUPS,
-            }
+        let (workgroup, slices_per_group, one_subgroup) = if info.is_cpu() {
+            (info.subgroup_size.clamp(1, 128), 16, true)
         } else {
-            Self {
-                workgroup: 128.min(info.max_workgroup_invocations),
-                slices_per_group: 1,
-                one_subgroup: false,
-                per_lane,
-                local_max,
-                class_sort: ClassSort::Subgroup,
-                defer_max: 0,
-                defer_workgroup: 0,
-                defer_groups: DEFER_GROUPS,
-            }
+            (128.min(info.max_workgroup_invocations), 1, false)
+        };
+        let mut shape = Self {
+            workgroup,
+            slices_per_group,
+            one_subgroup,
+            per_lane,
+            local_max,
+            class_sort: ClassSort::Subgroup,
+            defer_max: 0,
+            defer_workgroup: 0,
+            defer_groups: DEFER_GROUPS,
         };
         let local = max_class.min(LOCAL_MAX);
         if info.is_cpu() && !per_lane {
@@ -200,6 +190,13 @@ impl TransportShape {
             shape.one_subgroup = shape.workgroup <= info.subgroup_size;
         }
         shape
+    }
+
+    /// Whether the workgroup transport's first pass may sort classes up to
+    /// `limit` in place of LOCAL_MAX (`VulkanOptions::local_max`): a power of
+    /// two from 64 to LOCAL_MAX.
+    pub fn local_max_allowed(limit: u32) -> bool {
+        limit.is_power_of_two() && (64..=LOCAL_MAX).contains(&limit)
     }
 
     /// Shared memory the workgroup transport (transport.comp) takes with

@@ -1,7 +1,7 @@
 //! The environment variables the command line reads and hands to the library as
 //! options (the library reads none but the documented `FSOT_FAULT` test switch).
 
-use fsot::gpu::shape::{ClassSort, LOCAL_MAX};
+use fsot::gpu::shape::{ClassSort, TransportShape, LOCAL_MAX};
 use fsot::vk::{Context, ContextOptions, SortPath};
 
 use super::{Error, Result};
@@ -88,7 +88,7 @@ pub(crate) fn local_max() -> Result<Option<u32>> {
     match std::env::var("FSOT_LOCAL_MAX").ok().as_deref() {
         None | Some("") => Ok(None),
         Some(v) => match v.parse::<u32>() {
-            Ok(n) if n.is_power_of_two() && (64..=LOCAL_MAX).contains(&n) => Ok(Some(n)),
+            Ok(n) if TransportShape::local_max_allowed(n) => Ok(Some(n)),
             _ => Err(Error::invalid(format!(
                 "FSOT_LOCAL_MAX={v}: it takes a power of two from 64 to {LOCAL_MAX}, or is unset ({LOCAL_MAX})"
             ))),
