@@ -126,6 +126,27 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn per_lane_invocations_that_take_many_slices_give_the_cpu_displacements() {
+    // Each invocation takes as many slices from the queue as its loop budget
+    // allows (a few workgroups take all 300 small classes): every slice is
+    // still transported once, for spread keys, and for keys that all tie in
+    // classes of several hundred to about two thousand samples, whose heap
+    // sorts take each slice near its worst case (two of those would pass
+    // lavapipe's loop cap, cut loops short and move samples wrongly).
+    let options = VulkanOptions {
+        deterministic: true,
+        transport: Some(TransportKind::PerLane),
+        lane_rounds: Some(u32::MAX),
+        ..VulkanOptions::default()
+    };
+    compare_with_options(&Mask::white(Tile::new(16, 16, 8, 1, 2).unwrap(), 21), "taa", options);
+    let mut tied = Mask::white(Tile::new(16, 16, 8, 3, 2).unwrap(), 3);
+    tied.samples.iter_mut().for_each(|v| *v = 0.375);
+    compare_with_options(&tied, "gaussian", options);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
     // The workgroup transport as a GPU runs it (128 invocations: on lavapipe 16
     // subgroups, so the bucket sort's scan crosses subgroups), and in a shape

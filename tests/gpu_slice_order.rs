@@ -114,6 +114,45 @@ fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
+    // Which invocation takes which slice from the queue varies with the
+    // driver's threads; the sums do not (deterministic mode): the same run bit
+    // for bit with one slice an invocation, the default, and as many as the
+    // loop budget allows.
+    let Some(ctx) = common::gpu_context() else { return };
+    if !ctx.info().is_cpu() {
+        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+        return;
+    }
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let run = |rounds: Option<u32>| {
+        let options = VulkanOptions {
+            deterministic: true,
+            transport: Some(TransportKind::PerLane),
+            lane_rounds: rounds,
+            ..VulkanOptions::default()
+        };
+        let mut run = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();
+        let shape = run.report().transport.unwrap_or_default();
+        while !run.finished() {
+            run.step_batch(u32::MAX).unwrap();
+        }
+        (run.mask().unwrap().samples, shape)
+    };
+    let (one, shape) = run(Some(1));
+    assert!(shape.contains("up to 1 slice each"), "{shape}");
+    for rounds in [None, Some(u32::MAX)] {
+        let (samples, shape) = run(rounds);
+        eprintln!("{rounds:?}: {shape}");
+        assert!(samples == one, "{rounds:?} ({shape}) changed the run");
+    }
+    let (_, most) = run(Some(u32::MAX));
+    assert!(!most.contains("up to 1 slice"), "{most}");
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn the_workgroup_transport_takes_slices_in_index_order() {
     let Some(ctx) = common::gpu_context() else { return };
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();

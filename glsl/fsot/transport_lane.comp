@@ -4,9 +4,9 @@
 // (O(n) expected; ties by point index: the CPU's order), no barriers and no
 // traffic between invocations, which such drivers run as SIMD lanes. Classes
 // larger than FSOT_LANE_MAX go to the large-class path (global radix sort), as in
-// transport.comp; GPUs use that pass instead. Invocation r takes the slice of
-// rank r in decreasing class size (slice_order.glsl), so the lanes that run
-// together have classes of about the same size.
+// transport.comp; GPUs use that pass instead. The invocations take the slices
+// in decreasing class size (slice_order.glsl) from a queue, several each, so
+// the lanes that run together have classes of about the same size.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
@@ -78,24 +78,8 @@ float send(FsotSlice s, uint i, float target) {
     return delta * delta;
 }
 
-void main() {
-    // Workgroup p takes the group of ranks (p * pc.lane_stride) mod G, G the
-    // groups of the slices: a permutation (the host makes the stride coprime
-    // with G). llvmpipe hands each of its threads one contiguous share of a
-    // dispatch's workgroups, and in rank order the first share would hold the
-    // largest classes; the stride (near G / golden ratio) mixes large and small
-    // classes evenly into every share, while the lanes of one workgroup keep
-    // neighbouring ranks.
-    uint groups = (pc.slices + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;
-    uint p = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
-    if (p >= groups || schedule.stopped != 0u) {
-        return; // past the slices, or the stopping rule ended the run
-    }
-    uint q = (p * pc.lane_stride) % groups; // below 2^32: the stride is 1 past 65535 groups
-    uint rank = q * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
-    if (rank >= pc.slices) {
-        return; // the last group's lanes past the slices
-    }
+// Transports the slice of rank `rank` in the iteration's order.
+void transport_rank(uint rank) {
     uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
     FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
@@ -109,7 +93,6 @@ void main() {
                 fsot_write_large(s, uint(off), i);
             }
         }
-        fsot_check_loop_cap();
         return;
     }
     // Bucket sort: O(n) expected, few per-lane memory accesses (each one a
@@ -206,5 +189,24 @@ void main() {
     }
 #endif
     fsot_add_cost(pc.cost_slot, cost, n);
+}
+
+void main() {
+    if (schedule.stopped != 0u) {
+        return; // the stopping rule ended the run
+    }
+    // Each invocation takes the next rank from the iteration's queue, up to
+    // pc.lane_rounds times (src/gpu/shape.rs: set_lane_rounds, within the loop
+    // budget): the lanes of a workgroup take neighbouring ranks together, and
+    // the driver's threads take large classes and small alike (the largest
+    // first), however their pace differs. The dispatch holds enough
+    // invocations to take every slice even if each takes its full count.
+    for (uint round = 0u; round < pc.lane_rounds; ++round) {
+        uint rank = atomicAdd(slice_order[fsot_order_next_at(pc.order_slot)], 1u);
+        if (rank >= pc.slices) {
+            break; // every slice taken
+        }
+        transport_rank(rank);
+    }
     fsot_check_loop_cap();
 }

@@ -90,11 +90,16 @@ pub const ORDER_BINS: u32 = 256;
 /// Slots of bins the slice order holds (`FSOT_ORDER_BATCH`): a batch.
 pub const ORDER_BATCH: u32 = super::BATCH;
 
+/// Words of `SliceOrder` before its per-slot regions: every slot's bins and
+/// queue (zeroed before each ordering).
+pub const ORDER_HEAD_WORDS: u32 = ORDER_BATCH * (ORDER_BINS + 1);
+
 /// Words of `SliceOrder` for `slots` iterations' orders (at most ORDER_BATCH)
 /// of `slices` slices each (the regions of `glsl/fsot/slice_order.glsl`): the
-/// bins of every slot, then per slot each slice's bin and the slices in order.
+/// bins of every slot, every slot's queue, then per slot each slice's bin and
+/// the slices in order.
 pub fn slice_order_words(slices: u32, slots: u32) -> u64 {
-    ORDER_BATCH as u64 * ORDER_BINS as u64 + slots as u64 * 2 * slices as u64
+    ORDER_HEAD_WORDS as u64 + slots as u64 * 2 * slices as u64
 }
 
 /// Slots of slice orders for `slices` slices per iteration that one binding of
@@ -210,9 +215,9 @@ pub struct TransportPush {
     pub large_capacity: u32,
     /// The per-lane transport's slice order slot (`slice_order.glsl`).
     pub order_slot: u32,
-    /// The per-lane transport's stride through its groups of ranks
-    /// (`shape::group_stride`).
-    pub lane_stride: u32,
+    /// Slices each per-lane invocation takes at most
+    /// (`TransportShape::lane_rounds`).
+    pub lane_rounds: u32,
     /// Slices the workgroup transport's deferred list holds (its second pass).
     pub deferred_capacity: u32,
 }

@@ -15,12 +15,12 @@ use ash::vk;
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
     slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush,
-    UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_BINS,
+    UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_HEAD_WORDS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
-    group_stride, two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT,
-    DEFER_WORKGROUP, LANE_MAX, LOCAL_MAX, LOOP_BUDGET,
+    two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX,
+    LOCAL_MAX, LOOP_BUDGET,
 };
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -96,7 +96,11 @@ impl VulkanRun {
         let max_class = (kernel.taps.len() * tile.spp) as u32;
         // The per-lane transport's texel views: the samples, and the taps.
         let texels = (tile.values() as u64).max(kernel.taps.len() as u64);
-        let shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
+        let mut shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
+        // The driver's threads, for a CPU implementation: as many as the host's.
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
+        let most = options.lane_rounds.unwrap_or_else(|| shape.lane_spread(slices, threads));
+        shape.set_lane_rounds(max_class, tile.dims, most);
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
@@ -213,8 +217,7 @@ impl VulkanRun {
     fn record_slice_order(&self, cmd: vk::CommandBuffer, first: u32, count: u32) {
         let Some([count_pass, place_pass]) = &self.pipelines.order else { return };
         let push = self.transport_push(first, 0);
-        let bins = (ORDER_BATCH * ORDER_BINS) as u64 * 4;
-        zero(&self.ctx, cmd, &self.buffers.slice_order, 0, bins);
+        zero(&self.ctx, cmd, &self.buffers.slice_order, 0, ORDER_HEAD_WORDS as u64 * 4);
         barrier(&self.ctx, cmd);
         let groups = self.slices.div_ceil(64).clamp(1, 65535);
         count_pass.dispatch(cmd, 0, [groups, count, 1], bytemuck::bytes_of(&push));
@@ -231,8 +234,9 @@ impl VulkanRun {
             return Ok(None);
         }
         self.ctx.submit(|cmd| self.record_slice_order(cmd, iteration, 1))?;
-        // Slot 0: its ranks follow every slot's bins and its own slices' bins.
-        let first = (ORDER_BATCH * ORDER_BINS + self.slices) as usize;
+        // Slot 0: its ranks follow every slot's bins and queue, and its own
+        // slices' bins.
+        let first = (ORDER_HEAD_WORDS + self.slices) as usize;
         let bytes = ((first + self.slices as usize) * 4) as u64;
         let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&parts[0]);
@@ -323,7 +327,7 @@ impl VulkanRun {
             cost_slot: slot,
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
-            lane_stride: group_stride(self.shape.groups(self.slices)),
+            lane_rounds: self.shape.lane_rounds,
             deferred_capacity: self.shape.deferred_capacity(self.slices),
         }
     }

@@ -32,6 +32,9 @@ pub const DEFER_LIMIT: u32 = 8192;
 /// maxComputeWorkGroupCount a device gives. Past it, each takes several listed
 /// slices.
 pub const DEFER_GROUPS: u32 = 65535;
+/// Workgroups of the per-lane transport that each of the driver's threads is
+/// left at least, where the slices allow (`set_lane_rounds`).
+pub const LANE_GROUPS_PER_THREAD: u32 = 8;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
 
@@ -106,6 +109,10 @@ pub struct TransportShape {
     pub defer_workgroup: u32,
     /// Workgroups of that second pass at most (DEFER_GROUPS; less in tests).
     pub defer_groups: u32,
+    /// Per lane: slices each invocation takes at most, one after another
+    /// (`set_lane_rounds`; `TransportPush::lane_rounds`, not a specialization
+    /// constant, since it changes with the tile); 1 for the workgroup transport.
+    pub lane_rounds: u32,
 }
 
 impl TransportShape {
@@ -169,6 +176,7 @@ impl TransportShape {
             defer_max: 0,
             defer_workgroup: 0,
             defer_groups: DEFER_GROUPS,
+            lane_rounds: 1,
         };
         let local = max_class.min(LOCAL_MAX);
         if info.is_cpu() && !per_lane {
@@ -267,8 +275,12 @@ impl TransportShape {
     pub fn describe(&self) -> String {
         if self.per_lane {
             return format!(
-                "per lane ({} invocations a workgroup, a slice each), classes up to {} by a bucket sort",
-                self.workgroup, self.local_max
+                "per lane ({} invocations a workgroup, up to {} slice{} each, largest class first), classes up \
+                 to {} by a bucket sort",
+                self.workgroup,
+                self.lane_rounds,
+                if self.lane_rounds == 1 { "" } else { "s" },
+                self.local_max
             );
         }
         let sort = match self.class_sort {
@@ -395,35 +407,36 @@ impl TransportShape {
         lo
     }
 
+    /// Per lane: how many slices each invocation takes, one after another, from
+    /// the iteration's queue of ranks (`transport_lane.comp`): at most `most`,
+    /// and as many as its loop budget allows at the largest class (each slice
+    /// at its worst, and one iteration of the loop over them), at least one.
+    /// llvmpipe zero-fills an invocation's private arrays (36 KiB at LANE_MAX)
+    /// at every workgroup's start, about 2.4 us for 8 lanes on this project's
+    /// 2-core machine (bench/results/issue16-lane-rounds.txt), so fewer
+    /// workgroups that each take more slices spend less on it.
+    pub fn set_lane_rounds(&mut self, max_class: u32, dims: usize, most: u32) {
+        let worst = Self::lane_iterations(max_class.min(self.local_max), dims).max(max_class) + 1;
+        self.lane_rounds = if self.per_lane { (LANE_BUDGET / worst).min(most).max(1) } else { 1 };
+    }
+
+    /// Per lane: the most slices an invocation may take that still leaves each
+    /// of the driver's `threads` LANE_GROUPS_PER_THREAD workgroups of `slices`
+    /// (at least one): llvmpipe gives each thread one contiguous share of a
+    /// dispatch's workgroups, and every workgroup takes its ranks from the
+    /// queue in order, so the threads take large and small classes alike.
+    pub fn lane_spread(&self, slices: u32, threads: u32) -> u32 {
+        (slices / (self.workgroup * LANE_GROUPS_PER_THREAD * threads.max(1))).max(1)
+    }
+
     /// Workgroups of the transport pass for `slices` slices.
     pub fn groups(&self, slices: u32) -> u32 {
         if self.per_lane {
-            slices.div_ceil(self.workgroup)
+            slices.div_ceil(self.workgroup * self.lane_rounds)
         } else {
             slices.div_ceil(self.slices_per_group)
         }
     }
-}
-
-/// The stride of the per-lane transport's workgroups through the groups of
-/// slice ranks (`TransportPush::lane_stride`): workgroup p takes group (p *
-/// stride) mod `groups`. Coprime with `groups`, so every group is taken once,
-/// and near `groups` / golden ratio, so that any run of consecutive workgroups
-/// (llvmpipe gives each thread one) takes groups spread evenly over the ranks,
-/// large classes and small alike. 1 past 65535 groups (the shader's product p *
-/// stride stays below 2^32).
-pub fn group_stride(groups: u32) -> u32 {
-    if groups > 65535 || groups <= 2 {
-        return 1;
-    }
-    let gcd = |mut a: u32, mut b: u32| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a
-    };
-    let start = ((groups as f64 * 0.618_033_988_749_895).round() as u32).clamp(1, groups - 1);
-    (start..groups).chain(1..start).find(|&k| gcd(k, groups) == 1).unwrap_or(1)
 }
 
 /// `groups` workgroups as a dispatch, spread over y past 65535.
@@ -436,41 +449,72 @@ pub fn two_d(groups: u32) -> [u32; 3] {
 mod tests {
     use super::*;
 
+    /// What lavapipe (Mesa 22.3, AVX2) reports.
+    fn lavapipe() -> DeviceInfo {
+        DeviceInfo {
+            name: "llvmpipe".into(),
+            driver: String::new(),
+            device_type: ash::vk::PhysicalDeviceType::CPU,
+            subgroup_size: 8,
+            max_storage_buffer_range: 1 << 27,
+            max_texel_buffer_elements: 1 << 27,
+            max_workgroup_invocations: 1024,
+            max_shared_memory: 32768,
+            timestamp_period_ns: 1.0,
+            float_atomic_add: true,
+            int64_atomics: true,
+            subgroup_ballot: true,
+            float64: true,
+        }
+    }
+
     #[test]
-    fn the_group_stride_takes_every_group_once_and_mixes_every_threads_share() {
-        // Group q of the ranks weighs as a class of size (G - q)^2 would: the
-        // largest first, as the slice order puts them. llvmpipe gives each of
-        // T threads one contiguous share of ceil(G / T) workgroups.
-        for groups in 1..3000u32 {
-            let stride = group_stride(groups);
-            let taken: Vec<u32> = (0..groups).map(|p| p * stride % groups).collect();
-            let mut sorted = taken.clone();
-            sorted.sort_unstable();
-            assert!(sorted.iter().copied().eq(0..groups), "G = {groups}: stride {stride} is no permutation");
-            if groups < 64 {
-                continue;
-            }
-            let weight = |q: u32| ((groups - q) as f64).powi(2);
-            let total: f64 = taken.iter().map(|&q| weight(q)).sum();
-            for (threads, tolerance) in [(2u32, 0.10), (3, 0.20), (4, 0.20)] {
-                let share = groups.div_ceil(threads) as usize;
-                let mean = total / groups as f64 * share as f64;
-                for part in taken.chunks_exact(share) {
-                    let work: f64 = part.iter().map(|&q| weight(q)).sum();
-                    assert!(
-                        (work / mean - 1.0).abs() <= tolerance,
-                        "G = {groups}, {threads} threads: a share does {:.2} of its part",
-                        work / mean
-                    );
+    fn per_lane_invocations_take_several_slices_within_the_loop_budget() {
+        let lavapipe = lavapipe();
+        // The quick benchmark's problem (32x32x16 taa: 2328 slices, classes up
+        // to 1360, d = 2) on 2 threads: two slices an invocation (the heap
+        // sort's worst case at 1360 fits twice), 146 workgroups where 291 took
+        // one each, 73 to each thread.
+        let mut shape = TransportShape::choose(&lavapipe, 1360, 2, 1 << 15, None, None);
+        assert!(shape.per_lane);
+        assert_eq!(shape.lane_spread(2328, 2), 18);
+        shape.set_lane_rounds(1360, 2, shape.lane_spread(2328, 2));
+        assert_eq!((shape.lane_rounds, shape.groups(2328)), (2, 146));
+        // Small classes (at most 30, each at worst 375 loop iterations): as
+        // many as the spread allows, at most the budget's 159.
+        let mut small = TransportShape::choose(&lavapipe, 30, 2, 1 << 15, None, None);
+        assert_eq!(TransportShape::lane_iterations(30, 2), 375);
+        small.set_lane_rounds(30, 2, small.lane_spread(5000, 2));
+        assert_eq!(small.lane_rounds, 39);
+        small.set_lane_rounds(30, 2, small.lane_spread(100_000, 2));
+        assert_eq!(small.lane_rounds, 159);
+        // Whatever the class and dimension: every slice has an invocation's
+        // slot, and an invocation's slices fit its budget at their worst (or it
+        // takes one, which `choose` budgets).
+        for dims in 1..=8 {
+            for max_class in [2u32, 16, 100, 744, 1360, 2048, 5000] {
+                for slices in [1u32, 7, 300, 2328, 100_000] {
+                    let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
+                    for most in [1, shape.lane_spread(slices, 2), u32::MAX] {
+                        shape.set_lane_rounds(max_class, dims, most);
+                        let rounds = shape.lane_rounds;
+                        assert!(rounds >= 1 && rounds <= most, "{dims} {max_class} {most}: {rounds}");
+                        assert!(shape.groups(slices) * shape.workgroup * rounds >= slices);
+                        let worst = TransportShape::lane_iterations(max_class.min(shape.local_max), dims)
+                            .max(max_class);
+                        assert!(
+                            rounds == 1 || rounds * (worst + 1) <= LANE_BUDGET,
+                            "d = {dims}, {max_class}: {rounds} x {worst}"
+                        );
+                        assert!(shape.per_lane || rounds == 1);
+                    }
                 }
             }
         }
-        // In rank order (stride 1) the first of two shares would do most of it.
-        let groups = 291u32;
-        let first: f64 = (0..groups / 2).map(|q| ((groups - q) as f64).powi(2)).sum();
-        let all: f64 = (0..groups).map(|q| ((groups - q) as f64).powi(2)).sum();
-        assert!(first / all > 0.85);
-        assert_eq!(group_stride(70_000), 1, "past 65535 groups the product would overflow");
+        // Spread: at least LANE_GROUPS_PER_THREAD workgroups a thread where the
+        // slices allow.
+        assert_eq!(shape.lane_spread(100, 16), 1);
+        assert_eq!(shape.lane_spread(8 * 8 * 16 * 3, 16), 3);
     }
 
     #[test]
@@ -500,21 +544,7 @@ mod tests {
         // does not; workgroups grow until every invocation's share fits.
         assert!(TransportShape::lane_iterations(200, 3) <= LANE_BUDGET);
         assert!(TransportShape::lane_iterations(200, 8) > LANE_BUDGET);
-        let lavapipe = DeviceInfo {
-            name: "llvmpipe".into(),
-            driver: String::new(),
-            device_type: ash::vk::PhysicalDeviceType::CPU,
-            subgroup_size: 8,
-            max_storage_buffer_range: 1 << 27,
-            max_texel_buffer_elements: 1 << 27,
-            max_workgroup_invocations: 1024,
-            max_shared_memory: 32768,
-            timestamp_period_ns: 1.0,
-            float_atomic_add: true,
-            int64_atomics: true,
-            subgroup_ballot: true,
-            float64: true,
-        };
+        let lavapipe = lavapipe();
         for dims in 1..=8 {
             for max_class in [2u32, 16, 100, 744, 2048] {
                 let shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);

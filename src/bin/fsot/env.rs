@@ -96,6 +96,22 @@ pub(crate) fn local_max() -> Result<Option<u32>> {
     }
 }
 
+/// `FSOT_LANE_ROUNDS=N`: each invocation of the per-lane transport takes at most
+/// N slices (a positive integer; the loop budget still bounds it), in place of
+/// what spreads the slices over the host's threads: to compare (1: one slice
+/// an invocation, a workgroup per eight slices); unset: the spread.
+pub(crate) fn lane_rounds() -> Result<Option<u32>> {
+    match std::env::var("FSOT_LANE_ROUNDS").ok().as_deref() {
+        None | Some("") => Ok(None),
+        Some(v) => match v.parse::<u32>() {
+            Ok(n) if n >= 1 => Ok(Some(n)),
+            _ => {
+                Err(Error::invalid(format!("FSOT_LANE_ROUNDS={v}: it takes a positive integer, or is unset")))
+            }
+        },
+    }
+}
+
 /// A Vulkan context on the device the flag or the environment names.
 pub(crate) fn context(flag: Option<String>) -> Result<Context> {
     Context::new(&ContextOptions { validation: validation(), device: device(flag) })

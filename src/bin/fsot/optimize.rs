@@ -167,6 +167,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         defer: env::defer()?,
         local_max: env::local_max()?,
         defer_groups: None,
+        lane_rounds: env::lane_rounds()?,
     };
     Ok(RunOptions {
         backend,
