@@ -721,3 +721,37 @@ fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_r
         assert_refused_keeping_output(&o, &format!("FSOT_LOCAL_MAX={bad}"), dir.path());
     }
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_lane_rounds_caps_the_per_lane_transports_slices_and_bad_values_are_refused() {
+    // The per-lane transport (CPU implementations of Vulkan) takes as many
+    // slices an invocation as its loop budget allows; FSOT_LANE_ROUNDS=1 one
+    // each, which the profile says.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--iterations", "2"];
+    let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
+    let profile = |rounds: Option<&str>| {
+        let env: Vec<(&str, &str)> = rounds.map(|r| ("FSOT_LANE_ROUNDS", r)).into_iter().collect();
+        let o = fsot_with(dir.path(), &env, &[&args[..], &more[..]].concat());
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(o.status.success(), "{}{text}", stderr(&o));
+        text
+    };
+    let (capped, free) = (profile(Some("1")), profile(None));
+    if capped.contains("transport: per lane") {
+        assert!(capped.contains("up to 1 slice each"), "{capped}");
+        assert!(free.contains("transport: per lane") && !free.contains("up to 1 slice each"), "{free}");
+    } else {
+        eprintln!(
+            "SKIPPED (in part): this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS"
+        );
+    }
+    for bad in ["0", "-1", "two"] {
+        let args =
+            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
+        let o = fsot_with(dir.path(), &[("FSOT_LANE_ROUNDS", bad)], &args);
+        assert_refused_keeping_output(&o, &format!("FSOT_LANE_ROUNDS={bad}"), dir.path());
+    }
+}

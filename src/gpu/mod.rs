@@ -90,8 +90,8 @@ pub struct VulkanOptions {
     /// Workgroups of the second pass at most, in place of 65535 (`DEFER_GROUPS`):
     /// for tests, which then see each workgroup take several listed slices.
     pub defer_groups: Option<u32>,
-    /// The per-lane transport's slices per invocation at most, in place of
-    /// what spreads the slices over the host's threads (the loop budget still
-    /// bounds it: `TransportShape::set_lane_rounds`): for tests.
+    /// The per-lane transport's slices per invocation at most, in place of as
+    /// many as the loop budget allows (`TransportShape::set_lane_rounds`): for
+    /// tests and comparisons (the command line reads `FSOT_LANE_ROUNDS`).
     pub lane_rounds: Option<u32>,
 }

@@ -99,8 +99,7 @@ impl VulkanRun {
         let mut shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
         // The driver's threads, for a CPU implementation: as many as the host's.
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
-        let most = options.lane_rounds.unwrap_or_else(|| shape.lane_spread(slices, threads));
-        shape.set_lane_rounds(max_class, tile.dims, most);
+        shape.set_lane_rounds(max_class, tile.dims, options.lane_rounds.unwrap_or(u32::MAX), threads);
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);

@@ -33,7 +33,7 @@ pub const DEFER_LIMIT: u32 = 8192;
 /// slices.
 pub const DEFER_GROUPS: u32 = 65535;
 /// Workgroups of the per-lane transport that each of the driver's threads is
-/// left at least, where the slices allow (`set_lane_rounds`).
+/// given at least, where the slices allow (`groups`).
 pub const LANE_GROUPS_PER_THREAD: u32 = 8;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
@@ -113,6 +113,8 @@ pub struct TransportShape {
     /// (`set_lane_rounds`; `TransportPush::lane_rounds`, not a specialization
     /// constant, since it changes with the tile); 1 for the workgroup transport.
     pub lane_rounds: u32,
+    /// Per lane: the driver's threads, which its workgroups are spread over.
+    pub lane_threads: u32,
 }
 
 impl TransportShape {
@@ -177,6 +179,7 @@ impl TransportShape {
             defer_workgroup: 0,
             defer_groups: DEFER_GROUPS,
             lane_rounds: 1,
+            lane_threads: 1,
         };
         let local = max_class.min(LOCAL_MAX);
         if info.is_cpu() && !per_lane {
@@ -407,32 +410,31 @@ impl TransportShape {
         lo
     }
 
-    /// Per lane: how many slices each invocation takes, one after another, from
-    /// the iteration's queue of ranks (`transport_lane.comp`): at most `most`,
-    /// and as many as its loop budget allows at the largest class (each slice
-    /// at its worst, and one iteration of the loop over them), at least one.
-    /// llvmpipe zero-fills an invocation's private arrays (36 KiB at LANE_MAX)
-    /// at every workgroup's start, about 2.4 us for 8 lanes on this project's
-    /// 2-core machine (bench/results/issue16-lane-rounds.txt), so fewer
-    /// workgroups that each take more slices spend less on it.
-    pub fn set_lane_rounds(&mut self, max_class: u32, dims: usize, most: u32) {
+    /// Per lane: how many slices each invocation may take, one after another,
+    /// from the iteration's queue of ranks (`transport_lane.comp`): as many as
+    /// its loop budget allows at the largest class (each slice at its worst,
+    /// and one iteration of the loop over them), at most `most`, at least one;
+    /// and the driver's `threads`, which the workgroups are spread over
+    /// (`groups`).
+    pub fn set_lane_rounds(&mut self, max_class: u32, dims: usize, most: u32, threads: u32) {
         let worst = Self::lane_iterations(max_class.min(self.local_max), dims).max(max_class) + 1;
         self.lane_rounds = if self.per_lane { (LANE_BUDGET / worst).min(most).max(1) } else { 1 };
+        self.lane_threads = threads.max(1);
     }
 
-    /// Per lane: the most slices an invocation may take that still leaves each
-    /// of the driver's `threads` LANE_GROUPS_PER_THREAD workgroups of `slices`
-    /// (at least one): llvmpipe gives each thread one contiguous share of a
-    /// dispatch's workgroups, and every workgroup takes its ranks from the
-    /// queue in order, so the threads take large and small classes alike.
-    pub fn lane_spread(&self, slices: u32, threads: u32) -> u32 {
-        (slices / (self.workgroup * LANE_GROUPS_PER_THREAD * threads.max(1))).max(1)
-    }
-
-    /// Workgroups of the transport pass for `slices` slices.
+    /// Workgroups of the transport pass for `slices` slices. Per lane: enough
+    /// for every slice if each invocation takes `lane_rounds`, yet at least
+    /// LANE_GROUPS_PER_THREAD for each of `lane_threads` where the slices allow
+    /// (llvmpipe gives each thread one contiguous share of the workgroups; the
+    /// queue hands them all large classes and small alike). As few as that:
+    /// llvmpipe zero-fills an invocation's private arrays (36 KiB at LANE_MAX)
+    /// at every workgroup's start, about 2.6 us for 8 lanes on this project's
+    /// 2-core machine (bench/results/issue16-lane-rounds.txt).
     pub fn groups(&self, slices: u32) -> u32 {
         if self.per_lane {
-            slices.div_ceil(self.workgroup * self.lane_rounds)
+            let needed = slices.div_ceil(self.workgroup * self.lane_rounds);
+            let spread = (LANE_GROUPS_PER_THREAD * self.lane_threads).min(slices.div_ceil(self.workgroup));
+            needed.max(spread)
         } else {
             slices.div_ceil(self.slices_per_group)
         }
@@ -474,47 +476,48 @@ mod tests {
         // The quick benchmark's problem (32x32x16 taa: 2328 slices, classes up
         // to 1360, d = 2) on 2 threads: two slices an invocation (the heap
         // sort's worst case at 1360 fits twice), 146 workgroups where 291 took
-        // one each, 73 to each thread.
+        // one each.
         let mut shape = TransportShape::choose(&lavapipe, 1360, 2, 1 << 15, None, None);
         assert!(shape.per_lane);
-        assert_eq!(shape.lane_spread(2328, 2), 18);
-        shape.set_lane_rounds(1360, 2, shape.lane_spread(2328, 2));
+        shape.set_lane_rounds(1360, 2, u32::MAX, 2);
         assert_eq!((shape.lane_rounds, shape.groups(2328)), (2, 146));
-        // Small classes (at most 30, each at worst 375 loop iterations): as
-        // many as the spread allows, at most the budget's 159.
+        shape.set_lane_rounds(1360, 2, 1, 2);
+        assert_eq!((shape.lane_rounds, shape.groups(2328)), (1, 291));
+        // Small classes (at most 30, each at worst 375 loop iterations): 159 an
+        // invocation at most, yet 8 workgroups for each thread where the
+        // slices allow, which then take the queue at their own pace.
         let mut small = TransportShape::choose(&lavapipe, 30, 2, 1 << 15, None, None);
         assert_eq!(TransportShape::lane_iterations(30, 2), 375);
-        small.set_lane_rounds(30, 2, small.lane_spread(5000, 2));
-        assert_eq!(small.lane_rounds, 39);
-        small.set_lane_rounds(30, 2, small.lane_spread(100_000, 2));
+        small.set_lane_rounds(30, 2, u32::MAX, 2);
         assert_eq!(small.lane_rounds, 159);
-        // Whatever the class and dimension: every slice has an invocation's
-        // slot, and an invocation's slices fit its budget at their worst (or it
-        // takes one, which `choose` budgets).
+        assert_eq!(small.groups(5000), 16);
+        assert_eq!(small.groups(100_000), 79);
+        assert_eq!(small.groups(60), 8, "one slice an invocation at most");
+        small.set_lane_rounds(30, 2, u32::MAX, 16);
+        assert_eq!(small.groups(5000), 128);
+        // Whatever the class, dimension, slices and threads: every slice has an
+        // invocation's slot, and an invocation's slices fit its budget at their
+        // worst (or it takes one, which `choose` budgets).
         for dims in 1..=8 {
             for max_class in [2u32, 16, 100, 744, 1360, 2048, 5000] {
-                for slices in [1u32, 7, 300, 2328, 100_000] {
-                    let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
-                    for most in [1, shape.lane_spread(slices, 2), u32::MAX] {
-                        shape.set_lane_rounds(max_class, dims, most);
-                        let rounds = shape.lane_rounds;
-                        assert!(rounds >= 1 && rounds <= most, "{dims} {max_class} {most}: {rounds}");
+                let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
+                for (most, threads) in [(1, 2), (3, 1), (u32::MAX, 2), (u32::MAX, 64)] {
+                    shape.set_lane_rounds(max_class, dims, most, threads);
+                    let rounds = shape.lane_rounds;
+                    assert!(rounds >= 1 && rounds <= most, "{dims} {max_class} {most}: {rounds}");
+                    for slices in [1u32, 7, 300, 2328, 100_000] {
                         assert!(shape.groups(slices) * shape.workgroup * rounds >= slices);
-                        let worst = TransportShape::lane_iterations(max_class.min(shape.local_max), dims)
-                            .max(max_class);
-                        assert!(
-                            rounds == 1 || rounds * (worst + 1) <= LANE_BUDGET,
-                            "d = {dims}, {max_class}: {rounds} x {worst}"
-                        );
-                        assert!(shape.per_lane || rounds == 1);
                     }
+                    let worst =
+                        TransportShape::lane_iterations(max_class.min(shape.local_max), dims).max(max_class);
+                    assert!(
+                        rounds == 1 || rounds * (worst + 1) <= LANE_BUDGET,
+                        "d = {dims}, {max_class}: {rounds} x {worst}"
+                    );
+                    assert!(shape.per_lane || rounds == 1);
                 }
             }
         }
-        // Spread: at least LANE_GROUPS_PER_THREAD workgroups a thread where the
-        // slices allow.
-        assert_eq!(shape.lane_spread(100, 16), 1);
-        assert_eq!(shape.lane_spread(8 * 8 * 16 * 3, 16), 3);
     }
 
     #[test]

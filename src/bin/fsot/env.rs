@@ -97,9 +97,9 @@ pub(crate) fn local_max() -> Result<Option<u32>> {
 }
 
 /// `FSOT_LANE_ROUNDS=N`: each invocation of the per-lane transport takes at most
-/// N slices (a positive integer; the loop budget still bounds it), in place of
-/// what spreads the slices over the host's threads: to compare (1: one slice
-/// an invocation, a workgroup per eight slices); unset: the spread.
+/// N slices (a positive integer; the loop budget still bounds it): to compare
+/// (1: one slice an invocation, a workgroup per eight slices); unset: as many
+/// as the loop budget allows.
 pub(crate) fn lane_rounds() -> Result<Option<u32>> {
     match std::env::var("FSOT_LANE_ROUNDS").ok().as_deref() {
         None | Some("") => Ok(None),

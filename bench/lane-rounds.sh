@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The per-lane transport's slices per invocation (issue 16): the transport pass's
+# time per iteration (timestamps, --profile) with FSOT_LANE_ROUNDS=1 (one slice
+# an invocation: a workgroup per 8 slices) against the default (as many as the
+# loop budget and the spread allow), and the old binary (one slice an
+# invocation, static stride) against the new, alone and beside a busy loop on
+# one core (a noisy neighbour: the driver's threads then run at unequal pace).
+# 32x32x16, d = 2, taa, seed 7, 192 iterations, float atomics; six alternating
+# rounds, medians.
+# Usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE   (lavapipe unless VK_DRIVER_FILES says otherwise)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+old=${1:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
+new=${2:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
+out=${3:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+work=$(mktemp -d)
+hog=
+cleanup() { [ -n "$hog" ] && kill "$hog" 2>/dev/null; rm -rf "$work"; }
+trap cleanup EXIT
+transport() { # ENV... BIN: transport ms per iteration
+  env "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 192 \
+    --profile --out "$work/m.exr" 2>&1 | grep -o 'transport [0-9.]* ms' | awk '{print $2}'
+}
+median() { sort -g "$1" | awk '{a[NR]=$1} END {print (a[NR/2]+a[NR/2+1])/2}'; }
+shape() { env "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 2 \
+    --profile --out "$work/m.exr" 2>&1 | grep 'transport: '; }
+{
+  echo "# bench/lane-rounds.sh: old $old, new $new, commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+  echo "# new, default: $(shape FSOT_FLOAT_ATOMICS=1 "$new")"
+  echo "# new, FSOT_LANE_ROUNDS=1: $(shape FSOT_FLOAT_ATOMICS=1 FSOT_LANE_ROUNDS=1 "$new")"
+  echo "# old: $(shape FSOT_FLOAT_ATOMICS=1 "$old")"
+  for setting in calm noisy; do
+    if [ "$setting" = noisy ]; then
+      taskset -c 1 sh -c 'while :; do :; done' &
+      hog=$!
+    fi
+    : > "$work/old"; : > "$work/one"; : > "$work/new"
+    for round in 1 2 3 4 5 6; do
+      o=$(transport FSOT_FLOAT_ATOMICS=1 "$old"); echo "$o" >> "$work/old"
+      r=$(transport FSOT_FLOAT_ATOMICS=1 FSOT_LANE_ROUNDS=1 "$new"); echo "$r" >> "$work/one"
+      n=$(transport FSOT_FLOAT_ATOMICS=1 "$new"); echo "$n" >> "$work/new"
+      echo "$setting, round $round: old $o, new with FSOT_LANE_ROUNDS=1 $r, new $n ms per iteration"
+    done
+    echo "$setting: median old $(median "$work/old") ms, new with FSOT_LANE_ROUNDS=1 $(median "$work/one") ms, new $(median "$work/new") ms"
+    if [ -n "$hog" ]; then kill "$hog"; hog=; fi
+  done
+} | tee "$out"
