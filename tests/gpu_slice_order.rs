@@ -12,6 +12,7 @@ use fsot::problem::Tile;
 use fsot::rng::seed_key;
 use fsot::settings::Settings;
 use fsot::slice::SliceSampler;
+use fsot::vk::Context;
 
 fn settings(seed: u64) -> Settings {
     let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), seed);
@@ -26,12 +27,34 @@ fn lane_waste(lens: &[u32], lanes: usize) -> f64 {
     busy as f64 / lens.iter().map(|&n| n as u64).sum::<u64>() as f64
 }
 
+/// Whether the device is a CPU implementation, which the per-lane transport is
+/// for (says SKIPPED where not).
+fn takes_the_per_lane_transport(ctx: &Context) -> bool {
+    let cpu = ctx.info().is_cpu();
+    if !cpu {
+        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+    }
+    cpu
+}
+
+/// A whole deterministic per-lane run of 16x16x8 `taa` (seed 5, 40 iterations)
+/// with these options besides: its samples, and how its transport was launched.
+fn whole_per_lane_run(ctx: &Context, options: VulkanOptions) -> (Vec<f32>, String) {
+    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
+    let options = VulkanOptions { deterministic: true, transport: Some(TransportKind::PerLane), ..options };
+    let mut run = VulkanRun::new(ctx, tile, settings(5), None, options).unwrap();
+    let launch = run.report().transport.unwrap_or_default();
+    while !run.finished() {
+        run.step_batch(u32::MAX).unwrap();
+    }
+    (run.mask().unwrap().samples, launch)
+}
+
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
     let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().is_cpu() {
-        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+    if !takes_the_per_lane_transport(&ctx) {
         return;
     }
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
@@ -87,23 +110,11 @@ fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
     // are ordered a few iterations at a time within the batch; the run is the
     // same bit for bit (deterministic mode), whatever the slots.
     let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().is_cpu() {
-        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+    if !takes_the_per_lane_transport(&ctx) {
         return;
     }
-    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
-    let samples = |slots: Option<u32>| {
-        let options = VulkanOptions {
-            deterministic: true,
-            transport: Some(TransportKind::PerLane),
-            slice_order_slots: slots,
-            ..VulkanOptions::default()
-        };
-        let mut run = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();
-        while !run.finished() {
-            run.step_batch(u32::MAX).unwrap();
-        }
-        run.mask().unwrap().samples
+    let samples = |slots| {
+        whole_per_lane_run(&ctx, VulkanOptions { slice_order_slots: slots, ..VulkanOptions::default() }).0
     };
     let whole = samples(None);
     for slots in [1, 3] {
@@ -120,25 +131,11 @@ fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
     // for bit with one slice an invocation, two, and as many as the loop
     // budget allows (the default).
     let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().is_cpu() {
-        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
+    if !takes_the_per_lane_transport(&ctx) {
         return;
     }
-    let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
-    let run = |rounds: Option<u32>| {
-        let options = VulkanOptions {
-            deterministic: true,
-            transport: Some(TransportKind::PerLane),
-            lane_rounds: rounds,
-            ..VulkanOptions::default()
-        };
-        let mut run = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();
-        let shape = run.report().transport.unwrap_or_default();
-        while !run.finished() {
-            run.step_batch(u32::MAX).unwrap();
-        }
-        (run.mask().unwrap().samples, shape)
-    };
+    let run =
+        |rounds| whole_per_lane_run(&ctx, VulkanOptions { lane_rounds: rounds, ..VulkanOptions::default() });
     let (one, shape) = run(Some(1));
     assert!(shape.contains("up to 1 slice each"), "{shape}");
     let (two, shape) = run(Some(2));
