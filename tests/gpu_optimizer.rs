@@ -111,6 +111,34 @@ fn per_lane_classes_up_to_its_limit_give_the_cpu_displacements() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn per_lane_classes_past_2048_that_fit_the_loop_budget_need_no_large_class_stage() {
+    // 3 spp of taa at 16x16x8: classes up to 2232 samples, all within one
+    // invocation's loop budget, so the per-lane transport sorts them all (limit
+    // 2304) and no large-class stage is built. The CPU's displacements: classes
+    // past 2048 of spread keys (float32 may rank two nearly tied projections
+    // the other way), and one iteration where all keys tie (the heap sort at
+    // its worst).
+    let Some(ctx) = common::gpu_context() else { return };
+    if refused_here(&ctx, TransportKind::PerLane) {
+        return;
+    }
+    let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
+    let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
+    assert_eq!(kernel.taps.len() * 3, 2232);
+    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let run = VulkanRun::new(&ctx, tile, settings("taa", 10, 21), None, options).unwrap();
+    let launch = run.report().transport.unwrap_or_default();
+    assert!(launch.contains("per lane") && launch.contains("classes up to 2304"), "{launch}");
+    assert_eq!(run.large_capacity(), 0, "a large-class stage was built");
+    drop(run);
+    classes_past(options, 2048, 2, 3, false);
+    let mut tied = Mask::white(tile, 3);
+    tied.samples.iter_mut().for_each(|v| *v = 0.375);
+    compare_with_options(&tied, "taa", VulkanOptions { transport: Some(TransportKind::PerLane), ..options });
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn per_lane_sort_stays_exact_when_every_key_ties() {
     // Every sample at the same place: every projection of a class is equal, so
     // all keys pile into one bucket and the per-lane pass takes its heap-sort
@@ -281,7 +309,7 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
         ..VulkanOptions::default()
     };
     for dims in [2, 3] {
-        classes_past(options, 1024, dims);
+        classes_past(options, 1024, dims, 4, true);
     }
     // Asked for what the device or the shape cannot give: a clear error.
     let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
@@ -336,34 +364,35 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
         ..VulkanOptions::default()
     };
     let limit = if transport == TransportKind::PerLane { TransportShape::lane_limit(dims) } else { 2048 };
-    classes_past(options, limit, dims);
+    classes_past(options, limit, dims, 4, true);
 }
 
-/// The classes past `limit` (which the transport with `options` leaves to the
-/// large-class stage, or to its second pass) against the CPU's, one slice per
-/// iteration, so each read-back is one class. In classes of thousands of points
-/// some projections lie within float32 rounding of each other and may rank the
-/// other way round on the GPU; such a point must then get exactly its
-/// neighbour's target.
-fn classes_past(options: VulkanOptions, limit: u32, dims: usize) {
+/// The classes past `limit` of 16x16x8 `taa` at `spp` (which the transport with
+/// `options` leaves to the large-class stage, or to its second pass, or sorts
+/// itself) against the CPU's, one slice per iteration, so each read-back is one
+/// class; whether the run has a large-class stage (`large_stage`). In classes
+/// of thousands of points some projections lie within float32 rounding of each
+/// other and may rank the other way round on the GPU; such a point must then
+/// get exactly its neighbour's target.
+fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, large_stage: bool) {
     let Some(ctx) = common::gpu_context() else { return };
     let transport = options.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
-    let tile = Tile::new(16, 16, 8, 4, dims).unwrap();
-    let mut s = settings("taa", 400, 5);
+    let tile = Tile::new(16, 16, 8, spp, dims).unwrap();
+    let mut s = settings("taa", 5000, 5);
     s.slices = Some(1);
     let kernel = Kernel::new(s.kernel, &tile);
-    assert!(kernel.taps.len() * 4 > 2048, "the test must reach the large-class path");
+    assert!(kernel.taps.len() * spp > 2048, "the test must reach classes past 2048");
     let mask = Mask::white(tile, 5);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
-    assert!(gpu.large_capacity() > 1024);
+    assert_eq!(gpu.large_capacity() > 1024, large_stage, "large-class capacity {}", gpu.large_capacity());
     let (mut checked, mut ties) = (0, 0);
-    for iteration in 0..400 {
+    for iteration in 0..5000 {
         let slice = sampler.draw(iteration, 0);
-        if slice.len * 4 <= limit {
+        if slice.len * spp as u32 <= limit {
             continue;
         }
         let g = gpu.displacements(iteration).unwrap();

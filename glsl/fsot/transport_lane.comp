@@ -20,8 +20,9 @@ layout(push_constant) uniform Push { TransportPush pc; };
 #include "slice_order.glsl"
 
 layout(local_size_x_id = 0) in;
-// Largest class sorted in one invocation (set by the host: LANE_MAX, at most
-// 65535 for the 16-bit counters); 36 KiB of private memory per invocation at 2048.
+// Largest class sorted in one invocation (set by the host: src/gpu/shape.rs
+// lane_limit_for, at most 65535 for the 16-bit counters); 36 KiB of private
+// memory per invocation at 2048, which llvmpipe zero-fills at each workgroup's start.
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
 #define FSOT_INSERTION_BUDGET 4u
 

@@ -9,8 +9,13 @@ pub const LOCAL_MAX: u32 = 2048;
 /// Classes up to this many samples are sorted by one invocation in the per-lane
 /// transport (`FSOT_LANE_MAX` of transport_lane.comp; its private arrays take 18
 /// bytes per sample per invocation, which lavapipe takes and an NVIDIA driver
-/// refused at 20: the per-lane transport is for CPU implementations only).
+/// refused at 20: the per-lane transport is for CPU implementations only),
+/// unless the kernel's classes pass it and fit the loop budget
+/// (`lane_limit_for`).
 pub const LANE_MAX: u32 = 2048;
+/// The per-lane transport's limit past LANE_MAX is the kernel's largest class
+/// rounded up to a multiple of this (few pipelines to compile).
+pub const LANE_STEP: u32 = 256;
 /// Loop iterations one transport invocation may spend over its slices: under half
 /// of lavapipe's cap of 65535 per invocation.
 pub const LOOP_BUDGET: u32 = 30_000;
@@ -93,7 +98,8 @@ pub struct TransportShape {
     pub per_lane: bool,
     /// Largest class the pass sorts itself (`FSOT_LANE_MAX` or
     /// `FSOT_LOCAL_MAX`); larger classes go to the large-class stage's global
-    /// sort. Per lane: LANE_MAX, less for d >= 3 (`lane_limit`).
+    /// sort. Per lane: LANE_MAX, less for d >= 3, more where every class fits
+    /// the budget (`lane_limit_for`).
     pub local_max: u32,
     /// How the workgroup transport sorts a class (`VulkanOptions::class_sort`,
     /// Buckets where the subgroup path does not apply: d >= 3); the per-lane
@@ -162,7 +168,7 @@ impl TransportShape {
                     && Self::large_fits(max_class, limit, dims)
             }
         };
-        let local_max = if per_lane { Self::lane_limit(dims) } else { LOCAL_MAX };
+        let local_max = if per_lane { Self::lane_limit_for(max_class, dims) } else { LOCAL_MAX };
         let (workgroup, slices_per_group, one_subgroup) = if info.is_cpu() {
             (info.subgroup_size.clamp(1, 128), 16, true)
         } else {
@@ -394,6 +400,26 @@ impl TransportShape {
             || Self::walk_iterations((max_class / 2).div_ceil(LARGE_WORKGROUP), dims) <= LOOP_BUDGET
     }
 
+    /// The per-lane limit for a kernel whose largest class is `max_class`:
+    /// `lane_limit`, unless the classes pass LANE_MAX at d <= 2 and all fit
+    /// the loop budget (up to about 2600 samples): then the largest rounded up
+    /// to a multiple of LANE_STEP, so that no class goes to the large-class
+    /// stage, whose three global sorts cost lavapipe more than the whole
+    /// transport at 128x128x30 (0.18% of the slices there pass 2048; the
+    /// stage took 321 ms of an iteration's 555, the transport 226). The
+    /// private arrays grow with it (46 KiB an invocation at 2560), and
+    /// llvmpipe zero-fills them at each workgroup's start, so the limit stays
+    /// at LANE_MAX where every class fits it.
+    pub fn lane_limit_for(max_class: u32, dims: usize) -> u32 {
+        let limit = Self::lane_limit(dims);
+        let stretched = max_class.next_multiple_of(LANE_STEP);
+        if max_class > limit && limit == LANE_MAX && Self::lane_iterations(stretched, dims) <= LANE_BUDGET {
+            stretched
+        } else {
+            limit
+        }
+    }
+
     /// Largest class (at most LANE_MAX) that one per-lane invocation sorts and
     /// sends to its targets within LANE_BUDGET in `dims` dimensions: LANE_MAX
     /// for d <= 2; 207 for d = 3, 113 for d = 4, 7 for d = 8.
@@ -558,12 +584,25 @@ mod tests {
                 assert!(shape.per_lane || dims > 2 || max_class > LOOP_BUDGET / 2, "{dims} {max_class}");
             }
         }
+        // Per lane, d <= 2: classes past LANE_MAX that all fit the budget get a
+        // limit that holds them (the paper's tile, 2326: 2560), so no
+        // large-class stage; 256x256x64's 3372 does not fit, and keeps 2048.
+        assert_eq!(TransportShape::lane_limit_for(1408, 2), LANE_MAX);
+        assert_eq!(TransportShape::lane_limit_for(2326, 2), 2560);
+        assert_eq!(TransportShape::lane_limit_for(2326, 1), 2560);
+        assert!(TransportShape::lane_iterations(2560, 2) <= LANE_BUDGET);
+        assert_eq!(TransportShape::lane_limit_for(3372, 2), LANE_MAX);
+        assert!(TransportShape::lane_iterations(3584, 2) > LANE_BUDGET);
+        let paper = TransportShape::choose(&lavapipe, 2326, 2, 1 << 20, None, None);
+        assert!(paper.per_lane && paper.local_max == 2560, "{paper:?}");
+        assert!(paper.fits_loop_budget(&lavapipe, 2326, 2));
         // Per lane, d >= 3 sorts the classes up to its limit, the largest whose
         // loops fit, and leaves the rest to the large-class stage.
         assert_eq!(TransportShape::lane_limit(1), LANE_MAX);
         assert_eq!(TransportShape::lane_limit(2), LANE_MAX);
         for (dims, near) in [(3, 207), (4, 113), (8, 7)] {
             let limit = TransportShape::lane_limit(dims);
+            assert_eq!(TransportShape::lane_limit_for(2326, dims), limit);
             assert!(TransportShape::lane_iterations(limit, dims) <= LANE_BUDGET, "d = {dims}: {limit}");
             assert!(TransportShape::lane_iterations(limit + 1, dims) > LANE_BUDGET, "d = {dims}: {limit}");
             assert!(limit.abs_diff(near) <= near / 20, "d = {dims}: limit {limit}, documented about {near}");
