@@ -12,6 +12,7 @@
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 // variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
+#extension GL_KHR_shader_subgroup_ballot : require
 #define FSOT_TEXEL_READS // samples and taps through their texel views (bindings.glsl)
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
@@ -137,8 +138,13 @@ void transport_rank(uint rank) {
     // Insertion sort: each key moves past the larger keys of its own bucket,
     // so at most `pairs` moves in all. Where keys pile into few buckets
     // (degenerate samples), a heap sort instead: O(n log n) whatever the keys,
-    // so no class pushes an invocation past the driver's loop budget.
-    if (pairs <= FSOT_INSERTION_BUDGET * n) {
+    // so no class pushes an invocation past the driver's loop budget. Every
+    // lane of the subgroup takes the heap sort if one does (the same order
+    // either way): a SIMD driver runs both sides of a branch, and a group
+    // whose lanes took both would spend the two sorts' loops in one slice,
+    // past what the budget allows for it (src/gpu/shape.rs: lane_iterations).
+    bool piled = pairs > FSOT_INSERTION_BUDGET * n;
+    if (subgroupBallotBitCount(subgroupBallot(piled)) == 0u) {
         // In two loops, because a SIMD driver (llvmpipe) runs both sides of a
         // branch for all its lanes, masked, and a store under a mask is a loop
         // over the lanes: first the keys smaller than the largest before them,
