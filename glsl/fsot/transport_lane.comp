@@ -12,7 +12,7 @@
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 // variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
-#extension GL_KHR_shader_subgroup_ballot : require
+#extension GL_KHR_shader_subgroup_vote : require
 #define FSOT_TEXEL_READS // samples and taps through their texel views (bindings.glsl)
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
@@ -144,7 +144,7 @@ void transport_rank(uint rank) {
     // whose lanes took both would spend the two sorts' loops in one slice,
     // past what the budget allows for it (src/gpu/shape.rs: lane_iterations).
     bool piled = pairs > FSOT_INSERTION_BUDGET * n;
-    if (subgroupBallotBitCount(subgroupBallot(piled)) == 0u) {
+    if (!subgroupAny(piled)) {
         // In two loops, because a SIMD driver (llvmpipe) runs both sides of a
         // branch for all its lanes, masked, and a store under a mask is a loop
         // over the lanes: first the keys smaller than the largest before them,

@@ -561,6 +561,12 @@ fn transport_shape(
         Some(TransportKind::PerLane) if max_class > LOOP_BUDGET / 2 => {
             return Err(Error::invalid("the per-lane transport cannot take classes this large"))
         }
+        Some(TransportKind::PerLane) if !info.subgroup_vote => {
+            return Err(Error::VulkanUnavailable(format!(
+                "the per-lane transport needs subgroup vote operations in compute shaders, which {} lacks",
+                info.name
+            )))
+        }
         Some(TransportKind::PerLane) if texels > info.max_texel_buffer_elements => {
             return Err(Error::invalid(format!(
                 "the per-lane transport reads the samples through a texel view of {texels} texels; {} \

@@ -138,7 +138,8 @@ impl TransportShape {
     /// (`fits_loop_budget` says whether a shape does). The per-lane transport
     /// reads the samples and the taps through texel views: not chosen where one
     /// would hold more than the device's maxTexelBufferElements (`texels`: the
-    /// larger view's texels). `kind` forces a transport (None: by device);
+    /// larger view's texels), nor where the device lacks subgroup votes (its
+    /// lanes choose their sort together). `kind` forces a transport (None: by device);
     /// `forced` (invocations, slices per workgroup): the workgroup transport
     /// with that shape.
     pub fn choose(
@@ -162,6 +163,7 @@ impl TransportShape {
             None => {
                 let limit = Self::lane_limit(dims);
                 info.is_cpu()
+                    && info.subgroup_vote
                     && texels <= info.max_texel_buffer_elements
                     && max_class <= LOOP_BUDGET / 2
                     && (dims <= 2 || max_class <= limit)
@@ -492,6 +494,7 @@ mod tests {
             float_atomic_add: true,
             int64_atomics: true,
             subgroup_ballot: true,
+            subgroup_vote: true,
             float64: true,
         }
     }
@@ -622,6 +625,9 @@ mod tests {
         let small_views = DeviceInfo { max_texel_buffer_elements: 65536, ..lavapipe.clone() };
         assert!(TransportShape::choose(&small_views, 744, 2, 65536, None, None).per_lane);
         assert!(!TransportShape::choose(&small_views, 744, 2, 65537, None, None).per_lane);
+        // Nor without subgroup votes.
+        let no_vote = DeviceInfo { subgroup_vote: false, ..lavapipe.clone() };
+        assert!(!TransportShape::choose(&no_vote, 744, 2, 1 << 15, None, None).per_lane);
         // Every shape lavapipe gets fits its 32 KiB of shared memory; 2048
         // invocations would not.
         for dims in 1..=8 {

@@ -23,6 +23,8 @@ pub struct DeviceInfo {
     pub int64_atomics: bool,
     /// Subgroup ballot operations in compute shaders (the radix sort needs them).
     pub subgroup_ballot: bool,
+    /// Subgroup vote operations in compute shaders.
+    pub subgroup_vote: bool,
     /// shaderFloat64: 64-bit floats in shaders.
     pub float64: bool,
 }
@@ -123,6 +125,8 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         int64_atomics,
         subgroup_ballot: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT),
+        subgroup_vote: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::VOTE),
         float64,
     }
 }
