@@ -205,9 +205,9 @@ void main() {
     // Each invocation takes the next rank from the iteration's queue, up to
     // pc.lane_rounds times (src/gpu/shape.rs: set_lane_rounds, within the loop
     // budget): the lanes of a workgroup take neighbouring ranks together, and
-    // the driver's threads take large classes and small alike (the largest
-    // first), however their pace differs. The dispatch holds enough
-    // invocations to take every slice even if each takes its full count.
+    // the driver's threads, each running its share of the workgroups, take
+    // large classes and small alike (the largest first). The dispatch holds
+    // enough invocations to take every slice even if each takes its full count.
     for (uint round = 0u; round < pc.lane_rounds; ++round) {
         uint rank = atomicAdd(slice_order[fsot_order_next_at(pc.order_slot)], 1u);
         if (rank >= pc.slices) {
