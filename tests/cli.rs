@@ -290,6 +290,18 @@ fn assert_refused_keeping_output(o: &Output, named: &str, dir: &Path) {
     assert_eq!(std::fs::read(dir.join("existing.exr")).unwrap(), b"keep me", "{named}");
 }
 
+/// A CPU run with the variable `name` set to each of `bad` is refused with a
+/// message naming the setting, keeping `dir`'s existing.exr (written here).
+fn assert_variable_refused(dir: &Path, name: &str, bad: &[&str]) {
+    std::fs::write(dir.join("existing.exr"), b"keep me").unwrap();
+    let args =
+        ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
+    for value in bad {
+        let o = fsot_with(dir, &[(name, value)], &args);
+        assert_refused_keeping_output(&o, &format!("{name}={value}"), dir);
+    }
+}
+
 fn read_samples(path: &Path) -> Vec<u32> {
     fsot::io::exr::read(path).unwrap().samples.iter().map(|v| v.to_bits()).collect()
 }
@@ -688,13 +700,7 @@ fn fsot_class_sort_makes_the_same_mask_every_way_and_any_other_value_is_refused(
 #[test]
 fn fsot_defer_takes_0_or_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
-    for bad in ["1", "4096", "off"] {
-        let args =
-            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
-        let o = fsot_with(dir.path(), &[("FSOT_DEFER", bad)], &args);
-        assert_refused_keeping_output(&o, &format!("FSOT_DEFER={bad}"), dir.path());
-    }
+    assert_variable_refused(dir.path(), "FSOT_DEFER", &["1", "4096", "off"]);
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
@@ -704,7 +710,6 @@ fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_r
     // leave the first pass (for the second pass on a GPU, the large-class stage
     // on lavapipe); the profile names the limit.
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "2"];
     let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
     let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", "64")], &[&args[..], &more[..]].concat());
@@ -714,12 +719,7 @@ fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_r
         text.contains("  transport: workgroups of") && text.contains("classes up to 64 sorted"),
         "{text}"
     );
-    for bad in ["100", "32", "4096", "off"] {
-        let args =
-            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
-        let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", bad)], &args);
-        assert_refused_keeping_output(&o, &format!("FSOT_LOCAL_MAX={bad}"), dir.path());
-    }
+    assert_variable_refused(dir.path(), "FSOT_LOCAL_MAX", &["100", "32", "4096", "off"]);
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
@@ -729,7 +729,6 @@ fn fsot_lane_rounds_caps_the_per_lane_transports_slices_and_bad_values_are_refus
     // slices an invocation as its loop budget allows; FSOT_LANE_ROUNDS=1 one
     // each, which the profile says.
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--iterations", "2"];
     let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
     let profile = |rounds: Option<&str>| {
@@ -748,10 +747,5 @@ fn fsot_lane_rounds_caps_the_per_lane_transports_slices_and_bad_values_are_refus
             "SKIPPED (in part): this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS"
         );
     }
-    for bad in ["0", "-1", "two"] {
-        let args =
-            ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
-        let o = fsot_with(dir.path(), &[("FSOT_LANE_ROUNDS", bad)], &args);
-        assert_refused_keeping_output(&o, &format!("FSOT_LANE_ROUNDS={bad}"), dir.path());
-    }
+    assert_variable_refused(dir.path(), "FSOT_LANE_ROUNDS", &["0", "-1", "two"]);
 }

@@ -85,15 +85,8 @@ pub(crate) fn defer() -> Result<Option<u32>> {
 /// its second pass (GPUs) or to the large-class stage: less shared memory and
 /// fewer registers a workgroup, for tuning; unset: 2048.
 pub(crate) fn local_max() -> Result<Option<u32>> {
-    match std::env::var("FSOT_LOCAL_MAX").ok().as_deref() {
-        None | Some("") => Ok(None),
-        Some(v) => match v.parse::<u32>() {
-            Ok(n) if TransportShape::local_max_allowed(n) => Ok(Some(n)),
-            _ => Err(Error::invalid(format!(
-                "FSOT_LOCAL_MAX={v}: it takes a power of two from 64 to {LOCAL_MAX}, or is unset ({LOCAL_MAX})"
-            ))),
-        },
-    }
+    let takes = format!("a power of two from 64 to {LOCAL_MAX}, or is unset ({LOCAL_MAX})");
+    u32_variable("FSOT_LOCAL_MAX", TransportShape::local_max_allowed, &takes)
 }
 
 /// `FSOT_LANE_ROUNDS=N`: each invocation of the per-lane transport takes at most
@@ -101,13 +94,17 @@ pub(crate) fn local_max() -> Result<Option<u32>> {
 /// (1: one slice an invocation, a workgroup per eight slices); unset: as many
 /// as the loop budget allows.
 pub(crate) fn lane_rounds() -> Result<Option<u32>> {
-    match std::env::var("FSOT_LANE_ROUNDS").ok().as_deref() {
+    u32_variable("FSOT_LANE_ROUNDS", |n| n >= 1, "a positive integer, or is unset")
+}
+
+/// The variable `name` as a number that `allowed` accepts; None when unset or
+/// empty; otherwise a clear error saying what it `takes`.
+fn u32_variable(name: &str, allowed: impl Fn(u32) -> bool, takes: &str) -> Result<Option<u32>> {
+    match std::env::var(name).ok().as_deref() {
         None | Some("") => Ok(None),
         Some(v) => match v.parse::<u32>() {
-            Ok(n) if n >= 1 => Ok(Some(n)),
-            _ => {
-                Err(Error::invalid(format!("FSOT_LANE_ROUNDS={v}: it takes a positive integer, or is unset")))
-            }
+            Ok(n) if allowed(n) => Ok(Some(n)),
+            _ => Err(Error::invalid(format!("{name}={v}: it takes {takes}"))),
         },
     }
 }
