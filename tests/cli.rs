@@ -724,10 +724,10 @@ fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_r
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
-fn fsot_lane_rounds_caps_the_per_lane_transports_slices_and_bad_values_are_refused() {
+fn fsot_lane_rounds_and_chunks_tune_the_per_lane_transport_and_bad_values_are_refused() {
     // The per-lane transport (CPU implementations of Vulkan) takes as many
-    // slices an invocation as its loop budget allows; FSOT_LANE_ROUNDS=1 one
-    // each, which the profile says.
+    // slices an invocation as its loop budget allows at each chunk's classes;
+    // FSOT_LANE_ROUNDS=1 one each, which the profile says.
     let dir = tempfile::tempdir().unwrap();
     let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--iterations", "2"];
     let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
@@ -740,12 +740,16 @@ fn fsot_lane_rounds_caps_the_per_lane_transports_slices_and_bad_values_are_refus
     };
     let (capped, free) = (profile(Some("1")), profile(None));
     if capped.contains("transport: per lane") {
-        assert!(capped.contains("up to 1 slice each"), "{capped}");
-        assert!(free.contains("transport: per lane") && !free.contains("up to 1 slice each"), "{free}");
+        assert!(capped.contains("one slice an invocation"), "{capped}");
+        assert!(free.contains("transport: per lane") && !free.contains("an invocation"), "{free}");
     } else {
         eprintln!(
             "SKIPPED (in part): this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS"
         );
     }
     assert_variable_refused(dir.path(), "FSOT_LANE_ROUNDS", &["0", "-1", "two"]);
+    // FSOT_LANE_CHUNKS=N aims at N chunks of slices an iteration, to compare.
+    let o = fsot_with(dir.path(), &[("FSOT_LANE_CHUNKS", "1")], &[&args[..], &more[..]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_variable_refused(dir.path(), "FSOT_LANE_CHUNKS", &["0", "-1", "two"]);
 }

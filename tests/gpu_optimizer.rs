@@ -155,16 +155,18 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_invocations_that_take_many_slices_give_the_cpu_displacements() {
-    // Each invocation takes as many slices from the queue as its loop budget
-    // allows (a few workgroups take all 300 small classes): every slice is
-    // still transported once, for spread keys, and for keys that all tie in
-    // classes of several hundred to about two thousand samples, whose heap
-    // sorts take each slice near its worst case (two of those would pass
-    // lavapipe's loop cap, cut loops short and move samples wrongly).
+    // Each workgroup takes a chunk of slices, as many a lane as its loop
+    // budget allows at the chunk's classes (aiming at one chunk: a few hold
+    // all 300 slices, one for each tier, and a lane takes up to dozens): every
+    // slice is still transported once, for spread keys, and for keys that all
+    // tie in classes of several hundred to about two thousand samples, whose
+    // heap sorts take each slice near its worst case. (That a chunk's rounds
+    // fit the loop budget at its classes is tests/gpu_slice_order.rs's.)
     let options = VulkanOptions {
         deterministic: true,
         transport: Some(TransportKind::PerLane),
         lane_rounds: Some(u32::MAX),
+        lane_chunks: Some(1),
         ..VulkanOptions::default()
     };
     compare_with_options(&Mask::white(Tile::new(16, 16, 8, 1, 2).unwrap(), 21), "taa", options);

@@ -6,6 +6,7 @@
 mod common;
 
 use fsot::backend::Backend;
+use fsot::gpu::shape::LANE_BUDGET;
 use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::problem::Tile;
@@ -67,7 +68,7 @@ fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
     // Classes whose sizes fall in one of the order's 256 bins may come in any order.
     let bin_width = (taps + 1).div_ceil(256);
     for iteration in [0u32, 7, 31, 32, 39] {
-        let order = gpu.slice_order(iteration).unwrap().expect("a per-lane run orders its slices");
+        let order = gpu.slice_order(iteration).unwrap().expect("a per-lane run orders its slices").ranks;
         let slices = order.len() as u32;
         assert!(slices > 100, "{slices} slices");
         let mut seen = vec![false; slices as usize];
@@ -105,6 +106,70 @@ fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn the_chunk_plan_gives_every_rank_to_one_chunk_within_the_loop_budget() {
+    // The ordering's second pass shares each iteration's ranks out in chunks,
+    // tier by tier: every rank in exactly one chunk, every chunk's lanes within
+    // the loop budget at the classes its ranks actually hold (the CPU's own
+    // draws), a workgroup dispatched for every chunk, and far fewer chunks
+    // than slices. At 16x16x8 (1 and 3 spp: classes past LANE_MAX in the second,
+    // and at d = 3, where the f64 targets make a slice dear) and 32x32x16.
+    let Some(ctx) = common::gpu_context() else { return };
+    if !takes_the_per_lane_transport(&ctx) {
+        return;
+    }
+    for (tile, rounds) in [
+        (Tile::new(16, 16, 8, 1, 2).unwrap(), None),
+        (Tile::new(16, 16, 8, 3, 2).unwrap(), None),
+        (Tile::new(16, 16, 8, 1, 3).unwrap(), None),
+        (Tile::new(32, 32, 16, 1, 2).unwrap(), None),
+        (Tile::new(32, 32, 16, 1, 2).unwrap(), Some(3)),
+    ] {
+        let s = settings(5);
+        let options = VulkanOptions {
+            transport: Some(TransportKind::PerLane),
+            lane_rounds: rounds,
+            ..VulkanOptions::default()
+        };
+        let gpu = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
+        let shape = *gpu.shape();
+        let lanes = shape.workgroup;
+        let kernel = Kernel::new(s.kernel, &tile);
+        let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+        for iteration in [0u32, 33] {
+            let order = gpu.slice_order(iteration).unwrap().expect("a per-lane run orders its slices");
+            let what = format!("{}, {rounds:?} rounds, iteration {iteration}", tile.describe());
+            let slices = order.ranks.len() as u32;
+            let (mut rank, mut chunk) = (0u32, 0u32);
+            for t in &order.tiers {
+                assert_eq!(
+                    (t.first_rank, t.first_chunk),
+                    (rank, chunk),
+                    "{what}: tiers not contiguous: {t:?}"
+                );
+                assert!(t.rounds >= 1 && t.rounds <= rounds.unwrap_or(u32::MAX), "{what}: {t:?}");
+                assert!(t.rounds == 1 || t.rounds * t.cost <= LANE_BUDGET, "{what}: {t:?} past the budget");
+                for r in t.first_rank..t.first_rank + t.slices {
+                    let class = sampler.draw(iteration, order.ranks[r as usize]).len * tile.spp as u32;
+                    let cost = shape.lane_cost(class, tile.dims);
+                    assert!(cost <= t.cost, "{what}: rank {r}, a class of {class} costs {cost} in {t:?}");
+                }
+                rank += t.slices;
+                chunk += t.slices.div_ceil(lanes * t.rounds);
+            }
+            assert_eq!(rank, slices, "{what}: the tiers miss ranks");
+            assert_eq!(order.chunks, chunk, "{what}");
+            let [x, y, z] = order.dispatch;
+            assert!(x * y * z >= chunk && x <= 65535 && z == 1, "{what}: {:?} for {chunk}", order.dispatch);
+            eprintln!("{what}: {slices} slices in {chunk} chunks, {} tiers", order.tiers.len());
+            assert!(chunk * 2 <= slices.div_ceil(lanes), "{what}: {chunk} chunks for {slices} slices");
+        }
+        drop(gpu);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
     // Where one binding cannot hold a batch's orders (large tiles), the slices
     // are ordered a few iterations at a time within the batch; the run is the
@@ -126,7 +191,7 @@ fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
-    // Which invocation takes which slice from the queue varies with the
+    // Which workgroup takes which chunk from the queue varies with the
     // driver's threads; the sums do not (deterministic mode): the same run bit
     // for bit with one slice an invocation, two, and as many as the loop
     // budget allows (the default).
@@ -137,13 +202,13 @@ fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
     let run =
         |rounds| whole_per_lane_run(&ctx, VulkanOptions { lane_rounds: rounds, ..VulkanOptions::default() });
     let (one, shape) = run(Some(1));
-    assert!(shape.contains("up to 1 slice each"), "{shape}");
+    assert!(shape.contains("one slice an invocation"), "{shape}");
     let (two, shape) = run(Some(2));
-    assert!(shape.contains("up to 2 slices each"), "{shape}");
+    assert!(shape.contains("up to 2 slices an invocation"), "{shape}");
     assert!(two == one, "two slices an invocation changed the run");
     let (most, shape) = run(None);
     eprintln!("default: {shape}");
-    assert!(!shape.contains("up to 1 slice") && !shape.contains("up to 2 slices"), "{shape}");
+    assert!(!shape.contains("an invocation"), "{shape}");
     assert!(most == one, "{shape} changed the run");
     common::assert_no_validation_messages(&ctx);
 }

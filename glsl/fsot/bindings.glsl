@@ -64,7 +64,6 @@ struct TransportPush {
     uint cost_slot;      // where this iteration's objective goes: its index in the batch
     uint large_capacity; // elements the large-class buffers hold
     uint order_slot;     // where the per-lane transport finds this iteration's slice order
-    uint lane_rounds;    // slices each per-lane invocation takes at most (src/gpu/shape.rs: set_lane_rounds)
     uint deferred_capacity; // slices the deferred list holds (transport.comp's second pass)
 };
 

@@ -5,14 +5,17 @@
 // traffic between invocations, which such drivers run as SIMD lanes. Classes
 // larger than FSOT_LANE_MAX go to the large-class path (global radix sort), as in
 // transport.comp; GPUs use that pass instead. The invocations take the slices
-// in decreasing class size (slice_order.glsl) from a queue, several each, so
-// the lanes that run together have classes of about the same size.
+// in decreasing class size (slice_order.glsl), several each, so
+// the lanes that run together have classes of about the same size, and the
+// workgroups take chunks of them from a queue, each as many as its lanes can
+// take within the loop cap (slice_order.glsl).
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS
 // variant DIMS_FLOAT: FSOT_ANY_DIMS FSOT_FLOAT_ATOMICS
 // variant DIMS_DF: FSOT_ANY_DIMS FSOT_DF32
 // variant DIMS_DF_FLOAT: FSOT_ANY_DIMS FSOT_DF32 FSOT_FLOAT_ATOMICS
 #extension GL_KHR_shader_subgroup_vote : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #define FSOT_TEXEL_READS // samples and taps through their texel views (bindings.glsl)
 #include "bindings.glsl"
 layout(push_constant) uniform Push { TransportPush pc; };
@@ -202,18 +205,36 @@ void main() {
     if (schedule.stopped != 0u) {
         return; // the stopping rule ended the run
     }
-    // Each invocation takes the next rank from the iteration's queue, up to
-    // pc.lane_rounds times (src/gpu/shape.rs: set_lane_rounds, within the loop
-    // budget): the lanes of a workgroup take neighbouring ranks together, and
-    // the driver's threads, each running its share of the workgroups, take
-    // large classes and small alike (the largest first). The dispatch holds
-    // enough invocations to take every slice even if each takes its full count.
-    for (uint round = 0u; round < pc.lane_rounds; ++round) {
-        uint rank = atomicAdd(slice_order[fsot_order_next_at(pc.order_slot)], 1u);
-        if (rank >= pc.slices) {
-            break; // every slice taken
+    // The workgroup (one subgroup: src/gpu/shape.rs) takes the next chunk of
+    // the iteration's plan (slice_order.glsl), the largest classes first, so
+    // that the driver's threads, each running its share of the workgroups,
+    // take large classes and small. A chunk is `rounds` rounds of neighbouring
+    // ranks, one a lane each round, as many as its tier's cost allows within
+    // the loop budget (src/gpu/shape.rs: lane_table). The dispatch holds a
+    // workgroup for every chunk (more past 65535 chunks: those take none).
+    uint plan = fsot_lane_plan_at(pc.order_slot);
+    uint chunk = 0u;
+    if (subgroupElect()) {
+        chunk = atomicAdd(slice_order[plan], 1u);
+    }
+    chunk = subgroupBroadcastFirst(chunk);
+    if (chunk < slice_order[plan + 4u]) {
+        uint tier = 0u;
+        while (tier + 1u < FSOT_LANE_TIERS && slice_order[fsot_lane_tier_at(pc.order_slot, tier + 1u)] <= chunk) {
+            ++tier;
         }
-        transport_rank(rank);
+        uint at = fsot_lane_tier_at(pc.order_slot, tier);
+        uint rounds = slice_order[at + 3u];
+        uint lanes = gl_WorkGroupSize.x;
+        uint first = slice_order[at + 1u] + (chunk - slice_order[at]) * lanes * rounds;
+        uint end = min(first + lanes * rounds, slice_order[at + 1u] + slice_order[at + 2u]);
+        for (uint round = 0u; round < rounds; ++round) {
+            uint rank = first + round * lanes + gl_LocalInvocationIndex;
+            if (rank >= end) {
+                break; // the tier's last chunk
+            }
+            transport_rank(rank);
+        }
     }
     fsot_check_loop_cap();
 }

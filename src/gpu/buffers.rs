@@ -78,8 +78,8 @@ pub struct RunBuffers {
     pub large_args: Buffer,
     /// The stopping rule's state, when the device evaluates it (`RuleState`).
     pub schedule: Buffer,
-    /// The per-lane transport's slice order (`SliceOrder`; a placeholder for
-    /// the other transport).
+    /// The per-lane transport's slice order (`SliceOrder`, its lane table
+    /// uploaded; a placeholder for the other transport).
     pub slice_order: Buffer,
     /// The workgroup transport's deferred slices (`Deferred`): the second
     /// pass's indirect dispatch, then the list (a placeholder without one).
@@ -105,6 +105,7 @@ impl RunBuffers {
         large: &LargePlan,
         local_max: u32,
         order_words: u64,
+        lane_table: &[u32],
         deferred_capacity: u32,
     ) -> Result<Self> {
         let info = ctx.info();
@@ -178,6 +179,7 @@ impl RunBuffers {
             (&me.samples, bytemuck::cast_slice(samples)),
             (&me.taps, bytemuck::cast_slice(&table)),
             (&me.deferred, bytemuck::cast_slice(&dispatch)),
+            (&me.slice_order, bytemuck::cast_slice(lane_table)),
         ];
         upload_batch(ctx, &uploads, |cmd| {
             for b in [&me.first, &me.second, &me.acc, &me.costs, &me.large_meta, &me.schedule] {

@@ -90,16 +90,42 @@ pub const ORDER_BINS: u32 = 256;
 /// Slots of bins the slice order holds (`FSOT_ORDER_BATCH`): a batch.
 pub const ORDER_BATCH: u32 = super::BATCH;
 
-/// Words of `SliceOrder` before its per-slot regions: every slot's bins and
-/// queue (zeroed before each ordering).
-pub const ORDER_HEAD_WORDS: u32 = ORDER_BATCH * (ORDER_BINS + 1);
+/// Tiers of the per-lane transport's chunk plan at most (`FSOT_LANE_TIERS`):
+/// runs of bins whose worst slice costs an invocation within a factor of two.
+pub const LANE_TIERS: u32 = 64;
+/// Words of one slot's chunk plan (`fsot_lane_plan_at`): the chunk queue, the
+/// transport's dispatch (x, y, z), the chunks, three spare, then per tier its
+/// first chunk, first rank, slices and rounds.
+pub const LANE_PLAN_WORDS: u32 = 8 + 4 * LANE_TIERS;
+/// Words of the lane table at the start of `SliceOrder`, written once by the
+/// host (`TransportShape::lane_table`): lanes a chunk, the chunks aimed at, each
+/// bin's tier, then per tier its cost (loop iterations a slice at worst) and
+/// most rounds.
+pub const LANE_TABLE_WORDS: u32 = 2 + ORDER_BINS + 2 * LANE_TIERS;
+/// Words of `SliceOrder` zeroed before each ordering, after the lane table:
+/// every slot's bins and chunk plan.
+pub const ORDER_HEAD_WORDS: u32 = ORDER_BATCH * (ORDER_BINS + LANE_PLAN_WORDS);
+/// Words of `SliceOrder` before its per-slot regions.
+pub const ORDER_FIXED_WORDS: u32 = LANE_TABLE_WORDS + ORDER_HEAD_WORDS;
+
+/// Byte offset in `SliceOrder` of slot `slot`'s transport dispatch (x, y, z),
+/// which the ordering's second pass writes.
+pub fn lane_dispatch_offset(slot: u32) -> u64 {
+    (LANE_TABLE_WORDS + ORDER_BATCH * ORDER_BINS + slot * LANE_PLAN_WORDS + 1) as u64 * 4
+}
+
+/// The slice order's bin of a class of `class_taps` of `taps` taps: bin 0 holds
+/// the largest classes (`fsot_order_bin`).
+pub fn order_bin(class_taps: u32, taps: u32) -> u32 {
+    ((taps - class_taps.min(taps)) as u64 * ORDER_BINS as u64 / (taps as u64 + 1)) as u32
+}
 
 /// Words of `SliceOrder` for `slots` iterations' orders (at most ORDER_BATCH)
 /// of `slices` slices each (the regions of `glsl/fsot/slice_order.glsl`): the
-/// bins of every slot, every slot's queue, then per slot each slice's bin and
-/// the slices in order.
+/// lane table, the bins and chunk plan of every slot, then per slot each
+/// slice's bin and the slices in order.
 pub fn slice_order_words(slices: u32, slots: u32) -> u64 {
-    ORDER_HEAD_WORDS as u64 + slots as u64 * 2 * slices as u64
+    ORDER_FIXED_WORDS as u64 + slots as u64 * 2 * slices as u64
 }
 
 /// Slots of slice orders for `slices` slices per iteration that one binding of
@@ -215,9 +241,6 @@ pub struct TransportPush {
     pub large_capacity: u32,
     /// The per-lane transport's slice order slot (`slice_order.glsl`).
     pub order_slot: u32,
-    /// Slices each per-lane invocation takes at most
-    /// (`TransportShape::lane_rounds`).
-    pub lane_rounds: u32,
     /// Slices the workgroup transport's deferred list holds (its second pass).
     pub deferred_capacity: u32,
 }

@@ -12,7 +12,7 @@ pub mod run;
 pub mod shape;
 pub mod swap;
 
-pub use run::VulkanRun;
+pub use run::{LaneOrder, LaneTier, VulkanRun};
 pub use shape::{ClassSort, TransportKind, TransportShape};
 
 use crate::vk::SortPath;
@@ -91,7 +91,13 @@ pub struct VulkanOptions {
     /// for tests, which then see each workgroup take several listed slices.
     pub defer_groups: Option<u32>,
     /// The per-lane transport's slices per invocation at most, in place of as
-    /// many as the loop budget allows (`TransportShape::set_lane_rounds`): for
+    /// many as the loop budget allows at each chunk's classes
+    /// (`TransportShape::lane_table`): for
     /// tests and comparisons (the command line reads `FSOT_LANE_ROUNDS`).
     pub lane_rounds: Option<u32>,
+    /// The chunks the per-lane transport aims to share each iteration's slices
+    /// out in, in place of LANE_CHUNKS_PER_THREAD for each of the host's
+    /// threads (`TransportShape::lane_table`): for tests and comparisons (the
+    /// command line reads `FSOT_LANE_CHUNKS`).
+    pub lane_chunks: Option<u32>,
 }

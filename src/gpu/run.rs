@@ -14,13 +14,14 @@ use ash::vk;
 
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
-    slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush,
-    UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, ORDER_BATCH, ORDER_HEAD_WORDS,
+    lane_dispatch_offset, slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush,
+    RuleState, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, LANE_TABLE_WORDS, LANE_TIERS,
+    ORDER_BATCH, ORDER_BINS, ORDER_FIXED_WORDS, ORDER_HEAD_WORDS,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
-    two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP, LANE_MAX,
-    LOCAL_MAX, LOOP_BUDGET,
+    two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP,
+    LANE_CHUNKS_PER_THREAD, LANE_MAX, LOCAL_MAX, LOOP_BUDGET,
 };
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -36,6 +37,32 @@ use crate::step_rule::{schedule, Plateau, PlateauState, StepRule};
 use crate::vk::buffer::{download_batch, upload_batch};
 use crate::vk::commands::{barrier, copy, zero};
 use crate::vk::{choose_sort_path, Buffer, Context, PathChoice, RadixSort, SortPath, Timer};
+
+/// One iteration's slice order as the per-lane transport takes it
+/// (`VulkanRun::slice_order`; `glsl/fsot/slice_order.glsl`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LaneOrder {
+    /// Slice indices by rank: the largest classes first.
+    pub ranks: Vec<u32>,
+    /// The transport's dispatch (x, y, z): a workgroup for each chunk at least.
+    pub dispatch: [u32; 3],
+    /// Chunks of the plan: workgroups that take slices.
+    pub chunks: u32,
+    /// The plan's tiers that hold slices, in rank order.
+    pub tiers: Vec<LaneTier>,
+}
+
+/// A tier of a per-lane chunk plan: `slices` ranks from `first_rank`, in
+/// chunks of lanes x `rounds` from chunk `first_chunk`, each slice budgeted
+/// at `cost` loop iterations (the lane table's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LaneTier {
+    pub first_chunk: u32,
+    pub first_rank: u32,
+    pub slices: u32,
+    pub rounds: u32,
+    pub cost: u32,
+}
 
 pub struct VulkanRun {
     pub tile: Tile,
@@ -99,7 +126,8 @@ impl VulkanRun {
         let mut shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
         // The driver's threads, for a CPU implementation: as many as the host's.
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
-        shape.set_lane_rounds(max_class, tile.dims, options.lane_rounds.unwrap_or(u32::MAX), threads);
+        let chunks = options.lane_chunks.unwrap_or(LANE_CHUNKS_PER_THREAD * threads);
+        shape.set_lane_rounds(options.lane_rounds.unwrap_or(u32::MAX), chunks);
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
@@ -115,6 +143,10 @@ impl VulkanRun {
             false => 0,
         };
         let order_words = if order_slots > 0 { slice_order_words(slices, order_slots) } else { 0 };
+        let lane_table = match order_slots {
+            0 => Vec::new(),
+            _ => shape.lane_table(kernel.taps.len() as u32, tile.spp as u32, tile.dims),
+        };
         let buffers = RunBuffers::new(
             ctx,
             &tile,
@@ -126,6 +158,7 @@ impl VulkanRun {
             &large,
             local_max,
             order_words,
+            &lane_table,
             shape.deferred_capacity(slices),
         )?;
         let mut sort = buffers.large_sort(ctx, &large)?;
@@ -162,6 +195,11 @@ impl VulkanRun {
             buffers,
             ctx: ctx.clone(),
         })
+    }
+
+    /// How the transport pass is launched.
+    pub fn shape(&self) -> &TransportShape {
+        &self.shape
     }
 
     pub fn finished(&self) -> bool {
@@ -216,7 +254,8 @@ impl VulkanRun {
     fn record_slice_order(&self, cmd: vk::CommandBuffer, first: u32, count: u32) {
         let Some([count_pass, place_pass]) = &self.pipelines.order else { return };
         let push = self.transport_push(first, 0);
-        zero(&self.ctx, cmd, &self.buffers.slice_order, 0, ORDER_HEAD_WORDS as u64 * 4);
+        let table = LANE_TABLE_WORDS as u64 * 4;
+        zero(&self.ctx, cmd, &self.buffers.slice_order, table, ORDER_HEAD_WORDS as u64 * 4);
         barrier(&self.ctx, cmd);
         let groups = self.slices.div_ceil(64).clamp(1, 65535);
         count_pass.dispatch(cmd, 0, [groups, count, 1], bytemuck::bytes_of(&push));
@@ -225,21 +264,38 @@ impl VulkanRun {
         barrier(&self.ctx, cmd);
     }
 
-    /// The order the per-lane transport takes iteration `iteration`'s slices in
-    /// (slice indices by rank), computed on the device as a batch would; None
-    /// for the other transport, which takes them in index order.
-    pub fn slice_order(&self, iteration: u32) -> Result<Option<Vec<u32>>> {
+    /// The order the per-lane transport takes iteration `iteration`'s slices in,
+    /// and its chunk plan, computed on the device as a batch would; None for
+    /// the other transport, which takes them in index order.
+    pub fn slice_order(&self, iteration: u32) -> Result<Option<LaneOrder>> {
         if self.pipelines.order.is_none() {
             return Ok(None);
         }
         self.ctx.submit(|cmd| self.record_slice_order(cmd, iteration, 1))?;
-        // Slot 0: its ranks follow every slot's bins and queue, and its own
-        // slices' bins.
-        let first = (ORDER_HEAD_WORDS + self.slices) as usize;
+        // Slot 0: its ranks follow the lane table, every slot's bins and
+        // plan, and its own slices' bins.
+        let first = (ORDER_FIXED_WORDS + self.slices) as usize;
         let bytes = ((first + self.slices as usize) * 4) as u64;
         let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&parts[0]);
-        Ok(Some(words[first..].to_vec()))
+        let plan = (LANE_TABLE_WORDS + ORDER_BATCH * ORDER_BINS) as usize;
+        let tier = |t: usize| {
+            let at = plan + 8 + 4 * t;
+            let cost = words[2 + ORDER_BINS as usize + 2 * t];
+            LaneTier {
+                first_chunk: words[at],
+                first_rank: words[at + 1],
+                slices: words[at + 2],
+                rounds: words[at + 3],
+                cost,
+            }
+        };
+        Ok(Some(LaneOrder {
+            ranks: words[first..].to_vec(),
+            dispatch: [words[plan + 1], words[plan + 2], words[plan + 3]],
+            chunks: words[plan + 4],
+            tiers: (0..LANE_TIERS as usize).map(tier).filter(|t| t.slices > 0).collect(),
+        }))
     }
 
     /// Zeroes the large-class counters of one iteration, the elements and
@@ -254,9 +310,16 @@ impl VulkanRun {
     }
 
     /// The transport dispatch alone (barriers are the caller's).
+    /// Per lane, as many workgroups as the slot's chunk plan holds chunks (the
+    /// ordering's second pass wrote the dispatch).
     fn record_transport_pass(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
-        let groups = two_d(self.shape.groups(self.slices));
-        self.pipelines.transport.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
+        let pass = &self.pipelines.transport;
+        if self.shape.per_lane {
+            let offset = lane_dispatch_offset(push.order_slot);
+            pass.dispatch_indirect(cmd, 0, &self.buffers.slice_order, offset, bytemuck::bytes_of(push));
+        } else {
+            pass.dispatch(cmd, 0, two_d(self.shape.groups(self.slices)), bytemuck::bytes_of(push));
+        }
     }
 
     /// The update pass reads through texel views (CPU implementations) and leaves
@@ -326,7 +389,6 @@ impl VulkanRun {
             cost_slot: slot,
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
-            lane_rounds: self.shape.lane_rounds,
             deferred_capacity: self.shape.deferred_capacity(self.slices),
         }
     }

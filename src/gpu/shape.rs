@@ -1,6 +1,7 @@
 //! How the transport pass is launched on a device, within lavapipe's loop cap.
 
 use crate::error::{Error, Result};
+use crate::gpu::layout::{order_bin, LANE_TABLE_WORDS, LANE_TIERS, ORDER_BINS};
 use crate::vk::DeviceInfo;
 
 /// Classes up to this many samples are sorted in shared memory (the
@@ -37,9 +38,19 @@ pub const DEFER_LIMIT: u32 = 8192;
 /// maxComputeWorkGroupCount a device gives. Past it, each takes several listed
 /// slices.
 pub const DEFER_GROUPS: u32 = 65535;
-/// Workgroups of the per-lane transport that each of the driver's threads is
-/// given at least, where the slices allow (`groups`).
-pub const LANE_GROUPS_PER_THREAD: u32 = 8;
+/// Chunks of the per-lane transport aimed at for each of the driver's threads,
+/// where the slices' costs allow (`lane_table`; each tier adds at most one,
+/// its last, partial): few, since llvmpipe zero-fills an invocation's private
+/// arrays (36 KiB at LANE_MAX) at every workgroup's start, yet more than one,
+/// so that the threads end together. 4 was the fastest of 2, 4 and 8 at
+/// 32x32x16 `taa` on this project's 2-core machine
+/// (bench/results/issue16-lane-chunks.txt).
+pub const LANE_CHUNKS_PER_THREAD: u32 = 4;
+/// Loop iterations of drawing one slice and finding its class, at most, in
+/// the per-lane transport (`lane_cost`): the class's binary search over the
+/// taps (at most 33), its loop over the slice's rounds, and the draw's over
+/// the dimensions.
+pub const LANE_ROUND_LOOPS: u32 = 64;
 /// Workgroup size of the large-class transport (transport_large.comp).
 pub const LARGE_WORKGROUP: u32 = 128;
 
@@ -115,12 +126,11 @@ pub struct TransportShape {
     pub defer_workgroup: u32,
     /// Workgroups of that second pass at most (DEFER_GROUPS; less in tests).
     pub defer_groups: u32,
-    /// Per lane: slices each invocation takes at most, one after another
-    /// (`set_lane_rounds`; `TransportPush::lane_rounds`, not a specialization
-    /// constant, since it changes with the tile); 1 for the workgroup transport.
+    /// Per lane: the rounds of a chunk at most, each a slice a lane
+    /// (`set_lane_rounds`; `lane_table`: u32::MAX unless capped to compare).
     pub lane_rounds: u32,
-    /// Per lane: the driver's threads, which its workgroups are spread over.
-    pub lane_threads: u32,
+    /// Per lane: the chunks of slices aimed at an iteration (`lane_table`).
+    pub lane_chunks: u32,
 }
 
 impl TransportShape {
@@ -186,8 +196,8 @@ impl TransportShape {
             defer_max: 0,
             defer_workgroup: 0,
             defer_groups: DEFER_GROUPS,
-            lane_rounds: 1,
-            lane_threads: 1,
+            lane_rounds: u32::MAX,
+            lane_chunks: 1,
         };
         let local = max_class.min(LOCAL_MAX);
         if info.is_cpu() && !per_lane {
@@ -285,13 +295,15 @@ impl TransportShape {
     /// The pass, its shape and how it sorts a class, in words.
     pub fn describe(&self) -> String {
         if self.per_lane {
+            let cap = match self.lane_rounds {
+                u32::MAX => String::new(),
+                1 => ", one slice an invocation".into(),
+                r => format!(", up to {r} slices an invocation"),
+            };
             return format!(
-                "per lane ({} invocations a workgroup, up to {} slice{} each, largest class first), classes up \
-                 to {} by a bucket sort",
-                self.workgroup,
-                self.lane_rounds,
-                if self.lane_rounds == 1 { "" } else { "s" },
-                self.local_max
+                "per lane ({} invocations a workgroup, taking chunks of slices as the loop budget allows, \
+                 largest classes first{cap}), classes up to {} by a bucket sort",
+                self.workgroup, self.local_max
             );
         }
         let sort = match self.class_sort {
@@ -438,34 +450,70 @@ impl TransportShape {
         lo
     }
 
-    /// Per lane: how many slices each invocation may take, one after another,
-    /// from the iteration's queue of ranks (`transport_lane.comp`): as many as
-    /// its loop budget allows at the largest class (each slice at its worst,
-    /// and one iteration of the loop over them), at most `most`, at least one;
-    /// and the driver's `threads`, which the workgroups are spread over
-    /// (`groups`).
-    pub fn set_lane_rounds(&mut self, max_class: u32, dims: usize, most: u32, threads: u32) {
-        let worst = Self::lane_iterations(max_class.min(self.local_max), dims).max(max_class) + 1;
-        self.lane_rounds = if self.per_lane { (LANE_BUDGET / worst).min(most).max(1) } else { 1 };
-        self.lane_threads = threads.max(1);
+    /// Per lane: the cap on the rounds of a chunk (`most`, from
+    /// `VulkanOptions::lane_rounds`) and the chunks aimed at (`lane_table`;
+    /// `VulkanOptions::lane_chunks`, or LANE_CHUNKS_PER_THREAD for each of the
+    /// driver's threads); each at least one.
+    pub fn set_lane_rounds(&mut self, most: u32, chunks: u32) {
+        self.lane_rounds = most.max(1);
+        self.lane_chunks = chunks.max(1);
     }
 
-    /// Workgroups of the transport pass for `slices` slices. Per lane: enough
-    /// for every slice if each invocation takes `lane_rounds`, yet at least
-    /// LANE_GROUPS_PER_THREAD for each of `lane_threads` where the slices allow
-    /// (llvmpipe gives each thread one contiguous share of the workgroups; the
-    /// queue hands them all large classes and small alike). As few as that:
-    /// llvmpipe zero-fills an invocation's private arrays (36 KiB at LANE_MAX)
-    /// at every workgroup's start, about 2.6 us for 8 lanes on this project's
-    /// 2-core machine (bench/results/issue16-lane-rounds.txt).
-    pub fn groups(&self, slices: u32) -> u32 {
-        if self.per_lane {
-            let needed = slices.div_ceil(self.workgroup * self.lane_rounds);
-            let spread = (LANE_GROUPS_PER_THREAD * self.lane_threads).min(slices.div_ceil(self.workgroup));
-            needed.max(spread)
-        } else {
-            slices.div_ceil(self.slices_per_group)
+    /// Loop iterations one per-lane invocation spends on a slice of a class of
+    /// `class` at worst: its sort and targets (`lane_iterations`), or where the
+    /// class passes `local_max`, its listing for the large-class stage, plus
+    /// both, since a SIMD driver runs both sides of the branch when its lanes
+    /// differ; and LANE_ROUND_LOOPS for drawing the slice and finding its class.
+    pub fn lane_cost(&self, class: u32, dims: usize) -> u32 {
+        let listed = if class > self.local_max { class } else { 0 };
+        Self::lane_iterations(class.min(self.local_max), dims).saturating_add(listed) + LANE_ROUND_LOOPS
+    }
+
+    /// The per-lane transport's lane table (the first LANE_TABLE_WORDS of
+    /// `SliceOrder`, `glsl/fsot/slice_order.glsl`) for a kernel of `taps` taps
+    /// at `spp` samples per pixel in `dims` dimensions: the lanes of a chunk
+    /// (the workgroup, one subgroup), the chunks aimed at (`lane_chunks`),
+    /// each bin's tier, and each tier's cost
+    /// (`lane_cost` of its largest class) and most rounds (as many as
+    /// LANE_BUDGET holds at that cost, at most `lane_rounds`, at least one).
+    /// A tier is a run of bins, in rank order, whose largest classes cost
+    /// more than half its first's: a chunk of a tier, whatever its classes,
+    /// stays within the loop cap, and spends at least half of what it budgets.
+    pub fn lane_table(&self, taps: u32, spp: u32, dims: usize) -> Vec<u32> {
+        let bins = ORDER_BINS as usize;
+        let tiers = LANE_TIERS as usize;
+        // The largest class of each bin, in taps (0: an empty bin).
+        let mut top = vec![0u32; bins];
+        for class_taps in 1..=taps {
+            let bin = order_bin(class_taps, taps) as usize;
+            top[bin] = top[bin].max(class_taps);
         }
+        let mut tier_of = vec![0u32; bins];
+        let mut cost = vec![1u32; tiers];
+        let mut most = vec![1u32; tiers];
+        let mut used = 0usize;
+        for (bin, &t) in top.iter().enumerate() {
+            if t > 0 {
+                let c = self.lane_cost(t.saturating_mul(spp), dims);
+                if used == 0 || (c <= cost[used - 1] / 2 && used < tiers) {
+                    cost[used] = c;
+                    most[used] = (LANE_BUDGET / c).clamp(1, self.lane_rounds);
+                    used += 1;
+                }
+            }
+            tier_of[bin] = used.saturating_sub(1) as u32;
+        }
+        let mut table = vec![self.workgroup, self.lane_chunks];
+        table.extend(tier_of);
+        table.extend(cost.iter().zip(&most).flat_map(|(&c, &m)| [c, m]));
+        debug_assert_eq!(table.len(), LANE_TABLE_WORDS as usize);
+        table
+    }
+
+    /// Workgroups of the workgroup transport for `slices` slices (the
+    /// per-lane transport's come from its chunk plan, on the device).
+    pub fn groups(&self, slices: u32) -> u32 {
+        slices.div_ceil(self.slices_per_group)
     }
 }
 
@@ -499,51 +547,78 @@ mod tests {
         }
     }
 
+    /// A lane table's parts: lanes, chunks aimed at, each bin's tier, and
+    /// each tier's cost and most rounds.
+    fn table_parts(table: &[u32]) -> (u32, u32, &[u32], Vec<(u32, u32)>) {
+        let bins = ORDER_BINS as usize;
+        let tiers = table[2 + bins..].chunks(2).map(|p| (p[0], p[1])).collect();
+        (table[0], table[1], &table[2..2 + bins], tiers)
+    }
+
     #[test]
-    fn per_lane_invocations_take_several_slices_within_the_loop_budget() {
+    fn the_lane_table_budgets_each_tier_at_its_largest_class() {
         let lavapipe = lavapipe();
-        // The quick benchmark's problem (32x32x16 taa: 2328 slices, classes up
-        // to 1360, d = 2) on 2 threads: two slices an invocation (the heap
-        // sort's worst case at 1360 fits twice), 146 workgroups where 291 took
-        // one each.
+        // The quick benchmark's problem (32x32x16 taa: 1360 taps, d = 2) on 2
+        // threads: chunks of 8 lanes, 8 aimed at; the largest classes' tier
+        // takes two rounds a chunk (the heap sort's worst case at 1360 fits
+        // twice), and a tier of classes of at most a few taps takes hundreds.
         let mut shape = TransportShape::choose(&lavapipe, 1360, 2, 1 << 15, None, None);
         assert!(shape.per_lane);
-        shape.set_lane_rounds(1360, 2, u32::MAX, 2);
-        assert_eq!((shape.lane_rounds, shape.groups(2328)), (2, 146));
-        shape.set_lane_rounds(1360, 2, 1, 2);
-        assert_eq!((shape.lane_rounds, shape.groups(2328)), (1, 291));
-        // Small classes (at most 30, each at worst 375 loop iterations): 159 an
-        // invocation at most, yet 8 workgroups for each thread where the
-        // slices allow, which then take the queue at their own pace.
-        let mut small = TransportShape::choose(&lavapipe, 30, 2, 1 << 15, None, None);
-        assert_eq!(TransportShape::lane_iterations(30, 2), 375);
-        small.set_lane_rounds(30, 2, u32::MAX, 2);
-        assert_eq!(small.lane_rounds, 159);
-        assert_eq!(small.groups(5000), 16);
-        assert_eq!(small.groups(100_000), 79);
-        assert_eq!(small.groups(60), 8, "one slice an invocation at most");
-        small.set_lane_rounds(30, 2, u32::MAX, 16);
-        assert_eq!(small.groups(5000), 128);
-        // Whatever the class, dimension, slices and threads: every slice has an
-        // invocation's slot, and an invocation's slices fit its budget at their
-        // worst (or it takes one, which `choose` budgets).
+        shape.set_lane_rounds(u32::MAX, LANE_CHUNKS_PER_THREAD * 2);
+        let table = shape.lane_table(1360, 1, 2);
+        assert_eq!(table.len(), LANE_TABLE_WORDS as usize);
+        let (lanes, aim, tier_of, tiers) = table_parts(&table);
+        assert_eq!((lanes, aim), (8, 8));
+        assert_eq!(tiers[0], (shape.lane_cost(1360, 2), 2));
+        let last = tier_of[ORDER_BINS as usize - 1] as usize;
+        assert!(tiers[last].1 > 300, "{:?}", tiers[last]);
+        // Capped, to compare: one slice a lane, whatever the tier.
+        shape.set_lane_rounds(1, LANE_CHUNKS_PER_THREAD * 2);
+        let (_, _, _, capped) = table_parts(&shape.lane_table(1360, 1, 2));
+        assert!(capped.iter().all(|&(_, most)| most == 1));
+        // Whatever the kernel, dimension, spp, cap and threads: tiers follow
+        // the bins in rank order; a tier's cost is that of its first bin's
+        // largest class, at least every class's of its bins, more than twice
+        // the next tier's; and its rounds fit the loop budget at that cost (or
+        // are one, which `choose` budgets).
         for dims in 1..=8 {
-            for max_class in [2u32, 16, 100, 744, 1360, 2048, 5000] {
-                let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
-                for (most, threads) in [(1, 2), (3, 1), (u32::MAX, 2), (u32::MAX, 64)] {
-                    shape.set_lane_rounds(max_class, dims, most, threads);
-                    let rounds = shape.lane_rounds;
-                    assert!(rounds >= 1 && rounds <= most, "{dims} {max_class} {most}: {rounds}");
-                    for slices in [1u32, 7, 300, 2328, 100_000] {
-                        assert!(shape.groups(slices) * shape.workgroup * rounds >= slices);
+            for taps in [1u32, 2, 16, 100, 744, 1360, 2048, 5000] {
+                for spp in [1u32, 3] {
+                    let max_class = taps * spp;
+                    let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
+                    for (most, threads) in [(1, 2), (3, 1), (u32::MAX, 2), (u32::MAX, 64)] {
+                        shape.set_lane_rounds(most, LANE_CHUNKS_PER_THREAD * threads);
+                        let table = shape.lane_table(taps, spp, dims);
+                        let (lanes, aim, tier_of, tiers) = table_parts(&table);
+                        let what = format!("d = {dims}, {taps} taps x {spp}, cap {most}, {threads} threads");
+                        assert_eq!(
+                            (lanes, aim),
+                            (shape.workgroup, LANE_CHUNKS_PER_THREAD * threads),
+                            "{what}"
+                        );
+                        assert!(tier_of.windows(2).all(|w| w[1] == w[0] || w[1] == w[0] + 1), "{what}");
+                        for class_taps in 1..=taps {
+                            let tier = tier_of[order_bin(class_taps, taps) as usize] as usize;
+                            let cost = shape.lane_cost(class_taps * spp, dims);
+                            assert!(
+                                cost <= tiers[tier].0,
+                                "{what}: {class_taps} taps cost {cost} > {:?}",
+                                tiers[tier]
+                            );
+                        }
+                        let used = *tier_of.last().unwrap() as usize + 1;
+                        assert_eq!(tiers[0].0, shape.lane_cost(max_class, dims), "{what}");
+                        for (t, &(cost, rounds)) in tiers[..used].iter().enumerate() {
+                            assert!(rounds >= 1 && rounds <= most, "{what}: tier {t}");
+                            assert!(
+                                rounds == 1 || rounds * cost <= LANE_BUDGET,
+                                "{what}: tier {t}: {rounds} x {cost}"
+                            );
+                            if let Some(&(next, _)) = tiers[..used].get(t + 1) {
+                                assert!(2 * next <= cost, "{what}: tier {t} costs {cost}, the next {next}");
+                            }
+                        }
                     }
-                    let worst =
-                        TransportShape::lane_iterations(max_class.min(shape.local_max), dims).max(max_class);
-                    assert!(
-                        rounds == 1 || rounds * (worst + 1) <= LANE_BUDGET,
-                        "d = {dims}, {max_class}: {rounds} x {worst}"
-                    );
-                    assert!(shape.per_lane || rounds == 1);
                 }
             }
         }

@@ -97,6 +97,13 @@ pub(crate) fn lane_rounds() -> Result<Option<u32>> {
     u32_variable("FSOT_LANE_ROUNDS", |n| n >= 1, "a positive integer, or is unset")
 }
 
+/// `FSOT_LANE_CHUNKS=N`: the per-lane transport aims at N chunks of slices an
+/// iteration (a positive integer; the loop budget, and a chunk for each tier,
+/// may make more): to compare; unset: four for each of the host's threads.
+pub(crate) fn lane_chunks() -> Result<Option<u32>> {
+    u32_variable("FSOT_LANE_CHUNKS", |n| n >= 1, "a positive integer, or is unset")
+}
+
 /// The variable `name` as a number that `allowed` accepts; None when unset or
 /// empty; otherwise a clear error saying what it `takes`.
 fn u32_variable(name: &str, allowed: impl Fn(u32) -> bool, takes: &str) -> Result<Option<u32>> {

@@ -168,6 +168,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         local_max: env::local_max()?,
         defer_groups: None,
         lane_rounds: env::lane_rounds()?,
+        lane_chunks: env::lane_chunks()?,
     };
     Ok(RunOptions {
         backend,
