@@ -51,6 +51,24 @@ fn whole_per_lane_run(ctx: &Context, options: VulkanOptions) -> (Vec<f32>, Strin
     (run.mask().unwrap().samples, launch)
 }
 
+/// A per-lane run of `tile` (`taa`, seed 5) whose rounds a lane are capped at
+/// `rounds`, the CPU's draws of its slices, and its kernel's taps.
+fn per_lane_run_and_its_slices(
+    ctx: &Context,
+    tile: Tile,
+    rounds: Option<u32>,
+) -> (VulkanRun, SliceSampler, u32) {
+    let s = settings(5);
+    let options = VulkanOptions {
+        transport: Some(TransportKind::PerLane),
+        lane_rounds: rounds,
+        ..VulkanOptions::default()
+    };
+    let gpu = VulkanRun::new(ctx, tile, s, None, options).unwrap();
+    let kernel = Kernel::new(s.kernel, &tile);
+    (gpu, SliceSampler::new(seed_key(s.seed), tile, &kernel), kernel.taps.len() as u32)
+}
+
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
@@ -59,12 +77,7 @@ fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
         return;
     }
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
-    let s = settings(5);
-    let options = VulkanOptions { transport: Some(TransportKind::PerLane), ..VulkanOptions::default() };
-    let gpu = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
-    let kernel = Kernel::new(s.kernel, &tile);
-    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let taps = kernel.taps.len() as u32;
+    let (gpu, sampler, taps) = per_lane_run_and_its_slices(&ctx, tile, None);
     // Classes whose sizes fall in one of the order's 256 bins may come in any order.
     let bin_width = (taps + 1).div_ceil(256);
     for iteration in [0u32, 7, 31, 32, 39] {

@@ -40,10 +40,10 @@ pub const DEFER_LIMIT: u32 = 8192;
 pub const DEFER_GROUPS: u32 = 65535;
 /// Chunks of the per-lane transport aimed at for each of the driver's threads,
 /// where the slices' costs allow (`lane_table`; each tier adds at most one,
-/// its last, partial): few, since llvmpipe zero-fills an invocation's private
-/// arrays (36 KiB at LANE_MAX) at every workgroup's start, yet more than one,
-/// so that the threads end together. 4 was the fastest of 2, 4 and 8 at
-/// 32x32x16 `taa` on this project's 2-core machine
+/// its last, partial): few, since each workgroup's start costs llvmpipe a few
+/// microseconds (its lanes' private arrays among it), yet more than one, so
+/// that the threads end together. 1 to 4 a thread were alike and 8 to 16
+/// slower at 32x32x16 `taa` on this project's 2-core machine
 /// (bench/results/issue16-lane-chunks.txt).
 pub const LANE_CHUNKS_PER_THREAD: u32 = 4;
 /// Loop iterations of drawing one slice and finding its class, at most, in
