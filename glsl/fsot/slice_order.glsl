@@ -69,8 +69,9 @@ uint fsot_order_rank_at(uint k, uint rank) {
 }
 
 // A slice's bin: bin 0 holds the largest classes (every tap), the last bin the
-// smallest.
+// smallest (src/gpu/layout.rs: order_bin, which the lane table's tiers follow;
+// in 64 bits, for kernels of past 2^24 taps).
 uint fsot_order_bin(FsotSlice s) {
     uint smaller = pc.taps - fsot_class_taps(s);
-    return (smaller * FSOT_ORDER_BINS) / (pc.taps + 1u);
+    return uint((uint64_t(smaller) * FSOT_ORDER_BINS) / uint64_t(pc.taps + 1u));
 }
