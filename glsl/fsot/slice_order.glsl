@@ -22,7 +22,8 @@
 //                                   each tier's cost and most rounds;
 //   [L + k * BINS, ... + BINS)      slices of slot k in each bin;
 //   [L + B * BINS + k * P, ... + P) slot k's chunk plan (fsot_lane_plan_at);
-//   [H + 2 k S, ... + S)            each slice's bin;
+//   [H + 2 k S, ... + S)            each slice's class, in taps (the transport
+//                                   reads it in place of searching the taps);
 //   [H + (2 k + 1) S, ... + S)      the slices in order.
 // B is the batch (FSOT_ORDER_BATCH, the same as src/gpu/run.rs's BATCH). The
 // bins and plans are zero before the ordering passes, which fill slots 0, 1,
@@ -68,10 +69,10 @@ uint fsot_order_rank_at(uint k, uint rank) {
     return FSOT_ORDER_FIXED_WORDS + (2u * k + 1u) * pc.slices + rank;
 }
 
-// A slice's bin: bin 0 holds the largest classes (every tap), the last bin the
-// smallest (src/gpu/layout.rs: order_bin, which the lane table's tiers follow;
-// in 64 bits, for kernels of past 2^24 taps).
-uint fsot_order_bin(FsotSlice s) {
-    uint smaller = pc.taps - fsot_class_taps(s);
+// The bin of a class of `class_taps` taps: bin 0 holds the largest classes
+// (every tap), the last bin the smallest (src/gpu/layout.rs: order_bin, which
+// the lane table's tiers follow; in 64 bits, for kernels of past 2^24 taps).
+uint fsot_order_bin(uint class_taps) {
+    uint smaller = pc.taps - class_taps;
     return uint((uint64_t(smaller) * FSOT_ORDER_BINS) / uint64_t(pc.taps + 1u));
 }

@@ -1,8 +1,8 @@
 #version 450
 // The slice order's first pass (slice_order.glsl): one invocation per slice of
 // each iteration of the batch (workgroup row k: iteration pc.iteration + k)
-// draws the slice, records its class-size bin and counts it there. The bins must
-// be zero before. Run on CPU implementations only: the class size's binary
+// draws the slice, records its class's size in taps (which the transport reads)
+// and counts it in its bin. The bins must be zero before. Run on CPU implementations only: the class size's binary
 // search reads the taps through their texel view.
 #define FSOT_TEXEL_READS
 #include "bindings.glsl"
@@ -17,8 +17,8 @@ void main() {
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     for (uint slice = gl_GlobalInvocationID.x; slice < pc.slices; slice += stride) {
         FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration + k, slice, pc.dims, pc.width, pc.height, pc.frames);
-        uint bin = fsot_order_bin(s);
-        slice_order[fsot_order_key_at(k, slice)] = bin;
-        atomicAdd(slice_order[fsot_order_bin_at(k, bin)], 1u);
+        uint class_taps = fsot_class_taps(s);
+        slice_order[fsot_order_key_at(k, slice)] = class_taps;
+        atomicAdd(slice_order[fsot_order_bin_at(k, fsot_order_bin(class_taps))], 1u);
     }
 }

@@ -65,7 +65,7 @@ void main() {
     }
     barrier();
     for (uint slice = gl_LocalInvocationIndex; slice < pc.slices; slice += gl_WorkGroupSize.x) {
-        uint rank = atomicAdd(next_rank[slice_order[fsot_order_key_at(k, slice)]], 1u);
+        uint rank = atomicAdd(next_rank[fsot_order_bin(slice_order[fsot_order_key_at(k, slice)])], 1u);
         slice_order[fsot_order_rank_at(k, rank)] = slice;
     }
 }

@@ -273,7 +273,7 @@ impl VulkanRun {
         }
         self.ctx.submit(|cmd| self.record_slice_order(cmd, iteration, 1))?;
         // Slot 0: its ranks follow the lane table, every slot's bins and
-        // plan, and its own slices' bins.
+        // plan, and its own slices' classes.
         let first = (ORDER_FIXED_WORDS + self.slices) as usize;
         let bytes = ((first + self.slices as usize) * 4) as u64;
         let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
