@@ -123,9 +123,10 @@ fn the_chunk_plan_gives_every_rank_to_one_chunk_within_the_loop_budget() {
     // The ordering's second pass shares each iteration's ranks out in chunks,
     // tier by tier: every rank in exactly one chunk, every chunk's lanes within
     // the loop budget at the classes its ranks actually hold (the CPU's own
-    // draws), a workgroup dispatched for every chunk, and far fewer chunks
-    // than slices. At 16x16x8 (1 and 3 spp: classes past LANE_MAX in the second,
-    // and at d = 3, where the f64 targets make a slice dear) and 32x32x16.
+    // draws), a workgroup dispatched for every chunk, and at most half as many
+    // chunks as workgroups of one slice a lane. At 16x16x8 (1 and 3 spp: classes
+    // past LANE_MAX in the second, and at d = 3, where the f64 targets make a
+    // slice dear), 32x32x16, and 32x32x16 with rounds capped at 3.
     let Some(ctx) = common::gpu_context() else { return };
     if !takes_the_per_lane_transport(&ctx) {
         return;
