@@ -16,7 +16,7 @@ use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
     lane_dispatch_offset, slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush,
     RuleState, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, LANE_TABLE_WORDS, LANE_TIERS,
-    ORDER_BATCH, ORDER_BINS, ORDER_FIXED_WORDS, ORDER_HEAD_WORDS,
+    ORDER_BATCH, ORDER_BINS, ORDER_FIXED_WORDS, ORDER_HEAD_WORDS, ORDER_SLICES_PER_INVOCATION,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
@@ -257,7 +257,7 @@ impl VulkanRun {
         let table = LANE_TABLE_WORDS as u64 * 4;
         zero(&self.ctx, cmd, &self.buffers.slice_order, table, ORDER_HEAD_WORDS as u64 * 4);
         barrier(&self.ctx, cmd);
-        let groups = self.slices.div_ceil(64).clamp(1, 65535);
+        let groups = self.slices.div_ceil(64 * ORDER_SLICES_PER_INVOCATION).clamp(1, 65535);
         count_pass.dispatch(cmd, 0, [groups, count, 1], bytemuck::bytes_of(&push));
         barrier(&self.ctx, cmd);
         place_pass.dispatch(cmd, 0, [1, count, 1], bytemuck::bytes_of(&push));
