@@ -116,10 +116,29 @@ pub const ORDER_HEAD_WORDS: u32 = ORDER_BATCH * (ORDER_BINS + LANE_PLAN_WORDS);
 /// Words of `SliceOrder` before its per-slot regions.
 pub const ORDER_FIXED_WORDS: u32 = LANE_TABLE_WORDS + ORDER_HEAD_WORDS;
 
+/// The word of `SliceOrder` where slot `slot`'s chunk plan starts
+/// (`fsot_lane_plan_at`): its queue, then its dispatch (x, y, z), then its
+/// chunks.
+pub fn lane_plan_word(slot: u32) -> u32 {
+    LANE_TABLE_WORDS + ORDER_BATCH * ORDER_BINS + slot * LANE_PLAN_WORDS
+}
+
+/// The word of `SliceOrder` where tier `tier` of slot `slot`'s plan starts
+/// (`fsot_lane_tier_at`): its first chunk, first rank, slices and rounds.
+pub fn lane_tier_word(slot: u32, tier: u32) -> u32 {
+    lane_plan_word(slot) + 8 + 4 * tier
+}
+
+/// The word of the lane table holding tier `tier`'s cost, its most rounds
+/// next (`fsot_lane_table_cost`).
+pub fn lane_table_cost_word(tier: u32) -> u32 {
+    2 + ORDER_BINS + 2 * tier
+}
+
 /// Byte offset in `SliceOrder` of slot `slot`'s transport dispatch (x, y, z),
 /// which the ordering's second pass writes.
 pub fn lane_dispatch_offset(slot: u32) -> u64 {
-    (LANE_TABLE_WORDS + ORDER_BATCH * ORDER_BINS + slot * LANE_PLAN_WORDS + 1) as u64 * 4
+    (lane_plan_word(slot) + 1) as u64 * 4
 }
 
 /// The slice order's bin of a class of `class_taps` of `taps` taps: bin 0 holds

@@ -14,9 +14,10 @@ use ash::vk;
 
 use super::buffers::{LargePlan, RunBuffers};
 use super::layout::{
-    lane_dispatch_offset, slice_order_slots, slice_order_words, CostSlot, LargeMetaHead, PlateauPush,
-    RuleState, TransportPush, UpdatePush, ARG_GATHER, ARG_SEGMENTS, COST_SCALE, LANE_TABLE_WORDS, LANE_TIERS,
-    ORDER_BATCH, ORDER_BINS, ORDER_FIXED_WORDS, ORDER_HEAD_WORDS, ORDER_SLICES_PER_INVOCATION,
+    lane_dispatch_offset, lane_plan_word, lane_table_cost_word, lane_tier_word, slice_order_slots,
+    slice_order_words, CostSlot, LargeMetaHead, PlateauPush, RuleState, TransportPush, UpdatePush,
+    ARG_GATHER, ARG_SEGMENTS, COST_SCALE, LANE_TABLE_WORDS, LANE_TIERS, ORDER_BATCH, ORDER_FIXED_WORDS,
+    ORDER_HEAD_WORDS, ORDER_SLICES_PER_INVOCATION,
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
@@ -278,23 +279,22 @@ impl VulkanRun {
         let bytes = ((first + self.slices as usize) * 4) as u64;
         let parts = download_batch(&self.ctx, &[(&self.buffers.slice_order, bytes)], None)?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&parts[0]);
-        let plan = (LANE_TABLE_WORDS + ORDER_BATCH * ORDER_BINS) as usize;
-        let tier = |t: usize| {
-            let at = plan + 8 + 4 * t;
-            let cost = words[2 + ORDER_BINS as usize + 2 * t];
+        let plan = lane_plan_word(0) as usize;
+        let tier = |t: u32| {
+            let at = lane_tier_word(0, t) as usize;
             LaneTier {
                 first_chunk: words[at],
                 first_rank: words[at + 1],
                 slices: words[at + 2],
                 rounds: words[at + 3],
-                cost,
+                cost: words[lane_table_cost_word(t) as usize],
             }
         };
         Ok(Some(LaneOrder {
             ranks: words[first..].to_vec(),
             dispatch: [words[plan + 1], words[plan + 2], words[plan + 3]],
             chunks: words[plan + 4],
-            tiers: (0..LANE_TIERS as usize).map(tier).filter(|t| t.slices > 0).collect(),
+            tiers: (0..LANE_TIERS).map(tier).filter(|t| t.slices > 0).collect(),
         }))
     }
 

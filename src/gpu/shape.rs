@@ -570,6 +570,8 @@ mod tests {
         let (lanes, aim, tier_of, tiers) = table_parts(&table);
         assert_eq!((lanes, aim), (8, 8));
         assert_eq!(tiers[0], (shape.lane_cost(1360, 2), 2));
+        // Where the shaders (and `VulkanRun::slice_order`) read a tier's cost.
+        assert_eq!(table[crate::gpu::layout::lane_table_cost_word(1) as usize], tiers[1].0);
         let last = tier_of[ORDER_BINS as usize - 1] as usize;
         assert!(tiers[last].1 > 300, "{:?}", tiers[last]);
         // Capped, to compare: one slice a lane, whatever the tier.
