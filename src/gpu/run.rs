@@ -128,7 +128,7 @@ impl VulkanRun {
         // The driver's threads, for a CPU implementation: as many as the host's.
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
         let chunks = options.lane_chunks.unwrap_or(LANE_CHUNKS_PER_THREAD * threads);
-        shape.set_lane_rounds(options.lane_rounds.unwrap_or(u32::MAX), chunks);
+        shape.set_lane_plan(options.lane_rounds.unwrap_or(u32::MAX), chunks);
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);

@@ -127,7 +127,7 @@ pub struct TransportShape {
     /// Workgroups of that second pass at most (DEFER_GROUPS; less in tests).
     pub defer_groups: u32,
     /// Per lane: the rounds of a chunk at most, each a slice a lane
-    /// (`set_lane_rounds`; `lane_table`: u32::MAX unless capped to compare).
+    /// (`set_lane_plan`; `lane_table`: u32::MAX unless capped to compare).
     pub lane_rounds: u32,
     /// Per lane: the chunks of slices aimed at an iteration (`lane_table`).
     pub lane_chunks: u32,
@@ -450,11 +450,12 @@ impl TransportShape {
         lo
     }
 
-    /// Per lane: the cap on the rounds of a chunk (`most`, from
-    /// `VulkanOptions::lane_rounds`) and the chunks aimed at (`lane_table`;
-    /// `VulkanOptions::lane_chunks`, or LANE_CHUNKS_PER_THREAD for each of the
-    /// driver's threads); each at least one.
-    pub fn set_lane_rounds(&mut self, most: u32, chunks: u32) {
+    /// Per lane, what the chunk plan is asked for (`lane_table`): the cap on
+    /// the rounds of a chunk (`most`, from `VulkanOptions::lane_rounds`) and
+    /// the chunks aimed at (`VulkanOptions::lane_chunks`, or
+    /// LANE_CHUNKS_PER_THREAD for each of the driver's threads); each at least
+    /// one.
+    pub fn set_lane_plan(&mut self, most: u32, chunks: u32) {
         self.lane_rounds = most.max(1);
         self.lane_chunks = chunks.max(1);
     }
@@ -564,7 +565,7 @@ mod tests {
         // twice), and a tier of classes of at most a few taps takes hundreds.
         let mut shape = TransportShape::choose(&lavapipe, 1360, 2, 1 << 15, None, None);
         assert!(shape.per_lane);
-        shape.set_lane_rounds(u32::MAX, LANE_CHUNKS_PER_THREAD * 2);
+        shape.set_lane_plan(u32::MAX, LANE_CHUNKS_PER_THREAD * 2);
         let table = shape.lane_table(1360, 1, 2);
         assert_eq!(table.len(), LANE_TABLE_WORDS as usize);
         let (lanes, aim, tier_of, tiers) = table_parts(&table);
@@ -575,7 +576,7 @@ mod tests {
         let last = tier_of[ORDER_BINS as usize - 1] as usize;
         assert!(tiers[last].1 > 300, "{:?}", tiers[last]);
         // Capped, to compare: one slice a lane, whatever the tier.
-        shape.set_lane_rounds(1, LANE_CHUNKS_PER_THREAD * 2);
+        shape.set_lane_plan(1, LANE_CHUNKS_PER_THREAD * 2);
         let (_, _, _, capped) = table_parts(&shape.lane_table(1360, 1, 2));
         assert!(capped.iter().all(|&(_, most)| most == 1));
         // Whatever the kernel, dimension, spp, cap and threads: tiers follow
@@ -589,7 +590,7 @@ mod tests {
                     let max_class = taps * spp;
                     let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
                     for (most, threads) in [(1, 2), (3, 1), (u32::MAX, 2), (u32::MAX, 64)] {
-                        shape.set_lane_rounds(most, LANE_CHUNKS_PER_THREAD * threads);
+                        shape.set_lane_plan(most, LANE_CHUNKS_PER_THREAD * threads);
                         let table = shape.lane_table(taps, spp, dims);
                         let (lanes, aim, tier_of, tiers) = table_parts(&table);
                         let what = format!("d = {dims}, {taps} taps x {spp}, cap {most}, {threads} threads");
