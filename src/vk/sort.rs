@@ -134,33 +134,42 @@ pub struct SortShape {
 }
 
 impl SortShape {
-    /// The first of (256 x 16), (256 x 8), (128 x 16), (64 x 32) invocations x
-    /// items (a multiple of the scatter's 8 keys per round) whose scatter fits in
-    /// shared memory (per-subgroup digit counters, four digit tables, the staged
-    /// block); the subgroup size is the device's, never assumed. Larger blocks
+    /// The first of (256 x 16), (256 x 8), (128 x 16), (64 x 32), (32 x 32)
+    /// invocations x items (a multiple of the scatter's 8 keys per round) whose
+    /// scatter fits in shared memory (per-subgroup digit counters, four digit
+    /// tables, the staged block); the subgroup size is the device's, never
+    /// assumed. Lavapipe's 32 KiB takes 64 x 32 with its 8 lanes (256-bit
+    /// vectors), 32 x 32 with 4 (128-bit vectors, as on ARM64: 1024-pair
+    /// blocks, so at most 4M pairs). Not more than 32 items: lavapipe (Mesa
+    /// 22.3) sorts wrongly with 48, 56 or 64, even 100 pairs in one workgroup.
+    /// Larger blocks
     /// mean fewer blocks, a smaller histogram and scan, and less fixed work per
     /// pair, but only pay when there are enough pairs to fill the device (on an
     /// H100: 7.1 against 6.45 G pairs/s at 16M, 3.9 against 4.7 at 1M), so
     /// 4096-pair blocks are for capacities from 4M.
     pub fn for_device(ctx: &Context, capacity: u32) -> Result<Self> {
         let info = ctx.info();
-        let sub = info.subgroup_size.max(1);
+        Self::for_limits(info.subgroup_size, info.max_workgroup_invocations, info.max_shared_memory, capacity)
+    }
+
+    /// `for_device` for a device of these limits.
+    pub fn for_limits(subgroup: u32, max_workgroup: u32, max_shared: u32, capacity: u32) -> Result<Self> {
+        let sub = subgroup.max(1);
         let candidates: &[(u32, u32)] = if capacity >= 1 << 22 {
-            &[(256, 16), (256, 8), (128, 16), (64, 32)]
+            &[(256, 16), (256, 8), (128, 16), (64, 32), (32, 32)]
         } else {
-            &[(256, 8), (128, 16), (64, 32)]
+            &[(256, 8), (128, 16), (64, 32), (32, 32)]
         };
         for &(wg, items) in candidates {
             let subgroups = wg.div_ceil(sub);
             let block = wg * items;
             let shared = subgroups * 256 * 4 + 4 * 256 * 4 + block * 8;
-            if wg <= info.max_workgroup_invocations && shared <= info.max_shared_memory {
+            if wg <= max_workgroup && shared <= max_shared {
                 return Ok(Self { workgroup: wg, items, subgroups, block });
             }
         }
         Err(Error::VulkanUnavailable(format!(
-            "the radix sort does not fit this device's limits (subgroup {sub}, shared memory {} bytes)",
-            info.max_shared_memory
+            "the radix sort does not fit this device's limits (subgroup {sub}, shared memory {max_shared} bytes)"
         )))
     }
 }
@@ -551,5 +560,26 @@ pub fn float_key(f: f32) -> u32 {
         !b
     } else {
         b | 0x8000_0000
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_sort_takes_the_largest_block_whose_scatter_fits_the_devices_shared_memory() {
+        let shape = |sub, shared, capacity| SortShape::for_limits(sub, 1024, shared, capacity).ok();
+        let is =
+            |wg, items, subgroups| Some(SortShape { workgroup: wg, items, subgroups, block: wg * items });
+        // Lavapipe (32 KiB): 8 lanes on 256-bit vectors, 4 on 128-bit ones (ARM64).
+        assert_eq!(shape(8, 32768, 1 << 20), is(64, 32, 8));
+        assert_eq!(shape(4, 32768, 1 << 20), is(32, 32, 8));
+        // 48 KiB and 32 lanes (NVIDIA); 4096-pair blocks for large sorts only.
+        assert_eq!(shape(32, 49152, 1 << 20), is(256, 8, 8));
+        assert_eq!(shape(32, 49152, 1 << 24), is(256, 16, 8));
+        // Too little shared memory for any block: a clear refusal.
+        let err = SortShape::for_limits(4, 1024, 16384, 1 << 20).unwrap_err().to_string();
+        assert!(err.contains("subgroup 4") && err.contains("16384"), "{err}");
     }
 }
