@@ -140,10 +140,13 @@ impl SortShape {
     /// tables, the staged block); the subgroup size is the device's, never
     /// assumed. Lavapipe's 32 KiB takes 64 x 32 with its 8 lanes (256-bit
     /// vectors), 32 x 32 with 4 (128-bit vectors, as on ARM64: 1024-pair
-    /// blocks, so at most 4M pairs). Not more than 32 items: with 48, 56 or 64
-    /// lavapipe (Mesa 22.3) sorts wrongly, even 100 pairs in one workgroup
-    /// (whether the driver or the shaders are at fault is not known; 32 items
-    /// and fewer pass every sort test at 4, 8 and 16 lanes). Larger blocks
+    /// blocks, so at most 4M pairs). Not more than 32 items: with 40 to 64
+    /// lavapipe (Mesa 22.3) sorts wrongly, even 100 pairs in one workgroup, a
+    /// payload coming out holding a key, as if an invocation's key and payload
+    /// arrays overlapped; no validation message, and the same shaders with
+    /// their item loops not unrolled sort right at 32, so the driver's handling
+    /// of larger private arrays is the suspect, not shown. 32 items and fewer
+    /// pass every sort test at 4, 8 and 16 lanes. Larger blocks
     /// mean fewer blocks, a smaller histogram and scan, and less fixed work per
     /// pair, but only pay when there are enough pairs to fill the device (on an
     /// H100: 7.1 against 6.45 G pairs/s at 16M, 3.9 against 4.7 at 1M), so
