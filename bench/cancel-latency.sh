@@ -8,7 +8,7 @@
 set -euo pipefail
 old=$(realpath "$1"); new=$(realpath "$2"); out=$3
 cd "$(dirname "$0")/.."
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 WAIT=${WAIT:-20}
 ROUNDS=${ROUNDS:-3}

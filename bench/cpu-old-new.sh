@@ -26,7 +26,7 @@ backend=${BACKEND:-cpu}
 flags=(--backend "$backend")
 if [ "$backend" = vulkan ]; then
   flags+=(--deterministic)
-  export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+  export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
   export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 fi
 head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"

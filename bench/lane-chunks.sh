@@ -16,7 +16,7 @@ out=${3:?usage: bench/lane-chunks.sh OLD_BIN NEW_BIN OUT_FILE [CHUNKS...]}
 shift 3
 chunks=("$@")
 [ ${#chunks[@]} -gt 0 ] || chunks=(4 8 16 32)
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)
 hog=

@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 old=${1:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
 new=${2:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
 out=${3:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)
 hog=

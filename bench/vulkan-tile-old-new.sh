@@ -9,7 +9,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 usage="usage: bench/vulkan-tile-old-new.sh OLD_BIN NEW_BIN OUT_FILE SIZE KERNEL ITERATIONS"
 old=${1:?$usage}; new=${2:?$usage}; out=${3:?$usage}; size=${4:?$usage}; kernel=${5:?$usage}; iterations=${6:?$usage}
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --quiet --example same_samples
 compare=$(realpath target/release/examples/same_samples)

@@ -13,7 +13,7 @@ old=$(realpath "${1:?usage: bench/workgroup-transport-old-new.sh OLD_BIN NEW_BIN
 new=$(realpath "${2:?usage: bench/workgroup-transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}")
 out=${3:?usage: bench/workgroup-transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}
 rounds=${ROUNDS:-3}
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.x86_64.json}"
+export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --quiet --example same_samples
 compare=$(realpath target/release/examples/same_samples)
