@@ -178,7 +178,7 @@ fn the_chunk_plan_gives_every_rank_to_one_chunk_within_the_loop_budget() {
             // Chunks hold as many rounds as the iteration's share allows: each
             // full chunk of a tier the budget or the cap does not hold back
             // carries more than half the share (total cost / chunks aimed at),
-            // so fewer than twice the chunks aimed at are full ones, whatever
+            // so at most twice the chunks aimed at are full ones, whatever
             // the lanes (8 on x86 lavapipe, 4 where its vectors are 128 bits).
             let held = |t: &LaneTier| Some(t.rounds) == rounds || (t.rounds + 1) * t.cost > LANE_BUDGET;
             let full: u32 =
