@@ -16,25 +16,12 @@ out=${3:?usage: bench/lane-chunks.sh OLD_BIN NEW_BIN OUT_FILE [CHUNKS...]}
 shift 3
 chunks=("$@")
 [ ${#chunks[@]} -gt 0 ] || chunks=(4 8 16 32)
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
-export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-work=$(mktemp -d)
-hog=
-cleanup() { [ -n "$hog" ] && kill "$hog" 2>/dev/null; rm -rf "$work"; }
-trap cleanup EXIT
-transport() { # ENV... BIN: transport ms per iteration
-  env FSOT_FLOAT_ATOMICS=1 "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 \
-    --iterations 192 --profile --out "$work/m.exr" 2>&1 | grep -o 'transport [0-9.]* ms' | awk '{print $2}'
-}
-median() { sort -g "$1" | awk '{a[NR]=$1} END {print (a[NR/2]+a[NR/2+1])/2}'; }
+. bench/lib/lane-transport.sh
 {
   echo "# bench/lane-chunks.sh: old $old, new $new, commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
   names=(old default "${chunks[@]/#/chunks=}")
   for setting in calm noisy; do
-    if [ "$setting" = noisy ]; then
-      taskset -c 1 sh -c 'while :; do :; done' &
-      hog=$!
-    fi
+    [ "$setting" = noisy ] && start_hog
     for n in "${names[@]}"; do : > "$work/$n"; done
     for round in 1 2 3 4 5 6; do
       line="$setting, round $round:"
@@ -52,6 +39,6 @@ median() { sort -g "$1" | awk '{a[NR]=$1} END {print (a[NR/2]+a[NR/2+1])/2}'; }
     line="$setting: medians"
     for n in "${names[@]}"; do line="$line, $n $(median "$work/$n")"; done
     echo "$line ms"
-    if [ -n "$hog" ]; then kill "$hog"; hog=; fi
+    stop_hog
   done
 } | tee "$out"

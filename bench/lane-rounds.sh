@@ -13,17 +13,7 @@ cd "$(dirname "$0")/.."
 old=${1:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
 new=${2:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
 out=${3:?usage: bench/lane-rounds.sh OLD_BIN NEW_BIN OUT_FILE}
-export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
-export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-work=$(mktemp -d)
-hog=
-cleanup() { [ -n "$hog" ] && kill "$hog" 2>/dev/null; rm -rf "$work"; }
-trap cleanup EXIT
-transport() { # ENV... BIN: transport ms per iteration
-  env "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 192 \
-    --profile --out "$work/m.exr" 2>&1 | grep -o 'transport [0-9.]* ms' | awk '{print $2}'
-}
-median() { sort -g "$1" | awk '{a[NR]=$1} END {print (a[NR/2]+a[NR/2+1])/2}'; }
+. bench/lib/lane-transport.sh
 shape() { env "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 2 \
     --profile --out "$work/m.exr" 2>&1 | grep 'transport: '; }
 {
@@ -32,18 +22,15 @@ shape() { env "$@" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel t
   echo "# new, FSOT_LANE_ROUNDS=1: $(shape FSOT_FLOAT_ATOMICS=1 FSOT_LANE_ROUNDS=1 "$new")"
   echo "# old: $(shape FSOT_FLOAT_ATOMICS=1 "$old")"
   for setting in calm noisy; do
-    if [ "$setting" = noisy ]; then
-      taskset -c 1 sh -c 'while :; do :; done' &
-      hog=$!
-    fi
+    [ "$setting" = noisy ] && start_hog
     : > "$work/old"; : > "$work/one"; : > "$work/new"
     for round in 1 2 3 4 5 6; do
-      o=$(transport FSOT_FLOAT_ATOMICS=1 "$old"); echo "$o" >> "$work/old"
-      r=$(transport FSOT_FLOAT_ATOMICS=1 FSOT_LANE_ROUNDS=1 "$new"); echo "$r" >> "$work/one"
-      n=$(transport FSOT_FLOAT_ATOMICS=1 "$new"); echo "$n" >> "$work/new"
+      o=$(transport "$old"); echo "$o" >> "$work/old"
+      r=$(transport FSOT_LANE_ROUNDS=1 "$new"); echo "$r" >> "$work/one"
+      n=$(transport "$new"); echo "$n" >> "$work/new"
       echo "$setting, round $round: old $o, new with FSOT_LANE_ROUNDS=1 $r, new $n ms per iteration"
     done
     echo "$setting: median old $(median "$work/old") ms, new with FSOT_LANE_ROUNDS=1 $(median "$work/one") ms, new $(median "$work/new") ms"
-    if [ -n "$hog" ]; then kill "$hog"; hog=; fi
+    stop_hog
   done
 } | tee "$out"
