@@ -4,7 +4,7 @@
 mod common;
 
 use fsot::rng::{derive, Stream};
-use fsot::vk::sort::float_key;
+use fsot::vk::sort::{float_key, SortShape};
 use fsot::vk::{RadixSort, SortCount, SortPath};
 
 fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
@@ -36,7 +36,7 @@ fn sorts_like_the_cpu_at_awkward_sizes() {
     let Some(ctx) = common::gpu_context() else {
         return;
     };
-    // Up to 4M + 1 pairs, or the device's most (4M with lavapipe's 4 lanes).
+    // Up to 4M + 1 pairs, or the device's most.
     let most = RadixSort::max_capacity(&ctx).min((1 << 22) + 1);
     let mut sort = RadixSort::new(&ctx, most, SortCount::Host).unwrap();
     let mut rng = Stream::new(derive(5, 5));
@@ -174,5 +174,53 @@ fn every_path_sorts_stably_by_any_number_of_low_bits() {
             }
         }
     }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
+    // Every workgroup x items the device fits, not only the one it is given:
+    // 8 to 64 items an invocation, blocks of 64 to 4096 pairs (a shape's arrays
+    // are sized by its items: a fixed size once broke every shape past 32). Each
+    // path, at sizes around one block, several, the tail scan's last and the
+    // scan's two levels' limit for the smallest blocks (64 x 64 / 256 x 64).
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let info = ctx.info().clone();
+    let fits = |wg: u32, items: u32| {
+        SortShape::fits(wg, items, info.subgroup_size, info.max_workgroup_invocations, info.max_shared_memory)
+    };
+    let lanes = info.subgroup_size;
+    let shapes: Vec<SortShape> =
+        [(lanes, 8), (lanes, 40), (lanes, 64), (2 * lanes, 24), (4 * lanes, 32), (256, 16)]
+            .into_iter()
+            .filter_map(|(wg, items)| fits(wg, items))
+            .collect();
+    assert!(shapes.iter().any(|s| s.items > 32), "no shape past 32 items fits {}", info.name);
+    let mut rng = Stream::new(derive(11, 11));
+    for shape in shapes {
+        let block = shape.block;
+        let tail_max = fsot::vk::sort::TAIL_MAX_BLOCKS * block;
+        let capacity = shape.scan_capacity().min(3 * tail_max as u64 + 7) as u32;
+        let mut sort = RadixSort::with_shape(&ctx, capacity, SortCount::Host, shape).unwrap();
+        let mut sizes = vec![1, block - 1, block + 1, 3 * block + 5, tail_max, tail_max + 1, capacity];
+        sizes.retain(|&n| n <= capacity);
+        for path in [SortPath::Single, SortPath::Tail, SortPath::Blocks] {
+            sort.path = path;
+            for &n in &sizes {
+                if path == SortPath::Single && n > 20 * block {
+                    continue; // one workgroup: slow on lavapipe past a few blocks
+                }
+                let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() & 0xff0f_f0ff).collect();
+                let what = format!("{} x {} items, {path:?}", shape.workgroup, shape.items);
+                check(&mut sort, keys, &what);
+            }
+        }
+    }
+    // A shape the device cannot run is refused, not run.
+    let too_big = SortShape { workgroup: 32, items: 4096, subgroups: 32 / lanes, block: 32 * 4096 };
+    assert!(RadixSort::with_shape(&ctx, 1000, SortCount::Host, too_big).is_err());
     common::assert_no_validation_messages(&ctx);
 }

@@ -9,7 +9,7 @@ void main() {
     uint tid = gl_LocalInvocationID.x;
     uint n = 256u * radix_blocks();
     uint base = gl_WorkGroupID.x * block_size() + tid * ITEMS;
-    uint local[32];
+    uint local[ITEMS];
     uint sum = 0u;
     for (uint it = 0u; it < ITEMS; ++it) {
         uint i = base + it;

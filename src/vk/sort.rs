@@ -134,23 +134,15 @@ pub struct SortShape {
 }
 
 impl SortShape {
-    /// The first of (256 x 16), (256 x 8), (128 x 16), (64 x 32), (32 x 32)
-    /// invocations x items (a multiple of the scatter's 8 keys per round) whose
-    /// scatter fits in shared memory (per-subgroup digit counters, four digit
-    /// tables, the staged block); the subgroup size is the device's, never
-    /// assumed. Lavapipe's 32 KiB takes 64 x 32 with its 8 lanes (256-bit
-    /// vectors), 32 x 32 with 4 (128-bit vectors, as on ARM64: 1024-pair
-    /// blocks, so at most 4M pairs). Not more than 32 items: with 40 to 64
-    /// lavapipe (Mesa 22.3) sorts wrongly, even 100 pairs in one workgroup, a
-    /// payload coming out holding a key, as if an invocation's key and payload
-    /// arrays overlapped; no validation message, and the same shaders with
-    /// their item loops not unrolled sort right at 32, so the driver's handling
-    /// of larger private arrays is the suspect, not shown. 32 items and fewer
-    /// pass every sort test at 4, 8 and 16 lanes. Larger blocks
-    /// mean fewer blocks, a smaller histogram and scan, and less fixed work per
-    /// pair, but only pay when there are enough pairs to fill the device (on an
-    /// H100: 7.1 against 6.45 G pairs/s at 16M, 3.9 against 4.7 at 1M), so
-    /// 4096-pair blocks are for capacities from 4M.
+    /// The first of (256 x 16), (256 x 8), (128 x 16), (64 x 32), (32 x 64),
+    /// (32 x 32) invocations x items whose scatter fits in shared memory
+    /// (`fits`); the subgroup size is the device's, never assumed. Lavapipe's
+    /// 32 KiB takes 64 x 32 with its 8 lanes (256-bit vectors) and 32 x 64 with
+    /// 4 (128-bit vectors, as on ARM64): 2048-pair blocks either way. Larger
+    /// blocks mean fewer blocks, a smaller histogram and scan, and less fixed
+    /// work per pair, but only pay when there are enough pairs to fill the
+    /// device (on an H100: 7.1 against 6.45 G pairs/s at 16M, 3.9 against 4.7
+    /// at 1M), so 4096-pair blocks are for capacities from 4M.
     pub fn for_device(ctx: &Context, capacity: u32) -> Result<Self> {
         let info = ctx.info();
         Self::for_limits(info.subgroup_size, info.max_workgroup_invocations, info.max_shared_memory, capacity)
@@ -158,23 +150,52 @@ impl SortShape {
 
     /// `for_device` for a device of these limits.
     pub fn for_limits(subgroup: u32, max_workgroup: u32, max_shared: u32, capacity: u32) -> Result<Self> {
-        let sub = subgroup.max(1);
         let candidates: &[(u32, u32)] = if capacity >= 1 << 22 {
-            &[(256, 16), (256, 8), (128, 16), (64, 32), (32, 32)]
+            &[(256, 16), (256, 8), (128, 16), (64, 32), (32, 64), (32, 32)]
         } else {
-            &[(256, 8), (128, 16), (64, 32), (32, 32)]
+            &[(256, 8), (128, 16), (64, 32), (32, 64), (32, 32)]
         };
-        for &(wg, items) in candidates {
-            let subgroups = wg.div_ceil(sub);
-            let block = wg * items;
-            let shared = subgroups * 256 * 4 + 4 * 256 * 4 + block * 8;
-            if wg <= max_workgroup && shared <= max_shared {
-                return Ok(Self { workgroup: wg, items, subgroups, block });
-            }
-        }
-        Err(Error::VulkanUnavailable(format!(
-            "the radix sort does not fit this device's limits (subgroup {sub}, shared memory {max_shared} bytes)"
-        )))
+        candidates
+            .iter()
+            .find_map(|&(wg, items)| Self::fits(wg, items, subgroup, max_workgroup, max_shared))
+            .ok_or_else(|| {
+                Error::VulkanUnavailable(format!(
+                    "the radix sort does not fit this device's limits (subgroup {}, shared memory {max_shared} bytes)",
+                    subgroup.max(1)
+                ))
+            })
+    }
+
+    /// `workgroup` invocations of `items` pairs each, if a device of these limits
+    /// runs it: whole subgroups (the ranking walks a block subgroup by
+    /// subgroup), items a positive multiple of the scatter's 8 keys per round,
+    /// the workgroup within the device's, and the scatter's shared memory (digit
+    /// counters per subgroup, four digit tables, the staged block) within its.
+    pub fn fits(
+        workgroup: u32,
+        items: u32,
+        subgroup: u32,
+        max_workgroup: u32,
+        max_shared: u32,
+    ) -> Option<Self> {
+        let subgroup = subgroup.max(1);
+        let subgroups = workgroup / subgroup;
+        let block = workgroup.checked_mul(items)?;
+        let shared = subgroups as u64 * 256 * 4 + 4 * 256 * 4 + block as u64 * 8;
+        let ok = workgroup > 0
+            && workgroup % subgroup == 0
+            && items > 0
+            && items % 8 == 0
+            && workgroup <= max_workgroup
+            && shared <= max_shared as u64;
+        ok.then_some(Self { workgroup, items, subgroups, block })
+    }
+
+    /// The most pairs one sort of this shape can take: the scan's two levels
+    /// cover block x block / 256 blocks.
+    pub fn scan_capacity(&self) -> u64 {
+        let block = self.block as u64;
+        (block * block / 256) * block
     }
 }
 
@@ -210,21 +231,45 @@ impl RadixSort {
     /// Largest capacity: the scan's two levels cover block x block / 256 blocks,
     /// and each key buffer must fit one binding.
     pub fn max_capacity(ctx: &Context) -> u32 {
-        let block = SortShape::for_device(ctx, u32::MAX).map(|s| s.block).unwrap_or(2048) as u64;
-        let by_scan = (block * block / 256) * block;
+        let by_scan = SortShape::for_device(ctx, u32::MAX).map(|s| s.scan_capacity()).unwrap_or(1 << 24);
+        Self::capacity_limit(ctx, by_scan)
+    }
+
+    fn capacity_limit(ctx: &Context, by_scan: u64) -> u32 {
         let by_binding = ctx.info().max_storage_buffer_range / 4;
         by_scan.min(by_binding).min(u32::MAX as u64) as u32
     }
 
-    /// A sort for up to `capacity` pairs.
+    /// A sort for up to `capacity` pairs, in the device's shape (`SortShape::for_device`).
     pub fn new(ctx: &Context, capacity: u32, count: SortCount) -> Result<Self> {
+        let shape = SortShape::for_device(ctx, capacity.max(1))?;
+        Self::with_shape(ctx, capacity, count, shape)
+    }
+
+    /// A sort of a chosen shape (experiments, tests): refused where the device
+    /// cannot run it (`SortShape::fits`) or its scan cannot cover `capacity`.
+    pub fn with_shape(ctx: &Context, capacity: u32, count: SortCount, shape: SortShape) -> Result<Self> {
+        let info = ctx.info();
+        if SortShape::fits(
+            shape.workgroup,
+            shape.items,
+            info.subgroup_size,
+            info.max_workgroup_invocations,
+            info.max_shared_memory,
+        ) != Some(shape)
+        {
+            return Err(Error::invalid(format!(
+                "the sort shape {} x {} does not fit {} (subgroup {}, shared memory {} bytes)",
+                shape.workgroup, shape.items, info.name, info.subgroup_size, info.max_shared_memory
+            )));
+        }
         if !ctx.info().subgroup_ballot {
             return Err(Error::VulkanUnavailable(format!(
                 "{} lacks subgroup ballot in compute",
                 ctx.info().name
             )));
         }
-        let max = Self::max_capacity(ctx);
+        let max = Self::capacity_limit(ctx, shape.scan_capacity());
         if capacity > max {
             return Err(Error::invalid(format!(
                 "cannot sort {capacity} pairs on {}: at most {max} (binding or scan limit)",
@@ -232,7 +277,6 @@ impl RadixSort {
             )));
         }
         let capacity = capacity.max(1);
-        let shape = SortShape::for_device(ctx, capacity)?;
         let blocks = capacity.div_ceil(shape.block);
         let chunks = (256 * blocks).div_ceil(shape.block);
         let bytes = capacity as u64 * 4;
@@ -578,12 +622,30 @@ mod tests {
             |wg, items, subgroups| Some(SortShape { workgroup: wg, items, subgroups, block: wg * items });
         // Lavapipe (32 KiB): 8 lanes on 256-bit vectors, 4 on 128-bit ones (ARM64).
         assert_eq!(shape(8, 32768, 1 << 20), is(64, 32, 8));
-        assert_eq!(shape(4, 32768, 1 << 20), is(32, 32, 8));
+        assert_eq!(shape(4, 32768, 1 << 20), is(32, 64, 8));
         // 48 KiB and 32 lanes (NVIDIA); 4096-pair blocks for large sorts only.
         assert_eq!(shape(32, 49152, 1 << 20), is(256, 8, 8));
         assert_eq!(shape(32, 49152, 1 << 24), is(256, 16, 8));
         // Too little shared memory for any block: a clear refusal.
         let err = SortShape::for_limits(4, 1024, 16384, 1 << 20).unwrap_err().to_string();
         assert!(err.contains("subgroup 4") && err.contains("16384"), "{err}");
+        // 32 x 32 where 32 x 64 no longer fits: 4 lanes, 24 KiB.
+        assert_eq!(shape(4, 24576, 1 << 20), is(32, 32, 8));
+    }
+
+    #[test]
+    fn a_chosen_sort_shape_fits_only_where_the_device_runs_it() {
+        // 32 x 64 at 4 lanes: 8 subgroups' counters (8 KiB), four digit tables
+        // (4 KiB), 2048 staged pairs (16 KiB): 28 KiB.
+        assert!(SortShape::fits(32, 64, 4, 1024, 28 * 1024).is_some());
+        assert!(SortShape::fits(32, 64, 4, 1024, 28 * 1024 - 1).is_none());
+        assert!(SortShape::fits(32, 12, 8, 1024, 32768).is_none(), "not a multiple of 8 items");
+        assert!(SortShape::fits(32, 0, 8, 1024, 32768).is_none());
+        assert!(SortShape::fits(0, 8, 8, 1024, 32768).is_none());
+        assert!(SortShape::fits(32, 32, 64, 1024, 49152).is_none(), "not whole subgroups");
+        assert!(SortShape::fits(512, 8, 32, 256, 49152).is_none(), "past the device's workgroup");
+        // The scan's two levels: 2048-pair blocks cover 32M pairs, 1024-pair 4M.
+        assert_eq!(SortShape::fits(64, 32, 8, 1024, 32768).unwrap().scan_capacity(), 1 << 25);
+        assert_eq!(SortShape::fits(32, 32, 4, 1024, 32768).unwrap().scan_capacity(), 1 << 22);
     }
 }
