@@ -5,7 +5,7 @@ mod common;
 
 use fsot::rng::{derive, Stream};
 use fsot::vk::sort::{float_key, SortShape};
-use fsot::vk::{RadixSort, SortCount, SortPath};
+use fsot::vk::{Buffer, Location, RadixSort, SortCount, SortPath};
 
 fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
     let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
@@ -120,19 +120,29 @@ fn refuses_more_pairs_than_it_can_hold() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn every_path_sorts_stably_by_any_number_of_low_bits() {
-    // The single-workgroup pass (one block by default, forced here far past it),
-    // the histogram's tail scan (up to TAIL_MAX_BLOCKS blocks) and the four block
-    // passes (forced at small counts), by 8, 20 and 32 bits (one, three and four
-    // passes: an odd count ends in the second buffers), on keys with many
-    // duplicates in their low bits.
+    // The single-workgroup pass (one block by default on GPUs, forced here far
+    // past it), the histogram's tail scan (up to TAIL_MAX_BLOCKS blocks), the
+    // four block passes (forced at small counts) and the lanes path (a run an
+    // invocation: by default on CPU implementations), by 8, 20 and 32 bits
+    // (one, three and four passes: an odd count ends in the second buffers), on
+    // keys with many duplicates in their low bits.
     let Some(ctx) = common::gpu_context() else {
         return;
     };
     let mut sort = RadixSort::new(&ctx, 300_000, SortCount::Host).unwrap();
     let block = sort.shape().block;
     let tail_max = fsot::vk::sort::TAIL_MAX_BLOCKS * block;
-    assert!(sort.single_pass(Some(block)) && !sort.single_pass(Some(block + 1)));
+    if ctx.info().is_cpu() {
+        assert!(sort.lanes_path(), "a CPU implementation takes the lanes path by default");
+        assert!(!sort.single_pass(Some(1)) && !sort.tail_scan(Some(1)));
+    } else {
+        assert!(!sort.lanes_path());
+        assert!(sort.single_pass(Some(block)) && !sort.single_pass(Some(block + 1)));
+        assert!(sort.tail_scan(Some(tail_max)) && !sort.tail_scan(Some(tail_max + 1)));
+    }
+    sort.path = SortPath::Tail;
     assert!(sort.tail_scan(Some(tail_max)) && !sort.tail_scan(Some(tail_max + 1)));
+    sort.path = SortPath::Auto;
     assert!(!sort.single_pass(None), "a count only on the GPU never takes the single pass");
     let mut rng = Stream::new(derive(9, 9));
     let sizes = [
@@ -150,8 +160,9 @@ fn every_path_sorts_stably_by_any_number_of_low_bits() {
         65536,
         tail_max,
         tail_max + 1,
+        fsot::vk::sort::LANE_RUN * 73 + 5,
     ];
-    for path in [SortPath::Auto, SortPath::Single, SortPath::Tail, SortPath::Blocks] {
+    for path in [SortPath::Auto, SortPath::Single, SortPath::Tail, SortPath::Blocks, SortPath::Lanes] {
         sort.path = path;
         for &n in &sizes {
             if path == SortPath::Single && n > 100_000 {
@@ -222,5 +233,35 @@ fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
     // A shape the device cannot run is refused, not run.
     let too_big = SortShape { workgroup: 32, items: 4096, subgroups: 32 / lanes, block: 32 * 4096 };
     assert!(RadixSort::with_shape(&ctx, 1000, SortCount::Host, too_big).is_err());
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_count_only_on_the_device_sorts_by_every_path() {
+    // The optimizer's large-class stage sorts a count its passes wrote on the
+    // device: every dispatch is sized there (indirect), for each path.
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
+    let mut sort = RadixSort::new(&ctx, 200_000, SortCount::Device(&count)).unwrap();
+    let block = sort.shape().block;
+    let mut rng = Stream::new(derive(12, 12));
+    for path in [SortPath::Auto, SortPath::Tail, SortPath::Blocks, SortPath::Lanes] {
+        sort.path = path;
+        for n in [1u32, block + 1, 3 * fsot::vk::sort::LANE_RUN + 1, 99_999, 200_000] {
+            let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() & 0xff0f_f0ff).collect();
+            let vals: Vec<u32> = (0..n).map(|i| i ^ 0x5555).collect();
+            count.upload(&[n]).unwrap();
+            sort.keys[0].upload(&keys).unwrap();
+            sort.vals[0].upload(&vals).unwrap();
+            ctx.submit(|cmd| sort.record(cmd, 32, None)).unwrap();
+            let gk: Vec<u32> = sort.keys[0].download(n as usize).unwrap();
+            let gv: Vec<u32> = sort.vals[0].download(n as usize).unwrap();
+            let (ck, cv) = cpu_sort(&keys, &vals);
+            assert!(gk == ck && gv == cv, "{path:?}, device count {n}: differs from the CPU's stable sort");
+        }
+    }
     common::assert_no_validation_messages(&ctx);
 }

@@ -24,6 +24,9 @@ pub struct SortBench {
     pub stages_ms: [f64; 3],
     /// Pairs per block on this device.
     pub block: u32,
+    /// Whether the sort took the lanes path (`SortPath::Lanes`: runs of
+    /// `LANE_RUN` pairs an invocation, in place of blocks).
+    pub lanes: bool,
     /// The passes the sort took, in words, and its dispatches.
     pub passes: &'static str,
     pub dispatches: u32,
@@ -109,6 +112,8 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
         stages_ms[1] += (t[b + 3] - t[b + 1]) * 1e-6;
         stages_ms[2] += (t[b + 4] - t[b + 3]) * 1e-6;
     }
+    let (passes, dispatches) = sort.passes(Some(n));
+    let (block, lanes) = (sort.shape().block, sort.lanes_path());
     // Check the last run against the CPU.
     let gpu_vals: Vec<u32> = sort.vals[0].download(n as usize)?;
     let input: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
@@ -130,25 +135,10 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
         cpu_seconds: median(cpu_times),
         cpu_threads: rayon::current_num_threads(),
         stages_ms,
-        block: sort.shape().block,
-        passes: if sort.path == SortPath::LookBack {
-            "digit counts, then one look-back pass each"
-        } else if sort.single_pass(Some(n)) {
-            "one workgroup per pass"
-        } else if sort.tail_scan(Some(n)) {
-            "histogram with its tail scan, scatter"
-        } else {
-            "histogram, two scan dispatches, scatter"
-        },
-        dispatches: if sort.path == SortPath::LookBack {
-            5
-        } else if sort.single_pass(Some(n)) {
-            4
-        } else if sort.tail_scan(Some(n)) {
-            8
-        } else {
-            16
-        },
+        block,
+        lanes,
+        passes,
+        dispatches,
         copy_seconds,
     })
 }

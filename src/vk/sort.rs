@@ -85,9 +85,9 @@ pub const TAIL_MAX_BLOCKS: u32 = 32;
 /// Which passes a sort records.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SortPath {
-    /// One workgroup per pass for a count the host knows fits one block; the
-    /// histogram's tail scan up to `TAIL_MAX_BLOCKS` blocks; the four block
-    /// passes beyond.
+    /// On GPUs, one workgroup per pass for a count the host knows fits one
+    /// block; the histogram's tail scan up to `TAIL_MAX_BLOCKS` blocks; the
+    /// four block passes beyond. On CPU implementations, `Lanes`.
     #[default]
     Auto,
     /// Histogram, two scan dispatches and scatter over blocks, whatever the count.
@@ -108,7 +108,19 @@ pub enum SortPath {
     /// Tested on lavapipe with one thread (`tests/gpu_sort_look_back.rs`,
     /// `tests/gpu_sort_choice.rs`).
     LookBack,
+    /// A run of `LANE_RUN` pairs an invocation, counted and placed by that
+    /// invocation alone in input order (`radix_lane_histogram.comp`,
+    /// `radix_lane_scatter.comp`), between the same two scan dispatches: no
+    /// barrier, ballot or shared memory. For CPU implementations, which run a
+    /// workgroup as the lanes of a vector (`Auto` takes it there); correct on
+    /// any device.
+    Lanes,
 }
+
+/// Pairs one invocation of the lanes path counts and places (`SortPath::Lanes`):
+/// at least any shape's block, so the lanes' runs fit the histogram and the
+/// scan's partials sized for the blocks.
+pub const LANE_RUN: u32 = 4096;
 
 /// Bytes before the look-back status words in the `LookBack` buffer: four
 /// tickets and four passes' 256 digit counts.
@@ -199,6 +211,18 @@ impl SortShape {
     }
 }
 
+/// The passes of `SortPath::Lanes`: a workgroup of the device's subgroup size,
+/// `LANE_RUN` pairs an invocation (the scan's chunks of `LANE_RUN` entries).
+struct LanePasses {
+    workgroup: u32,
+    histogram: ComputePipeline,
+    scan_reduce: ComputePipeline,
+    scan_apply: ComputePipeline,
+    scatter: ComputePipeline,
+    /// With a device count: the dispatch sizes for runs, as `RadixSort::args`.
+    args: Option<(ComputePipeline, Buffer)>,
+}
+
 pub struct RadixSort {
     pub capacity: u32,
     /// Which passes `record` uses.
@@ -218,6 +242,7 @@ pub struct RadixSort {
     single: ComputePipeline,
     digits: ComputePipeline,
     onesweep: ComputePipeline,
+    lanes: LanePasses,
     /// With a device count: the pass that sizes the dispatches, and its output.
     args: Option<(ComputePipeline, Buffer)>,
     // Used through the descriptor sets; dropped after the pipelines.
@@ -296,14 +321,16 @@ impl RadixSort {
         let look_back_bytes = LOOK_BACK_HEAD + 256 * blocks as u64 * 4;
         let look_back = Buffer::new(ctx, look_back_bytes, Location::Device, "sort-look-back")?;
         let spec = [shape.workgroup, shape.items, shape.subgroups, shape.block];
-        let pass = |spirv: &[u8]| {
+        let lane_group = info.subgroup_size.clamp(1, LANE_RUN);
+        let lane_spec = [lane_group, LANE_RUN / lane_group, 1, LANE_RUN];
+        let pass_with = |spirv: &[u8], spec: &[u32]| {
             ComputePipeline::new(
                 ctx,
                 &ComputeDesc {
                     spirv,
                     bindings: binding::BINDINGS,
                     push_bytes: std::mem::size_of::<RadixPush>() as u32,
-                    spec: &spec,
+                    spec,
                     sets: 2,
                     images: &[],
                     uniforms: &[],
@@ -311,6 +338,7 @@ impl RadixSort {
                 },
             )
         };
+        let pass = |spirv: &[u8]| pass_with(spirv, &spec);
         let (histogram, scan_reduce, scan_apply, scatter, histogram_tail, single) = (
             pass(shaders::RADIX_HISTOGRAM)?,
             pass(shaders::SCAN_REDUCE)?,
@@ -325,15 +353,18 @@ impl RadixSort {
             (SortCount::Host, Some(own)) => own,
             (SortCount::Host, None) => return Err(Error::invalid("the sort's count buffer is missing")),
         };
-        let args = match count {
-            SortCount::Device(_) => {
-                let buffer = Buffer::new(ctx, 32, Location::Device, "sort-indirect-args")?;
-                let block = [shape.block];
+        // With the count only on the GPU: the pass that sizes the dispatches
+        // from it, `per_group` blocks a histogram and scatter workgroup.
+        let args_pass =
+            |block: u32, per_group: u32, name: &str| -> Result<Option<(ComputePipeline, Buffer)>> {
+                let SortCount::Device(_) = count else { return Ok(None) };
+                let buffer = Buffer::new(ctx, 32, Location::Device, name)?;
+                let spec = [block, per_group];
                 let desc = ComputeDesc {
                     spirv: shaders::RADIX_ARGS,
                     bindings: binding::BINDINGS,
                     push_bytes: 0,
-                    spec: &block,
+                    spec: &spec,
                     sets: 1,
                     images: &[],
                     uniforms: &[],
@@ -341,9 +372,16 @@ impl RadixSort {
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
                 pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])?;
-                Some((pipeline, buffer))
-            }
-            SortCount::Host => None,
+                Ok(Some((pipeline, buffer)))
+            };
+        let args = args_pass(shape.block, 1, "sort-indirect-args")?;
+        let lanes = LanePasses {
+            workgroup: lane_group,
+            histogram: pass_with(shaders::RADIX_LANE_HISTOGRAM, &lane_spec)?,
+            scan_reduce: pass_with(shaders::SCAN_REDUCE, &lane_spec)?,
+            scan_apply: pass_with(shaders::SCAN_APPLY, &lane_spec)?,
+            scatter: pass_with(shaders::RADIX_LANE_SCATTER, &lane_spec)?,
+            args: args_pass(LANE_RUN, lane_group, "sort-lane-indirect-args")?,
         };
         for s in 0..2 {
             let set = [
@@ -365,6 +403,10 @@ impl RadixSort {
                 &single,
                 &digits,
                 &onesweep,
+                &lanes.histogram,
+                &lanes.scan_reduce,
+                &lanes.scan_apply,
+                &lanes.scatter,
             ] {
                 p.bind(s, &set)?;
             }
@@ -385,6 +427,7 @@ impl RadixSort {
             single,
             digits,
             onesweep,
+            lanes,
             args,
             _hist: hist,
             partials,
@@ -421,7 +464,7 @@ impl RadixSort {
     pub fn single_pass(&self, known: Option<u32>) -> bool {
         match (self.path, known) {
             (SortPath::Single, Some(_)) => true,
-            (SortPath::Auto, Some(n)) => n <= self.shape.block,
+            (SortPath::Auto, Some(n)) => n <= self.shape.block && !self.ctx.info().is_cpu(),
             _ => false,
         }
     }
@@ -430,7 +473,7 @@ impl RadixSort {
     /// histogram in the histogram's last workgroup?
     pub fn tail_scan(&self, known: Option<u32>) -> bool {
         let blocks = known.unwrap_or(self.capacity).div_ceil(self.shape.block).max(1);
-        let wanted = matches!(self.path, SortPath::Auto | SortPath::Tail);
+        let wanted = matches!(self.path, SortPath::Auto | SortPath::Tail) && !self.lanes_path();
         wanted && blocks <= TAIL_MAX_BLOCKS
     }
 
@@ -461,6 +504,7 @@ impl RadixSort {
         }
         // With the count only on the GPU, size every dispatch from it (indirect).
         let indirect = match (known, &self.args) {
+            _ if self.lanes_path() => None,
             (None, Some((pipeline, buffer))) => {
                 pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
                 barrier(&self.ctx, cmd);
@@ -475,6 +519,10 @@ impl RadixSort {
         let chunks = (256 * blocks).div_ceil(self.shape.block);
         if self.path == SortPath::LookBack {
             self.record_look_back(cmd, passes, blocks, indirect, &stamp);
+            return;
+        }
+        if self.lanes_path() {
+            self.record_lanes(cmd, passes, known, &stamp);
             return;
         }
         let tail = self.tail_scan(known);
@@ -506,6 +554,72 @@ impl RadixSort {
                 stamp(3 + 4 * pass);
             }
             run(&self.scatter, blocks, ARG_BLOCKS);
+            barrier(&self.ctx, cmd);
+            stamp(4 + 4 * pass);
+        }
+        self.finish_odd(cmd, passes);
+    }
+
+    /// The passes a sort of `known` pairs takes, in words, with its dispatches
+    /// for 32-bit keys.
+    pub fn passes(&self, known: Option<u32>) -> (&'static str, u32) {
+        if self.path == SortPath::LookBack {
+            ("digit counts, then one look-back pass each", 5)
+        } else if self.single_pass(known) {
+            ("one workgroup per pass", 4)
+        } else if self.lanes_path() {
+            ("runs counted and placed an invocation each, two scan dispatches", 16)
+        } else if self.tail_scan(known) {
+            ("histogram with its tail scan, scatter", 8)
+        } else {
+            ("histogram, two scan dispatches, scatter", 16)
+        }
+    }
+
+    /// Does a sort take the lanes path? Asked for, or by default on a CPU
+    /// implementation, whatever the count (on lavapipe, 2 cores: 1.4 ms for
+    /// 4096 pairs where one workgroup per pass took 2.7 ms for 2048, and 4.5
+    /// against 35 ms for 64k with the tail scan; `bench/results/issue16-sort-lanes.txt`).
+    pub fn lanes_path(&self) -> bool {
+        match self.path {
+            SortPath::Lanes => true,
+            SortPath::Auto => self.ctx.info().is_cpu(),
+            _ => false,
+        }
+    }
+
+    /// The lanes path (`SortPath::Lanes`): per pass, the runs' histogram, the
+    /// two scan dispatches and the runs' scatter; stamps as `record_timed`.
+    fn record_lanes(&self, cmd: vk::CommandBuffer, passes: u32, known: Option<u32>, stamp: &dyn Fn(u32)) {
+        let lanes = &self.lanes;
+        let indirect = match (known, &lanes.args) {
+            (None, Some((pipeline, buffer))) => {
+                pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
+                barrier(&self.ctx, cmd);
+                Some(buffer)
+            }
+            _ => None,
+        };
+        let runs = known.unwrap_or(self.capacity).div_ceil(LANE_RUN).max(1);
+        let groups = runs.div_ceil(lanes.workgroup);
+        let chunks = (256 * runs).div_ceil(LANE_RUN);
+        stamp(0);
+        for pass in 0..passes {
+            let src = (pass % 2) as usize;
+            let push = RadixPush { shift: 8 * pass, blocks: runs, chunks, passes: 0 };
+            let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| {
+                launch(cmd, pipeline, src, indirect, arg, groups, push)
+            };
+            run(&lanes.histogram, groups, ARG_BLOCKS);
+            barrier(&self.ctx, cmd);
+            stamp(1 + 4 * pass);
+            run(&lanes.scan_reduce, chunks, ARG_CHUNKS);
+            barrier(&self.ctx, cmd);
+            stamp(2 + 4 * pass);
+            run(&lanes.scan_apply, chunks, ARG_CHUNKS);
+            barrier(&self.ctx, cmd);
+            stamp(3 + 4 * pass);
+            run(&lanes.scatter, groups, ARG_BLOCKS);
             barrier(&self.ctx, cmd);
             stamp(4 + 4 * pass);
         }

@@ -61,6 +61,7 @@ impl PathChoice {
     pub fn describe(&self) -> String {
         let name = match self.path {
             SortPath::LookBack => "look-back",
+            SortPath::Lanes => "lanes",
             _ => "block passes",
         };
         match self.times {
@@ -76,7 +77,8 @@ impl PathChoice {
 /// The path for sorts of about `n` pairs by their low `bits` bits on `ctx`'s
 /// device: the faster of the look-back path and the block passes, timed here
 /// (`time_sort_paths`), on devices that are not CPU implementations and have
-/// timestamps; `SortPath::Auto`, untimed, elsewhere.
+/// timestamps; `SortPath::Auto`, untimed, elsewhere (the lanes path on a CPU
+/// implementation).
 pub fn choose_sort_path(ctx: &Context, n: u32, bits: u32) -> Result<PathChoice> {
     let info = ctx.info();
     if info.is_cpu() || info.timestamp_period_ns <= 0.0 {

@@ -36,9 +36,14 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             );
             println!("  {}", bandwidth_line(&b));
             println!("  passes: {} ({} dispatches)", b.passes, b.dispatches);
-            // The other small-sort path on the same pairs, for comparison.
+            // The other paths on the same pairs, for comparison: on a CPU
+            // implementation (the lanes path by default) the workgroups' blocks;
+            // elsewhere the other small-sort path.
+            let tail_max = fsot::vk::sort::TAIL_MAX_BLOCKS * b.block;
             let other = match b.dispatches {
-                16 if n <= fsot::vk::sort::TAIL_MAX_BLOCKS * b.block => Some(SortPath::Tail),
+                _ if b.lanes && n <= tail_max => Some(SortPath::Tail),
+                _ if b.lanes => Some(SortPath::Blocks),
+                16 if n <= tail_max => Some(SortPath::Tail),
                 16 => None,
                 _ => Some(SortPath::Blocks),
             };
@@ -55,9 +60,13 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
                     o.gpu_pairs_per_second() * 1e-9
                 );
             }
+            let unit = match b.lanes {
+                true => format!("{}-pair runs", fsot::vk::sort::LANE_RUN),
+                false => format!("{}-pair blocks", b.block),
+            };
             println!(
-                "  one profiled sort ({}-pair blocks), 4 passes: histogram {:.3} ms, scan {:.3} ms, scatter {:.3} ms",
-                b.block, b.stages_ms[0], b.stages_ms[1], b.stages_ms[2]
+                "  one profiled sort ({unit}), 4 passes: histogram {:.3} ms, scan {:.3} ms, scatter {:.3} ms",
+                b.stages_ms[0], b.stages_ms[1], b.stages_ms[2]
             );
             Ok(())
         }
