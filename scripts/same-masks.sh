@@ -20,6 +20,7 @@ runs=(
   "--backend vulkan --deterministic --size 16x16x8 --dims 1 --kernel perceptual-taa --iterations 40 --seed 5"
   "--backend vulkan --deterministic --size 32x32x8 --dims 2 --kernel gaussian --sigma 3 --iterations 20 --seed 9"
   "--backend vulkan --deterministic --size 32x32x4 --dims 2 --kernel gaussian --sigma 12 --iterations 10 --seed 2"
+  "--backend vulkan --deterministic --size 16x16x8 --spp 16 --dims 2 --kernel taa --iterations 10 --seed 4"
 )
 failed=0
 for i in "${!runs[@]}"; do
