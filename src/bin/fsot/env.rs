@@ -39,13 +39,16 @@ pub(crate) fn transport_shape() -> Option<(u32, u32)> {
 }
 
 /// `FSOT_SORT=blocks`: the large-class stage sorts by the block passes even
-/// where the look-back path was timed faster (to compare the two); unset: the
-/// path is chosen at run time. The look-back path cannot be forced from here: on
-/// a CPU implementation with several threads it could wait forever.
+/// where the look-back path was timed faster, or where a CPU implementation
+/// would take the lanes path (to compare); unset: the path is chosen at run
+/// time. `SortPath::Tail` is what `Auto` does on a GPU for a count only on the
+/// device (the tail scan up to its limit, the four block passes past it), and
+/// never the lanes path. The look-back path cannot be forced from here: on a
+/// CPU implementation with several threads it could wait forever.
 pub(crate) fn large_sort() -> Result<Option<SortPath>> {
     match std::env::var("FSOT_SORT").ok().as_deref() {
         None | Some("") => Ok(None),
-        Some("blocks") => Ok(Some(SortPath::Auto)),
+        Some("blocks") => Ok(Some(SortPath::Tail)),
         Some(other) => Err(Error::invalid(format!(
             "FSOT_SORT={other}: it takes `blocks` (the block passes), or is unset (the path chosen at run time)"
         ))),
