@@ -253,12 +253,7 @@ fn a_count_only_on_the_device_sorts_by_every_path() {
         for n in [1u32, block + 1, 3 * fsot::vk::sort::LANE_RUN + 1, 99_999, 200_000] {
             let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() & 0xff0f_f0ff).collect();
             let vals: Vec<u32> = (0..n).map(|i| i ^ 0x5555).collect();
-            count.upload(&[n]).unwrap();
-            sort.keys[0].upload(&keys).unwrap();
-            sort.vals[0].upload(&vals).unwrap();
-            ctx.submit(|cmd| sort.record(cmd, 32, None)).unwrap();
-            let gk: Vec<u32> = sort.keys[0].download(n as usize).unwrap();
-            let gv: Vec<u32> = sort.vals[0].download(n as usize).unwrap();
+            let (gk, gv) = common::sort_with_device_count(&ctx, &mut sort, &mut count, &keys, &vals);
             let (ck, cv) = cpu_sort(&keys, &vals);
             assert!(gk == ck && gv == cv, "{path:?}, device count {n}: differs from the CPU's stable sort");
         }

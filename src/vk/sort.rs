@@ -211,6 +211,23 @@ impl SortShape {
     }
 }
 
+/// One path's pipelines for a radix pass: histogram, the two scan dispatches
+/// (None where the histogram scans itself), scatter.
+struct PassPipelines<'a> {
+    histogram: &'a ComputePipeline,
+    scan: Option<(&'a ComputePipeline, &'a ComputePipeline)>,
+    scatter: &'a ComputePipeline,
+}
+
+/// A pass's dispatch sizes with the count on the host: workgroups of the
+/// histogram and scatter, blocks (or runs) in the histogram, scan chunks.
+#[derive(Clone, Copy)]
+struct PassSize {
+    groups: u32,
+    blocks: u32,
+    chunks: u32,
+}
+
 /// The passes of `SortPath::Lanes`: a workgroup of the device's subgroup size,
 /// `LANE_RUN` pairs an invocation (the scan's chunks of `LANE_RUN` entries).
 struct LanePasses {
@@ -531,30 +548,47 @@ impl RadixSort {
             zero(&self.ctx, cmd, &self.partials, 0, 4);
             barrier(&self.ctx, cmd);
         }
+        let pipelines = PassPipelines {
+            histogram: if tail { &self.histogram_tail } else { &self.histogram },
+            scan: (!tail).then_some((&self.scan_reduce, &self.scan_apply)),
+            scatter: &self.scatter,
+        };
+        let size = PassSize { groups: blocks, blocks, chunks };
+        self.record_passes(cmd, passes, &pipelines, size, indirect, &stamp);
+    }
+
+    /// Records `passes` radix passes of histogram, scan (unless the histogram
+    /// scans itself) and scatter; stamps as `record_timed` (with the tail
+    /// scan, the three after the histogram: the scan counts in it).
+    fn record_passes(
+        &self,
+        cmd: vk::CommandBuffer,
+        passes: u32,
+        p: &PassPipelines,
+        size: PassSize,
+        indirect: Option<&Buffer>,
+        stamp: &dyn Fn(u32),
+    ) {
         stamp(0);
         for pass in 0..passes {
             let src = (pass % 2) as usize;
-            let push = RadixPush { shift: 8 * pass, blocks, chunks, passes: 0 };
+            let push = RadixPush { shift: 8 * pass, blocks: size.blocks, chunks: size.chunks, passes: 0 };
             let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| {
-                launch(cmd, pipeline, src, indirect, arg, groups, push)
+                launch(cmd, pipeline, src, indirect, arg, groups, push);
+                barrier(&self.ctx, cmd);
             };
-            if tail {
-                run(&self.histogram_tail, blocks, ARG_BLOCKS);
-                barrier(&self.ctx, cmd);
-                (1..4).for_each(|i| stamp(i + 4 * pass));
-            } else {
-                run(&self.histogram, blocks, ARG_BLOCKS);
-                barrier(&self.ctx, cmd);
-                stamp(1 + 4 * pass);
-                run(&self.scan_reduce, chunks, ARG_CHUNKS);
-                barrier(&self.ctx, cmd);
-                stamp(2 + 4 * pass);
-                run(&self.scan_apply, chunks, ARG_CHUNKS);
-                barrier(&self.ctx, cmd);
-                stamp(3 + 4 * pass);
+            run(p.histogram, size.groups, ARG_BLOCKS);
+            match p.scan {
+                Some((reduce, apply)) => {
+                    stamp(1 + 4 * pass);
+                    run(reduce, size.chunks, ARG_CHUNKS);
+                    stamp(2 + 4 * pass);
+                    run(apply, size.chunks, ARG_CHUNKS);
+                    stamp(3 + 4 * pass);
+                }
+                None => (1..4).for_each(|i| stamp(i + 4 * pass)),
             }
-            run(&self.scatter, blocks, ARG_BLOCKS);
-            barrier(&self.ctx, cmd);
+            run(p.scatter, size.groups, ARG_BLOCKS);
             stamp(4 + 4 * pass);
         }
         self.finish_odd(cmd, passes);
@@ -601,29 +635,17 @@ impl RadixSort {
             _ => None,
         };
         let runs = known.unwrap_or(self.capacity).div_ceil(LANE_RUN).max(1);
-        let groups = runs.div_ceil(lanes.workgroup);
-        let chunks = (256 * runs).div_ceil(LANE_RUN);
-        stamp(0);
-        for pass in 0..passes {
-            let src = (pass % 2) as usize;
-            let push = RadixPush { shift: 8 * pass, blocks: runs, chunks, passes: 0 };
-            let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| {
-                launch(cmd, pipeline, src, indirect, arg, groups, push)
-            };
-            run(&lanes.histogram, groups, ARG_BLOCKS);
-            barrier(&self.ctx, cmd);
-            stamp(1 + 4 * pass);
-            run(&lanes.scan_reduce, chunks, ARG_CHUNKS);
-            barrier(&self.ctx, cmd);
-            stamp(2 + 4 * pass);
-            run(&lanes.scan_apply, chunks, ARG_CHUNKS);
-            barrier(&self.ctx, cmd);
-            stamp(3 + 4 * pass);
-            run(&lanes.scatter, groups, ARG_BLOCKS);
-            barrier(&self.ctx, cmd);
-            stamp(4 + 4 * pass);
-        }
-        self.finish_odd(cmd, passes);
+        let pipelines = PassPipelines {
+            histogram: &lanes.histogram,
+            scan: Some((&lanes.scan_reduce, &lanes.scan_apply)),
+            scatter: &lanes.scatter,
+        };
+        let size = PassSize {
+            groups: runs.div_ceil(lanes.workgroup),
+            blocks: runs,
+            chunks: (256 * runs).div_ceil(LANE_RUN),
+        };
+        self.record_passes(cmd, passes, &pipelines, size, indirect, stamp);
     }
 
     /// The look-back path (`SortPath::LookBack`): the digit counts of every pass

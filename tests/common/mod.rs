@@ -53,3 +53,20 @@ pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
     Some(std::fs::read(out).unwrap())
 }
+
+/// Sorts `keys` and `vals` by all 32 bits with a sort made with
+/// `SortCount::Device(count)`: the count written to that buffer, the dispatches
+/// sized on the device (indirect); the sorted pairs read back.
+pub fn sort_with_device_count(
+    ctx: &Context,
+    sort: &mut fsot::vk::RadixSort,
+    count: &mut fsot::vk::Buffer,
+    keys: &[u32],
+    vals: &[u32],
+) -> (Vec<u32>, Vec<u32>) {
+    count.upload(&[keys.len() as u32]).unwrap();
+    sort.keys[0].upload(keys).unwrap();
+    sort.vals[0].upload(vals).unwrap();
+    ctx.submit(|cmd| sort.record(cmd, 32, None)).unwrap();
+    (sort.keys[0].download(keys.len()).unwrap(), sort.vals[0].download(keys.len()).unwrap())
+}
