@@ -168,8 +168,10 @@ impl TransportShape {
             // invocations can take the classes past the lane's limit. For d >= 3
             // only when every class fits the lane: there the limit is small (the
             // targets budgeted at their worst), and on lavapipe the large-class
-            // stage's three sorts cost more than the workgroup transport saves
-            // (bench/results/issue16-lane-dims.txt).
+            // stage costs more than the workgroup transport saves
+            // (bench/results/issue16-lane-dims.txt), also with the sort's lanes
+            // path (issue16-lane-dims-sort-lanes.txt: 74 to 78 ms an iteration
+            // against 53 at d = 3, 118 to 123 against 67 at d = 4).
             None => {
                 let limit = Self::lane_limit(dims);
                 info.is_cpu()
@@ -420,7 +422,8 @@ impl TransportShape {
     /// to a multiple of LANE_STEP, so that no class goes to the large-class
     /// stage, whose three global sorts cost lavapipe more than the whole
     /// transport at 128x128x30 (0.18% of the slices there pass 2048; the
-    /// stage took 321 ms of an iteration's 555, the transport 226). The
+    /// stage took 321 ms of an iteration's 555, the transport 226, measured
+    /// before the sort's lanes path and not since). The
     /// private arrays grow with it (46 KiB an invocation at 2560), and
     /// llvmpipe zero-fills them at each workgroup's start, so the limit stays
     /// at LANE_MAX where every class fits it.
