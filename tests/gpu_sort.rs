@@ -218,7 +218,7 @@ fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
         let mut sort = RadixSort::with_shape(&ctx, capacity, SortCount::Host, shape).unwrap();
         let mut sizes = vec![1, block - 1, block + 1, 3 * block + 5, tail_max, tail_max + 1, capacity];
         sizes.retain(|&n| n <= capacity);
-        for path in [SortPath::Single, SortPath::Tail, SortPath::Blocks] {
+        for path in [SortPath::Single, SortPath::Tail, SortPath::Blocks, SortPath::Lanes] {
             sort.path = path;
             for &n in &sizes {
                 if path == SortPath::Single && n > 20 * block {

@@ -117,9 +117,8 @@ pub enum SortPath {
     Lanes,
 }
 
-/// Pairs one invocation of the lanes path counts and places (`SortPath::Lanes`):
-/// at least any shape's block, so the lanes' runs fit the histogram and the
-/// scan's partials sized for the blocks.
+/// Pairs one invocation of the lanes path counts and places (`SortPath::Lanes`).
+/// 2048 and 8192 sorted 1M pairs about as fast on lavapipe (2 cores).
 pub const LANE_RUN: u32 = 4096;
 
 /// Bytes before the look-back status words in the `LookBack` buffer: four
@@ -333,8 +332,13 @@ impl RadixSort {
             ])
         };
         let (keys, vals) = (pair("sort-keys")?, pair("sort-vals")?);
-        let hist = Buffer::new(ctx, 256 * blocks as u64 * 4, Location::Device, "sort-hist")?;
-        let partials = Buffer::new(ctx, chunks as u64 * 4, Location::Device, "sort-partials")?;
+        // The histogram and the scan's partials hold the blocks' counts or the
+        // lanes path's runs', whichever are more (a shape's block may pass LANE_RUN).
+        let runs = capacity.div_ceil(LANE_RUN);
+        let hist_entries = 256 * blocks.max(runs) as u64;
+        let partial_entries = chunks.max((256 * runs).div_ceil(LANE_RUN)) as u64;
+        let hist = Buffer::new(ctx, hist_entries * 4, Location::Device, "sort-hist")?;
+        let partials = Buffer::new(ctx, partial_entries * 4, Location::Device, "sort-partials")?;
         let look_back_bytes = LOOK_BACK_HEAD + 256 * blocks as u64 * 4;
         let look_back = Buffer::new(ctx, look_back_bytes, Location::Device, "sort-look-back")?;
         let spec = [shape.workgroup, shape.items, shape.subgroups, shape.block];
