@@ -260,3 +260,28 @@ fn a_count_only_on_the_device_sorts_by_every_path() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_lanes_path_reads_its_input_as_storage_where_texel_views_cannot_hold_it() {
+    // The lanes path reads through texel views; a sort larger than the device's
+    // maxTexelBufferElements reads the same pairs as storage instead.
+    let Some(ctx) = common::gpu_context() else {
+        return;
+    };
+    let mut rng = Stream::new(derive(13, 13));
+    let mut sort = RadixSort::with_storage_reads(&ctx, 100_000, SortCount::Host).unwrap();
+    sort.path = SortPath::Lanes;
+    for n in [1usize, 4097, 100_000] {
+        let keys: Vec<u32> = (0..n).map(|_| rng.next_u32() & 0xff0f_f0ff).collect();
+        check(&mut sort, keys, "lanes path, storage reads");
+    }
+    let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
+    let mut sort = RadixSort::with_storage_reads(&ctx, 100_000, SortCount::Device(&count)).unwrap();
+    sort.path = SortPath::Lanes;
+    let keys: Vec<u32> = (0..99_999).map(|_| rng.next_u32()).collect();
+    let vals: Vec<u32> = (0..99_999).collect();
+    let (gk, gv) = common::sort_with_device_count(&ctx, &mut sort, &mut count, &keys, &vals);
+    assert!((gk, gv) == cpu_sort(&keys, &vals), "lanes path, storage reads, device count");
+    common::assert_no_validation_messages(&ctx);
+}

@@ -231,11 +231,13 @@ fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
 
 #[test]
 fn every_sort_binding_and_struct_matches_its_rust_mirror() {
-    let seen =
-        check_family("sort", fsot::vk::shaders::ALL, &sort::binding::BLOCKS, &[], sort::binding::BINDINGS);
-    for (name, _) in sort::binding::BLOCKS {
+    let (b, t) = (&sort::binding::BLOCKS, &sort::binding::TEXEL_VARIABLES);
+    let seen = check_family("sort", fsot::vk::shaders::ALL, b, t, sort::binding::BINDINGS);
+    for (name, _) in b.iter().chain(t) {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no sort pass");
     }
+    assert_eq!((b.len() + t.len()) as u32, sort::binding::BINDINGS);
+    assert_eq!(t.map(|v| v.1), sort::binding::TEXELS);
 }
 
 #[test]

@@ -24,7 +24,9 @@
 #define SORT_BINDING_PARTIALS 6
 #define SORT_BINDING_ARGS 7
 #define SORT_BINDING_LOOK_BACK 8
-#define SORT_BINDINGS 9
+#define SORT_BINDING_KEYS_TEXELS 9
+#define SORT_BINDING_VALS_TEXELS 10
+#define SORT_BINDINGS 11
 
 struct RadixPush {
     uint shift;   // bit offset of this pass's digit
@@ -63,6 +65,19 @@ layout(std430, set = 0, binding = SORT_BINDING_LOOK_BACK) buffer LookBack {
     uint lb_digits[4 * 256];
     uint lb_status[];
 };
+// The input keys and payloads as uniform texel buffers (R32_UINT views of the
+// same buffers), for the lanes path's reads (SORT_TEXEL_READS): a CPU
+// implementation reads a storage buffer at per-lane addresses one lane at a
+// time, and a texel buffer in one gather.
+#ifdef SORT_TEXEL_READS
+layout(set = 0, binding = SORT_BINDING_KEYS_TEXELS) uniform usamplerBuffer keys_texels;
+layout(set = 0, binding = SORT_BINDING_VALS_TEXELS) uniform usamplerBuffer vals_texels;
+uint key_in(uint i) { return texelFetch(keys_texels, int(i)).x; }
+uint val_in(uint i) { return texelFetch(vals_texels, int(i)).x; }
+#else
+uint key_in(uint i) { return keys_in[i]; }
+uint val_in(uint i) { return vals_in[i]; }
+#endif
 #define LB_AGGREGATE 0x40000000u
 #define LB_PREFIX 0x80000000u
 #define LB_COUNT 0x3fffffffu

@@ -6,6 +6,12 @@
 // as for the blocks of the other paths. No barrier, no ballot and no shared
 // memory: a CPU driver runs a workgroup's invocations as the lanes of one
 // vector, where every per-lane access is a loop over the lanes anyway.
+// variant STORAGE: SORT_STORAGE_READS
+// (the input read as storage, where a texel view would pass the device's
+// maxTexelBufferElements)
+#ifndef SORT_STORAGE_READS
+#define SORT_TEXEL_READS
+#endif
 #include "radix_common.glsl"
 
 void main() {
@@ -21,7 +27,7 @@ void main() {
     uint first = run * block_size();
     uint end = min(first + block_size(), count);
     for (uint i = first; i < end; ++i) {
-        counts[(keys_in[i] >> pc.shift) & 255u] += 1u;
+        counts[(key_in(i) >> pc.shift) & 255u] += 1u;
     }
     for (uint d = 0u; d < 256u; ++d) {
         hist[d * runs + run] = counts[d];

@@ -3,6 +3,12 @@
 // places its run of block_size() consecutive pairs, in input order, from the
 // scanned positions of its digits (radix_lane_histogram.comp): stable, since
 // runs are scanned in order within each digit and a run is placed in order.
+// variant STORAGE: SORT_STORAGE_READS
+// (the input read as storage, where a texel view would pass the device's
+// maxTexelBufferElements)
+#ifndef SORT_STORAGE_READS
+#define SORT_TEXEL_READS
+#endif
 #include "radix_common.glsl"
 
 void main() {
@@ -18,11 +24,11 @@ void main() {
     uint first = run * block_size();
     uint end = min(first + block_size(), count);
     for (uint i = first; i < end; ++i) {
-        uint k = keys_in[i];
+        uint k = key_in(i);
         uint d = (k >> pc.shift) & 255u;
         uint at = next[d];
         next[d] = at + 1u;
         keys_out[at] = k;
-        vals_out[at] = vals_in[i];
+        vals_out[at] = val_in(i);
     }
 }

@@ -29,6 +29,7 @@ use super::commands::{barrier, copy, zero};
 use super::context::Context;
 use super::pipeline::{ComputeDesc, ComputePipeline};
 use super::shaders;
+use super::texel_view::TexelView;
 use super::timer::Timer;
 use crate::error::{Error, Result};
 
@@ -43,10 +44,18 @@ pub mod binding {
     pub const PARTIALS: u32 = 6;
     pub const ARGS: u32 = 7;
     pub const LOOK_BACK: u32 = 8;
+    /// The input keys and payloads as uniform texel buffers (the lanes path).
+    pub const KEYS_TEXELS: u32 = 9;
+    pub const VALS_TEXELS: u32 = 10;
     /// Bindings in the layout.
-    pub const BINDINGS: u32 = 9;
+    pub const BINDINGS: u32 = 11;
+    /// The uniform texel buffer bindings.
+    pub const TEXELS: [u32; 2] = [KEYS_TEXELS, VALS_TEXELS];
+    /// The texel buffers with their variables' names in GLSL.
+    pub const TEXEL_VARIABLES: [(&str, u32); 2] =
+        [("keys_texels", KEYS_TEXELS), ("vals_texels", VALS_TEXELS)];
 
-    /// Every binding with the name of its block in GLSL.
+    /// Every storage binding with the name of its block in GLSL.
     pub const BLOCKS: [(&str, u32); 9] = [
         ("SortCount", COUNT),
         ("KeysIn", KEYS_IN),
@@ -265,6 +274,9 @@ pub struct RadixSort {
     _hist: Buffer,
     partials: Buffer,
     look_back: Buffer,
+    /// The texel views of `keys` and `vals` per descriptor set (the lanes
+    /// path's reads), where the device holds them.
+    _views: Option<[[TexelView; 2]; 2]>,
     ctx: Context,
 }
 
@@ -290,6 +302,17 @@ impl RadixSort {
     /// A sort of a chosen shape (experiments, tests): refused where the device
     /// cannot run it (`SortShape::fits`) or its scan cannot cover `capacity`.
     pub fn with_shape(ctx: &Context, capacity: u32, count: SortCount, shape: SortShape) -> Result<Self> {
+        Self::build(ctx, capacity, count, shape, true)
+    }
+
+    /// A sort in the device's shape whose lanes path reads its input as
+    /// storage, as where a texel view could not hold the capacity (for tests).
+    pub fn with_storage_reads(ctx: &Context, capacity: u32, count: SortCount) -> Result<Self> {
+        let shape = SortShape::for_device(ctx, capacity.max(1))?;
+        Self::build(ctx, capacity, count, shape, false)
+    }
+
+    fn build(ctx: &Context, capacity: u32, count: SortCount, shape: SortShape, texels: bool) -> Result<Self> {
         let info = ctx.info();
         if SortShape::fits(
             shape.workgroup,
@@ -355,7 +378,7 @@ impl RadixSort {
                     sets: 2,
                     images: &[],
                     uniforms: &[],
-                    texels: &[],
+                    texels: &binding::TEXELS,
                 },
             )
         };
@@ -389,19 +412,31 @@ impl RadixSort {
                     sets: 1,
                     images: &[],
                     uniforms: &[],
-                    texels: &[],
+                    texels: &binding::TEXELS,
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
                 pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])?;
                 Ok(Some((pipeline, buffer)))
             };
         let args = args_pass(shape.block, 1, "sort-indirect-args")?;
+        // The lanes path reads its input through texel views where the device
+        // holds that many texels in one, else as storage.
+        let views = if texels && u64::from(capacity) <= info.max_texel_buffer_elements {
+            let view = |b: &Buffer| TexelView::new(ctx, b, vk::Format::R32_UINT, 4);
+            Some([[view(&keys[0])?, view(&vals[0])?], [view(&keys[1])?, view(&vals[1])?]])
+        } else {
+            None
+        };
+        let (lane_histogram, lane_scatter) = match views {
+            Some(_) => (shaders::RADIX_LANE_HISTOGRAM, shaders::RADIX_LANE_SCATTER),
+            None => (shaders::RADIX_LANE_HISTOGRAM_STORAGE, shaders::RADIX_LANE_SCATTER_STORAGE),
+        };
         let lanes = LanePasses {
             workgroup: lane_group,
-            histogram: pass_with(shaders::RADIX_LANE_HISTOGRAM, &lane_spec)?,
+            histogram: pass_with(lane_histogram, &lane_spec)?,
             scan_reduce: pass_with(shaders::SCAN_REDUCE, &lane_spec)?,
             scan_apply: pass_with(shaders::SCAN_APPLY, &lane_spec)?,
-            scatter: pass_with(shaders::RADIX_LANE_SCATTER, &lane_spec)?,
+            scatter: pass_with(lane_scatter, &lane_spec)?,
             args: args_pass(LANE_RUN, lane_group, "sort-lane-indirect-args")?,
         };
         for s in 0..2 {
@@ -430,6 +465,12 @@ impl RadixSort {
                 &lanes.scatter,
             ] {
                 p.bind(s, &set)?;
+                if let Some(views) = &views {
+                    p.bind_texels(
+                        s,
+                        &[(binding::KEYS_TEXELS, &views[s][0]), (binding::VALS_TEXELS, &views[s][1])],
+                    )?;
+                }
             }
         }
         Ok(Self {
@@ -453,6 +494,7 @@ impl RadixSort {
             _hist: hist,
             partials,
             look_back,
+            _views: views,
             ctx: ctx.clone(),
         })
     }
