@@ -658,9 +658,9 @@ impl RadixSort {
 
     /// Does a sort take the lanes path? Asked for, or by default on a CPU
     /// implementation, whatever the count (on lavapipe, 2 cores: 2048 pairs in
-    /// 0.92 ms where the tail scan took 2.41, 64k in 5.44 against 35.0 ms, 1M
-    /// in 66.8 against 527.5 ms by the block passes;
-    /// `bench/results/issue16-sort-lanes.txt`).
+    /// 0.77 ms where the tail scan took 2.43, 64k in 3.73 against 34.7 ms, 1M
+    /// in 35.9 against 537.2 ms by the block passes;
+    /// `bench/results/issue16-sort-lanes-texels.txt`).
     pub fn lanes_path(&self) -> bool {
         match self.path {
             SortPath::Lanes => true,
