@@ -327,11 +327,8 @@ impl RadixSort {
                 shape.workgroup, shape.items, info.name, info.subgroup_size, info.max_shared_memory
             )));
         }
-        if !ctx.info().subgroup_ballot {
-            return Err(Error::VulkanUnavailable(format!(
-                "{} lacks subgroup ballot in compute",
-                ctx.info().name
-            )));
+        if !info.subgroup_ballot {
+            return Err(Error::VulkanUnavailable(format!("{} lacks subgroup ballot in compute", info.name)));
         }
         let max = Self::capacity_limit(ctx, shape.scan_capacity());
         if capacity > max {
@@ -565,16 +562,11 @@ impl RadixSort {
             self.finish_odd(cmd, passes);
             return;
         }
-        // With the count only on the GPU, size every dispatch from it (indirect).
-        let indirect = match (known, &self.args) {
-            _ if self.lanes_path() => None,
-            (None, Some((pipeline, buffer))) => {
-                pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
-                barrier(&self.ctx, cmd);
-                Some(buffer)
-            }
-            _ => None,
-        };
+        if self.lanes_path() {
+            self.record_lanes(cmd, passes, known, &stamp);
+            return;
+        }
+        let indirect = self.size_on_device(cmd, known, &self.args);
         let blocks = match known {
             Some(n) => n.div_ceil(self.shape.block).clamp(1, self.blocks),
             None => self.blocks,
@@ -582,10 +574,6 @@ impl RadixSort {
         let chunks = (256 * blocks).div_ceil(self.shape.block);
         if self.path == SortPath::LookBack {
             self.record_look_back(cmd, passes, blocks, indirect, &stamp);
-            return;
-        }
-        if self.lanes_path() {
-            self.record_lanes(cmd, passes, known, &stamp);
             return;
         }
         let tail = self.tail_scan(known);
@@ -601,6 +589,21 @@ impl RadixSort {
         };
         let size = PassSize { groups: blocks, blocks, chunks };
         self.record_passes(cmd, passes, &pipelines, size, indirect, &stamp);
+    }
+
+    /// With the count only on the GPU (`known` None), records the path's
+    /// `args` pass, which sizes every later dispatch from it, and returns its
+    /// output for the indirect dispatches.
+    fn size_on_device<'a>(
+        &self,
+        cmd: vk::CommandBuffer,
+        known: Option<u32>,
+        args: &'a Option<(ComputePipeline, Buffer)>,
+    ) -> Option<&'a Buffer> {
+        let (None, Some((pipeline, buffer))) = (known, args) else { return None };
+        pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
+        barrier(&self.ctx, cmd);
+        Some(buffer)
     }
 
     /// Records `passes` radix passes of histogram, scan (unless the histogram
@@ -673,14 +676,7 @@ impl RadixSort {
     /// two scan dispatches and the runs' scatter; stamps as `record_timed`.
     fn record_lanes(&self, cmd: vk::CommandBuffer, passes: u32, known: Option<u32>, stamp: &dyn Fn(u32)) {
         let lanes = &self.lanes;
-        let indirect = match (known, &lanes.args) {
-            (None, Some((pipeline, buffer))) => {
-                pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
-                barrier(&self.ctx, cmd);
-                Some(buffer)
-            }
-            _ => None,
-        };
+        let indirect = self.size_on_device(cmd, known, &lanes.args);
         let runs = known.unwrap_or(self.capacity).div_ceil(LANE_RUN).max(1);
         let pipelines = PassPipelines {
             histogram: &lanes.histogram,
