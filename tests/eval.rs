@@ -20,6 +20,7 @@ fn tiny() -> EvalSize {
         planned: false,
         planned_without_taa: true,
         display: fsot::eval::jod::DISPLAY,
+        anatomy: false,
     }
 }
 
@@ -28,7 +29,9 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     let dir = tempfile::tempdir().unwrap();
     let scenes = [Scene::LightPick, Scene::DefocusMotion];
     let pictures = dir.path().join("pictures");
-    let records = run_eval(&tiny(), &[2.1], &scenes, dir.path(), Some(&pictures), &[], |_| {}).unwrap();
+    let records =
+        run_eval(&tiny(), &[2.1], &scenes, dir.path(), Some(&pictures), &[], Default::default(), |_| {})
+            .unwrap();
     assert_eq!(records.len(), scenes.len() * METHODS.len() * 2);
     for r in &records {
         assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
@@ -76,7 +79,8 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
     assert!(md.contains("### JOD, sigma 2.1, with TAA") && md.contains(" +- "));
     // A second run reads the masks and references from the cache: same figures.
-    let again = run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], |_| {}).unwrap();
+    let again =
+        run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], Default::default(), |_| {}).unwrap();
     assert_eq!(records, again);
 }
 
@@ -87,8 +91,17 @@ fn a_blue_noise_mask_beats_white_noise_in_every_scene_under_taa() {
     let dir = tempfile::tempdir().unwrap();
     let mut size = tiny();
     size.iterations = 100;
-    let records =
-        run_eval(&size, &[2.1], &fsot::eval::scenes::SCENES, dir.path(), None, &[], |_| {}).unwrap();
+    let records = run_eval(
+        &size,
+        &[2.1],
+        &fsot::eval::scenes::SCENES,
+        dir.path(),
+        None,
+        &[],
+        Default::default(),
+        |_| {},
+    )
+    .unwrap();
     // Measured ratios 0.173, 0.222, 0.375, 0.436, 0.650, 0.449 (scene order);
     // each bound 15% above.
     let bounds = [0.20, 0.26, 0.43, 0.50, 0.75, 0.52];
@@ -106,7 +119,8 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
     let dir = tempfile::tempdir().unwrap();
     let size = EvalSize { planned: true, ..tiny() };
     let scenes = [Scene::LightPick, Scene::DefocusMotion];
-    let records = run_eval(&size, &[2.1], &scenes, dir.path(), None, &[], |_| {}).unwrap();
+    let records =
+        run_eval(&size, &[2.1], &scenes, dir.path(), None, &[], Default::default(), |_| {}).unwrap();
     assert_eq!(records.len(), scenes.len() * (METHODS.len() + 1) * 2);
     for scene in ["light-pick", "defocus-motion"] {
         for taa in [false, true] {
@@ -160,8 +174,17 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     assert_eq!(own.masks[0].samples, shared.masks[0].samples, "the light's own mask is the one it lends");
     // Both are measured, with and without TAA; a scene without sharing has no
     // unshared column.
-    let records =
-        run_eval(&size, &[2.1], &[Scene::VeachMis, Scene::LightPick], dir.path(), None, &[], |_| {}).unwrap();
+    let records = run_eval(
+        &size,
+        &[2.1],
+        &[Scene::VeachMis, Scene::LightPick],
+        dir.path(),
+        None,
+        &[],
+        Default::default(),
+        |_| {},
+    )
+    .unwrap();
     let count = |scene: &str, m: &str| records.iter().filter(|r| r.scene == scene && r.method == m).count();
     assert_eq!((count("veach-mis", "fsot-planned"), count("veach-mis", "fsot-planned-unshared")), (2, 2));
     assert_eq!((count("light-pick", "fsot-planned"), count("light-pick", "fsot-planned-unshared")), (2, 0));
@@ -186,6 +209,7 @@ fn record(
         jod,
         jod_ci95,
         seeds: 5,
+        anatomy: None,
     }
 }
 
@@ -210,4 +234,46 @@ fn a_winner_is_bold_only_where_its_interval_clears_the_runner_ups() {
         record("b", 0.3, 0.01, 7.8, 0.05),
     ];
     assert!(to_markdown(&records).contains("| **8.000 +- 0.050** |"));
+}
+
+#[test]
+fn a_run_measures_only_the_methods_named_and_dissects_their_error_when_asked() {
+    use fsot::eval::anatomy::{SPATIAL_EDGES, TEMPORAL_EDGES};
+    let dir = tempfile::tempdir().unwrap();
+    let names = ["white".to_string(), "ours-taa".to_string()];
+    let size = EvalSize { anatomy: true, ..tiny() };
+    let only = fsot::eval::suite::Only::Named(&names);
+    let records = run_eval(&size, &[2.1], &[Scene::SoftShadow], dir.path(), None, &[], only, |_| {}).unwrap();
+    let mut methods: Vec<&str> = records.iter().map(|r| r.method.as_str()).collect();
+    methods.dedup();
+    assert_eq!(methods, ["white", "ours-taa"]);
+    for r in &records {
+        let a = r.anatomy.as_ref().expect("an anatomy for every record");
+        // The anatomy's JOD is the judge's: averaged over the same renders.
+        assert!((a.jod - r.jod).abs() < 1e-9, "{r:?}");
+        assert_eq!(a.spatial.len(), SPATIAL_EDGES.len() - 1);
+        assert_eq!(a.temporal.len(), TEMPORAL_EDGES.len() - 1);
+        // Every spatial band holds power; the 8 judged frames reach some temporal bands only.
+        assert!(a.spatial.iter().all(|&p| p > 0.0), "{a:?}");
+        assert!(a.temporal[0] > 0.0 && a.temporal.iter().filter(|&&p| p > 0.0).count() >= 3, "{a:?}");
+        // Four channels (video), each with a value per band.
+        assert_eq!(a.bands.len(), 4);
+        assert!(a.bands.iter().all(|b| b.len() == a.band_frequencies.len()));
+        assert!(a.bands.iter().flatten().all(|&q| q.is_finite() && q >= 0.0), "{a:?}");
+    }
+    // An optimised mask leaves less error power at the lowest spatial frequencies
+    // than white noise does, with TAA and without.
+    for taa in [false, true] {
+        let low = |m: &str| {
+            let r = records.iter().find(|r| r.method == m && r.taa == taa).unwrap();
+            r.anatomy.as_ref().unwrap().spatial[0]
+        };
+        assert!(
+            low("ours-taa") < 0.8 * low("white"),
+            "TAA {taa}: {} against {}",
+            low("ours-taa"),
+            low("white")
+        );
+    }
+    assert!(fsot::eval::suite::anatomy_markdown(&records).contains("| ours-taa |"));
 }

@@ -55,6 +55,22 @@ impl Judge {
     /// The JOD (10: no visible difference) of `render` against `reference`
     /// (n x n frames), over the frames from `start`.
     pub fn jod(&self, render: &[Vec<f64>], reference: &[Vec<f64>], start: usize, n: usize) -> Result<f64> {
+        Ok(self.verdict(render, reference, start, n)?.jod)
+    }
+
+    /// The frame rate the judge watches at.
+    pub fn fps(&self) -> f64 {
+        self.fps as f64
+    }
+
+    /// The JOD of `render` against `reference` and what it pools: per channel and band.
+    pub fn verdict(
+        &self,
+        render: &[Vec<f64>],
+        reference: &[Vec<f64>],
+        start: usize,
+        n: usize,
+    ) -> Result<Verdict> {
         if render.len() != reference.len() || start >= render.len() {
             return Err(Error::invalid(format!(
                 "a judge of {} frames against {}, from frame {start}",
@@ -75,8 +91,51 @@ impl Judge {
             .metric
             .predict_video(&frames(render)?, &frames(reference)?, self.fps, Color::Srgb)
             .map_err(vdp_error)?;
-        Ok(prediction.jod as f64)
+        let (channels, frames) = (prediction.channels, prediction.frames);
+        let bands = prediction.band_frequencies.len();
+        let q = &prediction.quality_per_channel;
+        let pooled = (0..channels)
+            .map(|c| {
+                (0..bands)
+                    .map(|b| {
+                        let weight =
+                            CHANNEL_WEIGHTS[c] * if b + 1 == bands { BASEBAND_WEIGHTS[c] } else { 1.0 };
+                        let mean_square = (0..frames)
+                            .map(|f| (q[(c * frames + f) * bands + b] as f64 * weight).powi(2))
+                            .sum::<f64>()
+                            / frames as f64;
+                        mean_square.sqrt()
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok(Verdict {
+            jod: prediction.jod as f64,
+            bands: pooled,
+            band_frequencies: prediction.band_frequencies.iter().map(|&f| f as f64).collect(),
+        })
     }
+}
+
+/// ColorVideoVDP's weights per channel (sustained achromatic, red-green,
+/// yellow-violet, transient achromatic) and of each channel's baseband, as
+/// cvvdp 0.5.7's calibration (cvvdp_parameters.json) gives them.
+const CHANNEL_WEIGHTS: [f64; 4] = [1.0, 1.0, 1.0, 0.808_113_455_772_399_9];
+const BASEBAND_WEIGHTS: [f64; 4] =
+    [0.003_633_448_621_258_139_6, 1.662_772_417_068_481_4, 4.118_745_326_995_85, 25.259_698_867_797_85];
+
+/// A verdict: the JOD and the differences it pools.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Verdict {
+    pub jod: f64,
+    /// Per channel (sustained achromatic, red-green, yellow-violet, transient
+    /// achromatic; grey frames leave the two colour channels near zero) and
+    /// band (finest first, the baseband last): the root mean square over frames
+    /// of the pooled difference times the weights the JOD pools it with. The
+    /// JOD falls with the L4 norm of a frame's values over bands and channels.
+    pub bands: Vec<Vec<f64>>,
+    /// Band frequencies, cycles per degree (the baseband last).
+    pub band_frequencies: Vec<f64>,
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! Evaluation: render animated integrands with a mask's samples, filter the error
 //! as a display (TAA) and an eye would, and measure what is left.
+pub mod anatomy;
 pub mod eye;
 pub mod integrands;
 pub mod jod;

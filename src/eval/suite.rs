@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use crate::baselines::fast::{FastSpec, Filter};
 use crate::baselines::swap::SwapDevice;
 use crate::error::{Error, Result};
+use crate::eval::anatomy::{anatomy, Anatomy};
 use crate::eval::eye::Eye;
 use crate::eval::jod::{Judge, DISPLAY};
 use crate::eval::metric::relative_errors;
@@ -74,6 +75,9 @@ pub struct EvalSize {
     pub planned_without_taa: bool,
     /// The ColorVideoVDP display model (`jod::DISPLAY` by default).
     pub display: &'static str,
+    /// Also dissect each record's error (`anatomy.rs`): its spectra and what
+    /// ColorVideoVDP pools per channel and band.
+    pub anatomy: bool,
 }
 
 impl EvalSize {
@@ -91,6 +95,7 @@ impl EvalSize {
             planned: true,
             planned_without_taa: false,
             display: DISPLAY,
+            anatomy: false,
         }
     }
 
@@ -107,6 +112,7 @@ impl EvalSize {
             planned: true,
             planned_without_taa: true,
             display: DISPLAY,
+            anatomy: false,
         }
     }
 }
@@ -128,17 +134,26 @@ pub struct Record {
     pub jod_ci95: f64,
     /// Independent masks measured (1 for a mask given from outside).
     pub seeds: u32,
+    /// The error dissected (mean over the renders), when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anatomy: Option<Anatomy>,
 }
 
 /// What one seed's renders measured, per TAA setting (without, with): the
-/// means of (pRelMSE, RelMSE, JOD) over its renders.
-type SeedValues = [[f64; 3]; 2];
+/// means of (pRelMSE, RelMSE, JOD) over its renders, and their anatomies
+/// when asked for.
+#[derive(Clone, Default)]
+struct SeedValues {
+    values: [[f64; 3]; 2],
+    anatomy: [Vec<Anatomy>; 2],
+}
 
 /// The two records (without and with TAA) of a method's seeds.
 fn records_of(scene: Scene, method: &str, sigma: f64, seeds: u32, values: &[SeedValues]) -> [Record; 2] {
     [false, true].map(|taa| {
         let k = taa as usize;
-        let of = |j: usize| Interval::of(&values.iter().map(|v| v[k][j]).collect::<Vec<_>>());
+        let of = |j: usize| Interval::of(&values.iter().map(|v| v.values[k][j]).collect::<Vec<_>>());
+        let dissected: Vec<Anatomy> = values.iter().flat_map(|v| v.anatomy[k].iter().cloned()).collect();
         let (p, r, j) = (of(0), of(1), of(2));
         Record {
             scene: scene.name().to_string(),
@@ -152,6 +167,7 @@ fn records_of(scene: Scene, method: &str, sigma: f64, seeds: u32, values: &[Seed
             jod: j.mean,
             jod_ci95: j.ci95,
             seeds,
+            anatomy: (!dissected.is_empty()).then(|| Anatomy::mean(&dissected)),
         }
     })
 }
@@ -344,12 +360,20 @@ impl Judging<'_> {
     fn measure(&self, image: Vec<Vec<f64>>) -> Result<(SeedValues, crate::eval::pictures::Frames)> {
         let n = self.size.shot.image;
         let with_taa = taa(&image, TAA_ALPHA);
-        let mut out = [[0.0; 3]; 2];
+        let mut out = SeedValues::default();
         for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
             let r = &self.reference;
             let (p, rel) = relative_errors(frames, &r.frames[k], &r.seen[k], &self.eye, self.start, n);
-            let jod = self.judge.jod(frames, &r.frames[k], self.start, n)?;
-            out[k] = [p, rel, jod];
+            let jod = match self.size.anatomy {
+                true => {
+                    let a = anatomy(frames, &r.frames[k], self.start, n, self.judge)?;
+                    let jod = a.jod;
+                    out.anatomy[k].push(a);
+                    jod
+                }
+                false => self.judge.jod(frames, &r.frames[k], self.start, n)?,
+            };
+            out.values[k] = [p, rel, jod];
         }
         Ok((out, (image, with_taa)))
     }
@@ -365,14 +389,17 @@ impl Judging<'_> {
         let renders = self.size.renders.max(1);
         let mut values = Vec::with_capacity(seeds as usize);
         for k in 0..seeds {
-            let mut mean = [[0.0; 3]; 2];
+            let mut mean = SeedValues::default();
             for r in 0..renders {
                 let image = render_with(k, 100 + 1000 * k as u64 + r as u64)?;
                 let (v, frames) = self.measure(image)?;
-                for (m, v) in mean.iter_mut().zip(v) {
+                for (m, v) in mean.values.iter_mut().zip(v.values) {
                     for (a, b) in m.iter_mut().zip(v) {
                         *a += b / renders as f64;
                     }
+                }
+                for (m, v) in mean.anatomy.iter_mut().zip(v.anatomy) {
+                    m.extend(v);
                 }
                 if let (Some(keep), 0, 0) = (kept.as_deref_mut(), k, r) {
                     keep.push(frames);
@@ -384,7 +411,27 @@ impl Judging<'_> {
     }
 }
 
-/// Runs the evaluation; `log` gets a line per step.
+/// Which methods a run measures: all of them, or those named (`fsot-planned`
+/// names both planned records).
+#[derive(Clone, Copy, Debug, Default)]
+pub enum Only<'a> {
+    #[default]
+    All,
+    Named(&'a [String]),
+}
+
+impl Only<'_> {
+    pub fn includes(&self, method: &str) -> bool {
+        match self {
+            Only::All => true,
+            Only::Named(names) => names.iter().any(|n| n == method),
+        }
+    }
+}
+
+/// Runs the evaluation of the methods `only` names (the given masks `extra`
+/// among them); `log` gets a line per step.
+#[allow(clippy::too_many_arguments)]
 pub fn run_eval(
     size: &EvalSize,
     sigmas: &[f64],
@@ -392,6 +439,7 @@ pub fn run_eval(
     cache: &Path,
     pictures: Option<&Path>,
     extra: &[(String, Mask)],
+    only: Only,
     mut log: impl FnMut(&str),
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
@@ -424,8 +472,12 @@ pub fn run_eval(
             // The first seed's first render of each method, for the pictures (first sigma only).
             let mut kept = Vec::new();
             let keep = pictures.is_some() && sigma_index == 0;
-            let names: Vec<&str> =
-                METHODS.iter().copied().chain(extra.iter().map(|e| e.0.as_str())).collect();
+            let names: Vec<&str> = METHODS
+                .iter()
+                .copied()
+                .chain(extra.iter().map(|e| e.0.as_str()))
+                .filter(|m| only.includes(m))
+                .collect();
             for method in names {
                 let given = extra.iter().find(|e| e.0 == method).map(|e| &e.1);
                 let masks: Vec<Mask> = match given {
@@ -458,7 +510,7 @@ pub fn run_eval(
                 ));
                 records.extend(pair);
             }
-            if size.planned {
+            if size.planned && only.includes("fsot-planned") {
                 records.extend(planned_records(&judging, sigma, cache, &mut log)?);
             }
             if let (Some(dir), false) = (pictures, kept.is_empty()) {
@@ -568,7 +620,8 @@ pub fn to_markdown(records: &[Record]) -> String {
                 &scenes,
                 &methods,
                 |scene, m| {
-                    let white = find(scene, "white")?.prelmse;
+                    // Absolute values where white noise was not measured.
+                    let white = find(scene, "white").map_or(0.0, |r| r.prelmse);
                     find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
                 },
                 false,
@@ -638,6 +691,71 @@ fn table(
             continue;
         }
         out += &format!("| {scene} | {} |\n", cells.join(" | "));
+    }
+    out
+}
+
+/// The records' anatomies as Markdown: per scene and TAA setting, a row per
+/// method: its JOD, its error power per spatial and temporal band (a ratio to
+/// white noise's where white noise was measured), and ColorVideoVDP's pooled
+/// differences in the sustained and transient achromatic channels per band.
+pub fn anatomy_markdown(records: &[Record]) -> String {
+    use crate::eval::anatomy::{SPATIAL_EDGES, TEMPORAL_EDGES};
+    let mut out = String::new();
+    let mut scenes: Vec<&str> = Vec::new();
+    for r in records.iter().filter(|r| r.anatomy.is_some()) {
+        if !scenes.contains(&r.scene.as_str()) {
+            scenes.push(&r.scene);
+        }
+    }
+    let edges = |e: &[f64], unit: &str| -> Vec<String> {
+        e.windows(2)
+            .map(|w| format!("{}-{} {unit}", w[0], w[1].min(if unit == "Hz" { 30.0 } else { 0.71 })))
+            .collect()
+    };
+    for scene in scenes {
+        for taa in [true, false] {
+            let rows: Vec<&Record> =
+                records.iter().filter(|r| r.scene == scene && r.taa == taa && r.anatomy.is_some()).collect();
+            let Some(first) = rows.first().and_then(|r| r.anatomy.as_ref()) else { continue };
+            let white = rows.iter().find(|r| r.method == "white").and_then(|r| r.anatomy.clone());
+            let bands: Vec<String> = first.band_frequencies.iter().map(|f| format!("{f:.2} cpd")).collect();
+            let mut head = vec!["method".to_string(), "JOD".to_string()];
+            head.extend(edges(&SPATIAL_EDGES, "c/px"));
+            head.extend(edges(&TEMPORAL_EDGES, "Hz"));
+            head.extend(bands.iter().map(|b| format!("sust. {b}")));
+            head.extend(bands.iter().map(|b| format!("trans. {b}")));
+            out += &format!(
+                "\n### {scene}, {} (error power per band{}; ColorVideoVDP's weighted differences per band)\n\n",
+                if taa { "with TAA" } else { "without TAA" },
+                if white.is_some() { " as a ratio to white noise's" } else { "" }
+            );
+            out += &format!("| {} |\n|{}\n", head.join(" | "), " --- |".repeat(head.len()));
+            for r in rows {
+                let a = r.anatomy.as_ref().expect("filtered");
+                let ratio = |v: f64, w: Option<f64>| match w {
+                    Some(w) if w > 0.0 => format!("{:.3}", v / w),
+                    _ => format!("{v:.2e}"),
+                };
+                let mut cells = vec![r.method.clone(), format!("{:.3}", a.jod)];
+                cells.extend(
+                    a.spatial
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.spatial[k]))),
+                );
+                cells.extend(
+                    a.temporal
+                        .iter()
+                        .enumerate()
+                        .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.temporal[k]))),
+                );
+                for c in [0, 3] {
+                    cells.extend(a.bands.get(c).into_iter().flatten().map(|v| format!("{v:.4}")));
+                }
+                out += &format!("| {} |\n", cells.join(" | "));
+            }
+        }
     }
     out
 }

@@ -50,6 +50,8 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let rb = AtomicFile::create(&args.out.join("robustness.json"))?;
     let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
+    size.anatomy = args.anatomy;
+    let anatomy_file = args.anatomy.then(|| AtomicFile::create(&args.out.join("anatomy.md"))).transpose()?;
     if let Some(i) = args.iterations {
         if !(1..=1_000_000).contains(&i) {
             return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
@@ -91,10 +93,28 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     published.extend(own);
     let pictures = args.out.join("pictures");
     let cache = cache_dir(&args.out);
-    let records =
-        run_eval(&size, &sigmas, &scenes, &cache, Some(&pictures), &published, |line| eprintln!("{line}"))?;
-    // Judges that differ from the optimizer, on the sigma 2.1 column's masks.
-    let robust = match sigmas.contains(&robustness::MADE_FOR_SIGMA) {
+    let known: Vec<&str> = fsot::eval::suite::METHODS
+        .iter()
+        .copied()
+        .chain(published.iter().map(|p| p.0.as_str()))
+        .chain(["fsot-planned"])
+        .collect();
+    if let Some(unknown) = args.methods.iter().find(|m| !known.contains(&m.as_str())) {
+        return Err(Error::invalid(format!(
+            "--methods: unknown method `{unknown}` (one of {})",
+            known.join(", ")
+        )));
+    }
+    let only = match args.methods.is_empty() {
+        true => fsot::eval::suite::Only::All,
+        false => fsot::eval::suite::Only::Named(&args.methods),
+    };
+    let records = run_eval(&size, &sigmas, &scenes, &cache, Some(&pictures), &published, only, |line| {
+        eprintln!("{line}")
+    })?;
+    // Judges that differ from the optimizer, on the sigma 2.1 column's masks
+    // (every method's: not with --methods).
+    let robust = match sigmas.contains(&robustness::MADE_FOR_SIGMA) && args.methods.is_empty() {
         true => {
             let r = robustness::run_robustness(&size, &scenes, &cache, |line| eprintln!("{line}"))?;
             rb.commit(format!("{}\n", serde_json::to_string_pretty(&r).unwrap_or_default()).as_bytes())?;
@@ -138,6 +158,16 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         to_markdown(&records) + &robust
     );
     md.commit(table.as_bytes())?;
+    if let Some(f) = anatomy_file {
+        let text = format!(
+            "# fsot eval: the error's anatomy\n\nfsot {} (commit {}); {} display; bands as in src/eval/anatomy.rs.\n{}",
+            env!("CARGO_PKG_VERSION"),
+            env!("FSOT_COMMIT"),
+            size.display,
+            fsot::eval::suite::anatomy_markdown(&records)
+        );
+        f.commit(text.as_bytes())?;
+    }
     js.commit(json.as_bytes())?;
     if let Some(f) = extra {
         f.commit(json.as_bytes())?;

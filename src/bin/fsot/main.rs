@@ -101,6 +101,15 @@ struct EvalArgs {
     /// Only these scenes (comma-separated names) [default: all].
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
+    /// Only these methods (comma-separated: the table's names, `published-stbn`
+    /// and `published-fast` with --peers, the names of --mask, `fsot-planned`)
+    /// [default: all].
+    #[arg(long, value_delimiter = ',')]
+    methods: Vec<String>,
+    /// Also dissect each method's error into anatomy.md: its power per spatial and
+    /// temporal frequency band, and ColorVideoVDP's differences per channel and band.
+    #[arg(long)]
+    anatomy: bool,
     /// Also measure the published scalar masks found in this folder
     /// (real_stbn.png, real_uniform_gauss_1.3435_exponential_0.1_0.1_product.png),
     /// as `published-stbn` and `published-fast`.
