@@ -18,7 +18,8 @@ fn main() {
     std::fs::create_dir_all(&cache).unwrap();
     let size = EvalSize::quick();
     let displays = ["standard_fhd", "standard_4k", "sdr_fhd_24", "standard_phone"];
-    let judges: Vec<Judge> = displays.iter().map(|d| Judge::new(d, 60.0).unwrap()).collect();
+    let judges: Vec<Judge> =
+        displays.iter().map(|d| Judge::new(d, 60.0, fsot::eval::jod::Grey::Luminance).unwrap()).collect();
     let methods = ["white", "stbn", "ours-perceptual-taa"];
     let masks: Vec<_> = methods.iter().map(|m| method_mask(m, 2.1, &size, &cache, 1).unwrap()).collect();
     let n = size.shot.image;

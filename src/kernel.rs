@@ -1,6 +1,8 @@
 //! Spatio-temporal kernels: the filter the rendering error goes through.
 //!
-//! A kernel is spatial Gaussian x temporal filter. On a wrapping tile it becomes a
+//! A kernel is spatial filter x temporal filter. The spatial filter is a Gaussian
+//! given in pixels, or the eye at a display's pixels per degree (`csf.rs`: a
+//! mixture of Gaussians fitted to the contrast sensitivity). On a wrapping tile it becomes a
 //! finite table of offsets (dx, dy, dt) from a centre pixel, each with a weight; the
 //! table is folded onto the tile (offsets that land on the same tile pixel add up),
 //! normalised to sum 1 and sorted by decreasing weight, so that the class of a level
@@ -29,11 +31,52 @@ pub enum Temporal {
     PerceptualTaa { fps: f64, alpha: f64 },
 }
 
+/// The spatial part of a kernel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Spatial {
+    /// exp(-(dx^2 + dy^2) / sigma^2), pixels (no factor 2, as in the paper).
+    Gaussian { sigma: f64 },
+    /// The eye's contrast sensitivity on a display of `ppd` pixels per degree.
+    Display { ppd: f64 },
+}
+
+impl Spatial {
+    /// The weights of a centred offset (dx, dy), before normalisation, and the
+    /// largest offset with a weight: a Gaussian's weights are exp(-r^2 / sigma^2)
+    /// to the tolerance; a display's are its fitted mixture.
+    fn weights(&self, tolerance: f64) -> (i64, Box<dyn Fn(i64, i64) -> f64>) {
+        match *self {
+            Spatial::Gaussian { sigma } => {
+                let r = (sigma * (1.0 / tolerance).ln().sqrt()).floor() as i64;
+                let s2 = sigma * sigma;
+                (r, Box::new(move |dx, dy| (-((dx * dx + dy * dy) as f64) / s2).exp()))
+            }
+            Spatial::Display { ppd } => {
+                let parts: Vec<(f64, Vec<f64>)> =
+                    crate::csf::mixture(ppd).into_iter().map(|(w, s)| (w, crate::csf::profile(s))).collect();
+                let r = parts.iter().map(|p| p.1.len() / 2).max().unwrap_or(0) as i64;
+                let at = move |dx: i64, dy: i64| {
+                    parts
+                        .iter()
+                        .map(|(w, p)| {
+                            let c = (p.len() / 2) as i64;
+                            let get = |k: i64| {
+                                p.get((k + c) as usize).copied().filter(|_| k.abs() <= c).unwrap_or(0.0)
+                            };
+                            w * get(dx) * get(dy)
+                        })
+                        .sum()
+                };
+                (r, Box::new(at))
+            }
+        }
+    }
+}
+
 /// Everything that defines a kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KernelSpec {
-    /// Spatial Gaussian exp(-(dx^2 + dy^2) / sigma^2) (no factor 2, as in the paper).
-    pub sigma: f64,
+    pub spatial: Spatial,
     pub temporal: Temporal,
     /// Offsets whose weight is below `tolerance` x the largest weight are dropped.
     /// Such offsets belong only to classes of levels below that fraction of the
@@ -98,7 +141,14 @@ impl KernelSpec {
                 )))
             }
         };
-        Ok(Self { sigma, temporal, tolerance: DEFAULT_TOLERANCE })
+        Ok(Self { spatial: Spatial::Gaussian { sigma }, temporal, tolerance: DEFAULT_TOLERANCE })
+    }
+
+    /// The same kernel with the eye of a display of `ppd` pixels per degree as
+    /// its spatial filter.
+    pub fn on_display(self, ppd: f64) -> Result<Self> {
+        let ppd = crate::display::check_ppd(ppd)?;
+        Ok(Self { spatial: Spatial::Display { ppd }, ..self })
     }
 
     pub fn name(&self) -> &'static str {
@@ -122,27 +172,36 @@ impl KernelSpec {
             let (key, value) = pair.split_once(" = ")?;
             values.insert(key, value.parse::<f64>().ok()?);
         }
-        let expected: &[&str] = match name {
-            "spatial" => &["sigma"],
-            "gaussian" => &["sigma", "sigma_t"],
-            "taa" => &["sigma", "alpha"],
-            "perceptual" => &["sigma", "fps"],
-            "perceptual-taa" => &["sigma", "fps", "alpha"],
+        let spatial = match (values.contains_key("sigma"), values.contains_key("ppd")) {
+            (true, false) => "sigma",
+            (false, true) => "ppd",
             _ => return None,
         };
-        if values.len() != expected.len() || expected.iter().any(|k| !values.contains_key(k)) {
+        let expected: &[&str] = match name {
+            "spatial" => &[],
+            "gaussian" => &["sigma_t"],
+            "taa" => &["alpha"],
+            "perceptual" => &["fps"],
+            "perceptual-taa" => &["fps", "alpha"],
+            _ => return None,
+        };
+        if values.len() != expected.len() + 1 || expected.iter().any(|k| !values.contains_key(k)) {
             return None;
         }
         let get = |k: &str, default: f64| values.get(k).copied().unwrap_or(default);
         let sigma_t = values.get("sigma_t").copied();
-        Self::from_name(
+        let spec = Self::from_name(
             name,
-            get("sigma", 0.0),
+            get("sigma", DEFAULT_SIGMA),
             sigma_t,
             get("alpha", DEFAULT_ALPHA),
             get("fps", DEFAULT_FPS),
         )
-        .ok()
+        .ok()?;
+        match spatial {
+            "ppd" => spec.on_display(get("ppd", 0.0)).ok(),
+            _ => Some(spec),
+        }
     }
 
     /// A one-line description with every parameter, for files and logs.
@@ -154,7 +213,11 @@ impl KernelSpec {
             Temporal::Perceptual { fps } => format!(", fps = {fps}"),
             Temporal::PerceptualTaa { fps, alpha } => format!(", fps = {fps}, alpha = {alpha}"),
         };
-        format!("{} (sigma = {}{t})", self.name(), self.sigma)
+        let spatial = match self.spatial {
+            Spatial::Gaussian { sigma } => format!("sigma = {sigma}"),
+            Spatial::Display { ppd } => format!("ppd = {ppd}"),
+        };
+        format!("{} ({spatial}{t})", self.name())
     }
 }
 
@@ -292,13 +355,13 @@ impl Kernel {
     pub fn new(spec: KernelSpec, tile: &Tile) -> Self {
         let (w, h, frames) = (tile.width as i64, tile.height as i64, tile.frames);
         // Spatial weights, folded onto W x H.
-        let s2 = spec.sigma * spec.sigma;
-        let r = (spec.sigma * (1.0 / spec.tolerance).ln().sqrt()).floor() as i64;
+        let (r, weight) = spec.spatial.weights(spec.tolerance);
+        let peak = weight(0, 0);
         let mut spatial = vec![0.0f64; (w * h) as usize];
         for dy in -r..=r {
             for dx in -r..=r {
-                let g = (-((dx * dx + dy * dy) as f64) / s2).exp();
-                if g >= spec.tolerance {
+                let g = weight(dx, dy);
+                if g >= spec.tolerance * peak {
                     spatial[(dy.rem_euclid(h) * w + dx.rem_euclid(w)) as usize] += g;
                 }
             }
@@ -426,6 +489,68 @@ mod tests {
         assert!((k.mean_class_len() - std::f64::consts::PI * 4.41).abs() < 0.1);
     }
 
+    /// The kernel's 2-D frequency response at (fx, fy) cycles per pixel, by the
+    /// direct sum over its taps (a tile of one frame).
+    fn response(k: &Kernel, w: u32, fx: f64, fy: f64) -> f64 {
+        let signed = |d: u32| if d > w / 2 { d as f64 - w as f64 } else { d as f64 };
+        k.taps
+            .iter()
+            .map(|t| t.weight * (std::f64::consts::TAU * (fx * signed(t.dx) + fy * signed(t.dy))).cos())
+            .sum()
+    }
+
+    #[test]
+    fn a_gaussian_kernel_responds_as_its_fourier_transform() {
+        // exp(-r^2 / sigma^2) transforms to exp(-pi^2 sigma^2 f^2): on the pixel grid
+        // to within aliasing, below 1e-3 for sigma 2.1.
+        let spec = KernelSpec::from_name("spatial", 2.1, None, 0.1, 60.0).unwrap();
+        let k = Kernel::new(spec, &tile(128, 128, 1));
+        for (fx, fy) in [(0.0, 0.0), (0.05, 0.0), (0.1, 0.1), (0.2, 0.05), (0.3, 0.3), (0.5, 0.5)] {
+            let exact = (-(std::f64::consts::PI * 2.1f64).powi(2) * (fx * fx + fy * fy)).exp();
+            assert!((response(&k, 128, fx, fy) - exact).abs() < 1e-3, "({fx}, {fy})");
+        }
+    }
+
+    #[test]
+    fn a_display_kernel_follows_the_contrast_sensitivity_at_its_pixels_per_degree() {
+        // Against Barten's formula in f64, over the whole pixel-frequency square:
+        // flat up to the sensitivity's peak, then its fall. A positive mixture of
+        // Gaussians rounds the shoulder at the peak (the worst point, about 0.12
+        // below the target at 38 pixels per degree); it is far closer than the
+        // Gaussian of sigma 2.1 pixels.
+        for ppd in [38.0, 75.0] {
+            let gaussian = Kernel::new(
+                KernelSpec::from_name("spatial", 2.1, None, 0.1, 60.0).unwrap(),
+                &tile(128, 128, 1),
+            );
+            let spec = gaussian.spec.on_display(ppd).unwrap();
+            let k = Kernel::new(spec, &tile(128, 128, 1));
+            assert!(k.taps.iter().all(|t| t.weight > 0.0));
+            let (mut worst, mut square, mut square_gaussian, mut n) = (0.0f64, 0.0, 0.0, 0.0);
+            for i in 0..=20 {
+                for j in 0..=20 {
+                    let (fx, fy) = (0.025 * i as f64, 0.025 * j as f64);
+                    let want = crate::csf::target(fx.hypot(fy), ppd);
+                    let d = response(&k, 128, fx, fy) - want;
+                    worst = worst.max(d.abs());
+                    square += d * d;
+                    square_gaussian += (response(&gaussian, 128, fx, fy) - want).powi(2);
+                    n += 1.0;
+                }
+            }
+            let (rms, rms_gaussian) = ((square / n).sqrt(), (square_gaussian / n).sqrt());
+            assert!(worst < 0.13 && rms < 0.05, "ppd {ppd}: worst {worst}, rms {rms}");
+            assert!(rms < 0.4 * rms_gaussian, "ppd {ppd}: rms {rms} against the Gaussian's {rms_gaussian}");
+        }
+        // A finer display sees less of a pixel-sized error: a wider kernel.
+        let wide = |ppd| {
+            let spec =
+                KernelSpec::from_name("spatial", 2.1, None, 0.1, 60.0).unwrap().on_display(ppd).unwrap();
+            Kernel::new(spec, &tile(64, 64, 1)).mean_class_len()
+        };
+        assert!(wide(75.0) > 2.0 * wide(38.0), "{} against {}", wide(75.0), wide(38.0));
+    }
+
     #[test]
     fn kernels_fold_onto_tiny_tiles() {
         let spec = KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap();
@@ -460,6 +585,8 @@ mod tests {
             for (sigma, alpha, fps, sigma_t) in [(2.1, 0.1, 60.0, None), (1.3435, 0.05, 30.0, Some(0.7))] {
                 let spec = KernelSpec::from_name(name, sigma, sigma_t, alpha, fps).unwrap();
                 assert_eq!(KernelSpec::from_description(&spec.describe()), Some(spec), "{}", spec.describe());
+                let spec = spec.on_display(37.8).unwrap();
+                assert_eq!(KernelSpec::from_description(&spec.describe()), Some(spec), "{}", spec.describe());
             }
         }
         for text in [
@@ -468,6 +595,8 @@ mod tests {
             "taa (sigma = 2.1, alpha = x)",
             "taa (sigma = 2.1, alpha = 0.1, fps = 60)",
             "taa (sigma = 2.1, alpha = 7)",
+            "taa (sigma = 2.1, ppd = 40, alpha = 0.1)",
+            "taa (ppd = 1, alpha = 0.1)",
             "",
         ] {
             assert_eq!(KernelSpec::from_description(text), None, "{text}");

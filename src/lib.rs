@@ -6,6 +6,8 @@ pub mod baselines;
 pub mod bench;
 pub mod checkpoint;
 pub mod cpu_backend;
+pub mod csf;
+pub mod display;
 pub mod error;
 pub mod eval;
 pub mod gpu;

@@ -114,9 +114,15 @@ pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
         (true, Some(a)) => ("perceptual-taa", format!("TAA (alpha {a}) then the eye at {} fps", display.fps)),
         (true, None) => ("perceptual", format!("no TAA: the eye's temporal filter at {} fps", display.fps)),
     };
-    let spec =
-        KernelSpec::from_name(name, display.sigma, None, display.taa_alpha.unwrap_or(0.1), display.fps)?;
-    Ok((spec, why))
+    let spec = KernelSpec::from_name(
+        name,
+        crate::kernel::DEFAULT_SIGMA,
+        None,
+        display.taa_alpha.unwrap_or(0.1),
+        display.fps,
+    )?;
+    let spec = KernelSpec { spatial: display.spatial, ..spec };
+    Ok((spec, format!("{why}, seen on {}", display.seen_on)))
 }
 
 /// The tile's size, and why.

@@ -4,7 +4,12 @@
 //! [display]
 //! fps = 60            # frame rate, for the perceptual filter
 //! taa_alpha = 0.1     # TAA blend weight of the current frame; absent: no TAA
-//! sigma = 2.1         # the eye's spatial Gaussian in pixels; default 2.1
+//! name = "standard_fhd"  # the display the frames are seen on (default), or:
+//! # ppd = 60          #   its pixels per degree, or:
+//! # resolution = [2560, 1440]
+//! # diagonal = 27.0   #   inches
+//! # distance = 0.7    #   metres
+//! # sigma = 2.1       # instead: the eye as a spatial Gaussian in pixels
 //! animated = true     # false: still camera and scene (accumulation)
 //!
 //! [tile]              # optional; the planner chooses what is absent
@@ -27,17 +32,20 @@ use serde::Deserialize;
 use toml::Spanned;
 
 use crate::error::{Error, Result};
-use crate::kernel::DEFAULT_SIGMA;
+use crate::kernel::Spatial;
 use crate::problem::{Tile, MAX_DIMS, MAX_SPP};
 
 /// How the renderer's frames are shown and seen.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Display {
     pub fps: f64,
     /// TAA's blend weight of the current frame; None: no TAA.
     pub taa_alpha: Option<f64>,
-    /// The eye's spatial Gaussian exp(-r^2 / sigma^2), pixels.
-    pub sigma: f64,
+    /// The eye's spatial filter: the contrast sensitivity at the display's
+    /// pixels per degree, or a Gaussian given in pixels.
+    pub spatial: Spatial,
+    /// Where `spatial` came from, for the plan's reasons.
+    pub seen_on: String,
     /// False: a still camera and scene, frames accumulated.
     pub animated: bool,
 }
@@ -80,6 +88,11 @@ struct FileScene {
 struct FileDisplay {
     fps: Option<Spanned<f64>>,
     taa_alpha: Option<Spanned<f64>>,
+    name: Option<Spanned<String>>,
+    ppd: Option<Spanned<f64>>,
+    resolution: Option<Spanned<[u32; 2]>>,
+    diagonal: Option<Spanned<f64>>,
+    distance: Option<Spanned<f64>>,
     sigma: Option<Spanned<f64>>,
     animated: Option<bool>,
 }
@@ -119,7 +132,7 @@ impl Scene {
         })?;
         let display = match &file.display {
             Some(d) => check_display(d.get_ref(), &at)?,
-            None => Display { fps: 60.0, taa_alpha: None, sigma: DEFAULT_SIGMA, animated: true },
+            None => Display::default(),
         };
         let size = match file.tile.as_ref().and_then(|t| t.size.as_ref()) {
             Some(s) => Some(Tile::parse_size(s.get_ref()).map_err(|e| at(s.span(), e.to_string()))?),
@@ -158,14 +171,90 @@ fn check_display(
         Some(a) => Some(*a.get_ref()),
         None => None,
     };
-    let sigma = match &d.sigma {
-        Some(s) if !(s.get_ref().is_finite() && *s.get_ref() > 0.0 && *s.get_ref() <= 8.0) => {
-            return Err(at(s.span(), format!("sigma must be in (0, 8] pixels, got {}", s.get_ref())))
-        }
-        Some(s) => *s.get_ref(),
-        None => DEFAULT_SIGMA,
+    let (spatial, seen_on) = viewing(d, at)?;
+    Ok(Display { fps, taa_alpha, spatial, seen_on, animated: d.animated.unwrap_or(true) })
+}
+
+/// The spatial filter of a `[display]`: one of a name, ppd, the geometry
+/// (resolution, diagonal, distance, all three) or sigma.
+fn viewing(
+    d: &FileDisplay,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<(Spatial, String), String> {
+    let geometry = [
+        d.resolution.as_ref().map(|r| r.span()),
+        d.diagonal.as_ref().map(|r| r.span()),
+        d.distance.as_ref().map(|r| r.span()),
+    ];
+    let given: Vec<(&str, Range<usize>)> = [
+        ("name", d.name.as_ref().map(|v| v.span())),
+        ("ppd", d.ppd.as_ref().map(|v| v.span())),
+        ("resolution, diagonal and distance", geometry.iter().flatten().next().cloned()),
+        ("sigma", d.sigma.as_ref().map(|v| v.span())),
+    ]
+    .into_iter()
+    .filter_map(|(k, s)| s.map(|s| (k, s)))
+    .collect();
+    if let [_, (second, span), ..] = given.as_slice() {
+        return Err(at(
+            span.clone(),
+            format!(
+                "{second} with {}: give the display one way (name, ppd, the geometry or sigma)",
+                given[0].0
+            ),
+        ));
+    }
+    let on = |ppd: f64, span: Range<usize>, what: String| -> std::result::Result<(Spatial, String), String> {
+        let ppd = crate::display::check_ppd(ppd).map_err(|e| at(span, e.to_string()))?;
+        Ok((Spatial::Display { ppd }, format!("{what}: {ppd:.1} pixels per degree")))
     };
-    Ok(Display { fps, taa_alpha, sigma, animated: d.animated.unwrap_or(true) })
+    if let Some(s) = &d.sigma {
+        let sigma = *s.get_ref();
+        if !(sigma.is_finite() && sigma > 0.0 && sigma <= 8.0) {
+            return Err(at(s.span(), format!("sigma must be in (0, 8] pixels, got {sigma}")));
+        }
+        return Ok((Spatial::Gaussian { sigma }, format!("the eye as a Gaussian of sigma {sigma} pixels")));
+    }
+    if let Some(p) = &d.ppd {
+        return on(*p.get_ref(), p.span(), "the display".into());
+    }
+    if let Some(n) = &d.name {
+        let ppd = crate::display::preset_ppd(n.get_ref()).map_err(|e| at(n.span(), e.to_string()))?;
+        return on(ppd, n.span(), format!("display {}", n.get_ref()));
+    }
+    match (&d.resolution, &d.diagonal, &d.distance) {
+        (None, None, None) => Ok(Display::default_viewing()),
+        (Some(r), Some(g), Some(s)) => {
+            let ppd = crate::display::pixels_per_degree(*r.get_ref(), *g.get_ref(), *s.get_ref())
+                .map_err(|e| at(r.span(), e.to_string()))?;
+            let [w, h] = *r.get_ref();
+            on(ppd, r.span(), format!("a {w} x {h} display of {} in at {} m", g.get_ref(), s.get_ref()))
+        }
+        _ => {
+            let span = geometry.iter().flatten().next().cloned().unwrap_or(0..0);
+            Err(at(
+                span,
+                "the display's geometry needs all of resolution, diagonal (inches) and distance (metres)"
+                    .into(),
+            ))
+        }
+    }
+}
+
+impl Display {
+    fn default_viewing() -> (Spatial, String) {
+        let name = crate::display::DEFAULT_DISPLAY;
+        let ppd = crate::display::preset_ppd(name).expect("the default display is a preset"); // ok: a constant
+        (Spatial::Display { ppd }, format!("display {name} (the default): {ppd:.1} pixels per degree"))
+    }
+}
+
+impl Default for Display {
+    /// 60 fps, no TAA, animated, seen on the default display.
+    fn default() -> Self {
+        let (spatial, seen_on) = Display::default_viewing();
+        Display { fps: 60.0, taa_alpha: None, spatial, seen_on, animated: true }
+    }
 }
 
 fn check_group(

@@ -48,7 +48,7 @@ fn optimize_writes_exr_and_png_and_score_reads_it() {
     let s = fsot(&["score", "m.exr"], dir.path());
     assert!(s.status.success(), "{}", stderr(&s));
     let recorded = String::from_utf8_lossy(&s.stdout).into_owned();
-    assert!(recorded.contains("kernel taa (sigma = 2.1, alpha = 0.1) (recorded in the mask)"), "{recorded}");
+    assert!(recorded.contains("kernel taa (ppd = 37.84, alpha = 0.1) (recorded in the mask)"), "{recorded}");
     assert_eq!(recorded.split(": objective").nth(1), asked.split(": objective").nth(1));
     // --init continues from the file, taking its shape.
     let c = fsot(
@@ -637,7 +637,7 @@ fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
     std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
     let run = |value: &str, out: &str| {
         let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"];
-        let more = ["--kernel", "perceptual-taa", "--profile", "--out", out];
+        let more = ["--kernel", "perceptual-taa", "--sigma", "2.1", "--profile", "--out", out];
         // On a GPU the workgroup transport's second pass would take these
         // classes (up to 4096): off, so that the large-class stage runs.
         let vars = [("FSOT_SORT", value), ("FSOT_DEFER", "0")];
@@ -711,7 +711,7 @@ fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_r
     // on lavapipe); the profile names the limit.
     let dir = tempfile::tempdir().unwrap();
     let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "2"];
-    let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
+    let more = ["--kernel", "taa", "--sigma", "2.1", "--profile", "--out", "m.exr"];
     let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", "64")], &[&args[..], &more[..]].concat());
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}{text}", stderr(&o));

@@ -7,6 +7,11 @@ use fsot::eval::scenes::Scene;
 use fsot::eval::suite::{run_eval, to_json, to_markdown, EvalSize, METHODS};
 use fsot::problem::Tile;
 
+/// The eye of the evaluation's display, which `fsot-planned` plans for.
+fn judged_on() -> fsot::kernel::Spatial {
+    fsot::kernel::Spatial::Display { ppd: fsot::display::preset_ppd(fsot::eval::jod::DISPLAY).unwrap() }
+}
+
 fn tiny() -> EvalSize {
     EvalSize {
         tile: Tile::new(16, 16, 8, 1, 2).unwrap(),
@@ -19,7 +24,10 @@ fn tiny() -> EvalSize {
         reference_samples: 16,
         planned: false,
         planned_without_taa: true,
-        display: fsot::eval::jod::DISPLAY,
+        displays: vec![fsot::eval::jod::DISPLAY],
+        plan_tile: true,
+        grey: fsot::eval::jod::Grey::Luminance,
+        flip: None,
         anatomy: false,
     }
 }
@@ -77,7 +85,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     }
     let md = to_markdown(&records);
     assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
-    assert!(md.contains("### JOD, sigma 2.1, with TAA") && md.contains(" +- "));
+    assert!(md.contains("### JOD on standard_4k, sigma 2.1, with TAA") && md.contains(" +- "));
     // A second run reads the masks and references from the cache: same figures.
     let again =
         run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], Default::default(), |_| {}).unwrap();
@@ -136,14 +144,15 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
     }
     // defocus-motion: a 2-D lens mask and a 1-D time mask; light-pick: one 1-D mask.
     let planned =
-        fsot::eval::suite::planned_masks(Scene::DefocusMotion, 2.1, true, true, &size, dir.path(), 1)
+        fsot::eval::suite::planned_masks(Scene::DefocusMotion, judged_on(), true, true, &size, dir.path(), 1)
             .unwrap();
     let shape: Vec<(usize, usize)> =
         planned.reads.iter().map(|r| (planned.masks[r.0].tile.dims, r.1)).collect();
     assert_eq!(shape, [(2, 0), (1, 2)]);
     assert!(!planned.shares, "no two decisions of the same dimension");
     let planned =
-        fsot::eval::suite::planned_masks(Scene::LightPick, 2.1, false, true, &size, dir.path(), 1).unwrap();
+        fsot::eval::suite::planned_masks(Scene::LightPick, judged_on(), false, true, &size, dir.path(), 1)
+            .unwrap();
     assert_eq!(planned.masks.iter().map(|m| m.tile.dims).collect::<Vec<_>>(), [1]);
     assert_eq!(planned.seconds, 0.0, "read from the cache");
     assert!(
@@ -158,7 +167,8 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     let size = EvalSize { planned: true, ..tiny() };
     // veach-mis: a 2-D light sample and a 2-D BSDF sample read one mask.
     let shared =
-        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, true, &size, dir.path(), 1).unwrap();
+        fsot::eval::suite::planned_masks(Scene::VeachMis, judged_on(), true, true, &size, dir.path(), 1)
+            .unwrap();
     assert!(shared.shares);
     assert_eq!(shared.masks.len(), 1);
     let [(a, 0, [0, 0, 0], _), (b, 2, offset, shift)] = &shared.reads[..] else {
@@ -168,7 +178,8 @@ fn decisions_of_one_dimension_share_a_mask_and_the_evaluation_measures_what_that
     assert_ne!(*offset, [0, 0, 0]);
     assert!(shift.iter().all(|s| *s > 0.0 && *s < 1.0));
     let own =
-        fsot::eval::suite::planned_masks(Scene::VeachMis, 2.1, true, false, &size, dir.path(), 1).unwrap();
+        fsot::eval::suite::planned_masks(Scene::VeachMis, judged_on(), true, false, &size, dir.path(), 1)
+            .unwrap();
     assert!(!own.shares);
     assert_eq!(own.masks.len(), 2);
     assert_eq!(own.masks[0].samples, shared.masks[0].samples, "the light's own mask is the one it lends");
@@ -200,6 +211,7 @@ fn record(
     fsot::eval::suite::Record {
         scene: "soft-shadow".into(),
         method: method.into(),
+        display: "standard_4k".into(),
         taa: true,
         sigma: 2.1,
         prelmse,
@@ -208,6 +220,8 @@ fn record(
         relmse_ci95: 0.0,
         jod,
         jod_ci95,
+        flip: None,
+        flip_ci95: None,
         seeds: 5,
         anatomy: None,
     }
@@ -276,4 +290,54 @@ fn a_run_measures_only_the_methods_named_and_dissects_their_error_when_asked() {
         );
     }
     assert!(fsot::eval::suite::anatomy_markdown(&records).contains("| ours-taa |"));
+}
+
+#[test]
+fn fsots_display_geometry_gives_colorvideovdps_pixels_per_degree() {
+    // An independent reference: ColorVideoVDP's own display models.
+    for (name, ..) in fsot::display::PRESETS {
+        let theirs = colorvideovdp::DisplayModel::from_name(name).unwrap().geometry.pixels_per_degree();
+        let ours = fsot::display::preset_ppd(name).unwrap();
+        assert!((ours - theirs).abs() <= 0.005 + 1e-9, "{name}: {ours} against {theirs}");
+    }
+}
+
+#[test]
+fn flip_without_its_python_is_refused_clearly() {
+    let err = fsot::eval::flip::Flip::start(std::path::Path::new("/nonexistent/python")).err().unwrap();
+    assert!(err.to_string().contains("cannot start FLIP"), "{err}");
+}
+
+/// The Python with flip-evaluator: FSOT_FLIP_PYTHON, else bench/flip's environment.
+fn flip_python() -> std::path::PathBuf {
+    std::env::var_os("FSOT_FLIP_PYTHON").map(Into::into).unwrap_or_else(|| {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/flip/.venv/bin/python")
+    })
+}
+
+#[test]
+#[ignore = "needs FLIP installed: bench/flip/setup.sh (or FSOT_FLIP_PYTHON), then cargo test -- --ignored"]
+fn flip_sees_no_difference_in_equal_frames_and_more_in_noisier_ones_and_judges_after_taa() {
+    let flip = fsot::eval::flip::Flip::start(&flip_python()).unwrap();
+    let n = 32;
+    let mut rng = fsot::rng::Stream::new(4);
+    let reference: Vec<Vec<f64>> = (0..6).map(|_| vec![0.5; n * n]).collect();
+    let mut noisy = |a: f64| -> Vec<Vec<f64>> {
+        reference.iter().map(|f| f.iter().map(|v| v + a * (rng.next_f64() - 0.5)).collect()).collect()
+    };
+    assert_eq!(flip.judge(&reference, &reference, 2, n, 60.0).unwrap(), 0.0);
+    let (weak, strong) = (noisy(0.05), noisy(0.4));
+    let (weak, strong) = (
+        flip.judge(&weak, &reference, 2, n, 60.0).unwrap(),
+        flip.judge(&strong, &reference, 2, n, 60.0).unwrap(),
+    );
+    assert!(0.0 < weak && weak < strong, "weak {weak}, strong {strong}");
+    let dir = tempfile::tempdir().unwrap();
+    let size = EvalSize { flip: Some(flip_python()), ..tiny() };
+    let names = ["white".to_string()];
+    let only = fsot::eval::suite::Only::Named(&names);
+    let records = run_eval(&size, &[2.1], &[Scene::SoftShadow], dir.path(), None, &[], only, |_| {}).unwrap();
+    for r in &records {
+        assert_eq!(r.flip.is_some(), r.taa, "{r:?}");
+    }
 }

@@ -1,6 +1,7 @@
 //! Scene files: what a renderer samples, read strictly; every mistake is named
 //! with its line.
 
+use fsot::kernel::Spatial;
 use fsot::scene::{Group, Scene};
 
 const EXAMPLE: &str = r#"
@@ -30,7 +31,10 @@ visible = false
 fn the_example_scene_reads_as_written() {
     let s = Scene::parse(EXAMPLE, "example").unwrap();
     assert_eq!(s.display.taa_alpha, Some(0.1));
-    assert_eq!((s.display.fps, s.display.sigma, s.display.animated), (60.0, 2.1, true));
+    assert_eq!(
+        (s.display.fps, s.display.spatial, s.display.animated),
+        (60.0, Spatial::Gaussian { sigma: 2.1 }, true)
+    );
     assert_eq!(s.size, Some((64, 64, 32)));
     let names: Vec<&str> = s.groups.iter().map(|g| g.name.as_str()).collect();
     assert_eq!(names, ["pick", "lens", "bounce2"], "the renderer's order");
@@ -41,7 +45,11 @@ fn the_example_scene_reads_as_written() {
 fn what_is_absent_takes_its_default() {
     let s = Scene::parse("[[group]]\nname = \"a\"\ndims = 2\n", "minimal").unwrap();
     assert_eq!(s.display.taa_alpha, None, "no [display]: no TAA");
-    assert_eq!((s.display.fps, s.display.sigma, s.display.animated), (60.0, 2.1, true));
+    let fhd = fsot::display::preset_ppd("standard_fhd").unwrap();
+    assert_eq!(
+        (s.display.fps, s.display.spatial, s.display.animated),
+        (60.0, Spatial::Display { ppd: fhd }, true)
+    );
     assert_eq!(s.size, None);
     assert_eq!(s.groups[0], Group { name: "a".into(), dims: 2, spp: 1, visible: true, share: true });
 }
@@ -68,6 +76,15 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("{group}dims = 3\n"), "line 4", "duplicate key"),
         ("[[group]\nname = 1".to_string(), "line 1", ""),
         (format!("[display]\nanimated = \"yes\"\n{group}"), "line 2", "invalid type"),
+        (format!("[display]\nname = \"standard_8k\"\n{group}"), "line 2", "unknown display"),
+        (format!("[display]\nppd = 2\n{group}"), "line 2", "pixels per degree must be in"),
+        (format!("[display]\nppd = 60\nsigma = 2.1\n{group}"), "line 3", "give the display one way"),
+        (format!("[display]\nresolution = [2560, 1440]\ndiagonal = 27.0\n{group}"), "line 2", "needs all of"),
+        (
+            format!("[display]\nresolution = [2560, 0]\ndiagonal = 27.0\ndistance = 0.7\n{group}"),
+            "line 2",
+            "resolution",
+        ),
     ];
     for (text, line, what) in cases {
         let err = Scene::parse(text, "bad").err().unwrap_or_else(|| panic!("accepted: {text}"));
@@ -87,4 +104,24 @@ fn a_file_that_cannot_be_read_says_so() {
     std::fs::write(&path, "[[group]]\nname = \"a\"\ndims = 12\n").unwrap();
     let err = Scene::read(&path).unwrap_err().to_string();
     assert!(err.contains("s.toml") && err.contains("line 3"), "{err}");
+}
+
+#[test]
+fn a_display_is_named_or_given_by_its_pixels_per_degree_or_its_geometry() {
+    let group = "[[group]]\nname = \"a\"\ndims = 2\n";
+    let ppd = |display: &str| match Scene::parse(&format!("[display]\n{display}\n{group}"), "d")
+        .unwrap()
+        .display
+        .spatial
+    {
+        Spatial::Display { ppd } => ppd,
+        other => panic!("{display}: {other:?}"),
+    };
+    assert_eq!(ppd("ppd = 60"), 60.0);
+    assert_eq!(ppd("name = \"standard_4k\""), fsot::display::preset_ppd("standard_4k").unwrap());
+    let fhd = ppd("resolution = [1920, 1080]\ndiagonal = 24.0\ndistance = 0.6");
+    assert_eq!(fhd, ppd("name = \"standard_fhd\""));
+    // Twice the distance: nearly twice the pixels per degree.
+    let far = ppd("resolution = [1920, 1080]\ndiagonal = 24.0\ndistance = 1.2");
+    assert!((far / fhd - 2.0).abs() < 1e-3, "{far} against {fhd}");
 }

@@ -25,15 +25,49 @@ pub const DISPLAY: &str = "standard_4k";
 /// The version of the colorvideovdp crate (Cargo.lock pins it).
 pub const CRATE_VERSION: &str = "0.1.1";
 
+/// How grey frames reach the judge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Grey {
+    /// One channel: ColorVideoVDP then feeds the same luminance to its
+    /// achromatic and both colour-opponent channels (the reference
+    /// implementation's path for single-channel input).
+    #[default]
+    Luminance,
+    /// Three equal sRGB channels, as a display shows a grey image: the colour
+    /// channels see (almost) no contrast, the achromatic ones all of it.
+    Rgb,
+}
+
+impl Grey {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Grey::Luminance => "luminance",
+            Grey::Rgb => "rgb",
+        }
+    }
+}
+
 /// ColorVideoVDP on a display model at a frame rate.
 pub struct Judge {
     metric: Cvvdp,
     fps: f32,
+    grey: Grey,
     pub display: String,
 }
 
 fn vdp_error(e: colorvideovdp::Error) -> Error {
     Error::invalid(format!("ColorVideoVDP: {e}"))
+}
+
+/// The frames from `start` as the judges see them: divided by the reference's
+/// brightest judged pixel, clamped to [0, 1] and sRGB-encoded; the render's
+/// then the reference's.
+pub fn shown(render: &[Vec<f64>], reference: &[Vec<f64>], start: usize) -> [Vec<Vec<f32>>; 2] {
+    let peak = reference[start..].iter().flatten().fold(1e-12f64, |a, &b| a.max(b));
+    let encode = |seq: &[Vec<f64>]| {
+        seq[start..].iter().map(|f| f.iter().map(|&v| srgb_encode(v / peak)).collect()).collect()
+    };
+    [encode(render), encode(reference)]
 }
 
 /// The sRGB encoding of a linear value in [0, 1].
@@ -44,12 +78,12 @@ fn srgb_encode(v: f64) -> f32 {
 }
 
 impl Judge {
-    pub fn new(display: &str, fps: f64) -> Result<Self> {
+    pub fn new(display: &str, fps: f64, grey: Grey) -> Result<Self> {
         let model = DisplayModel::from_name(display).map_err(vdp_error)?;
         // Rows split over the rayon pool (results identical to one thread).
         let metric =
             Cvvdp::new(model, Options::default().with_execution(Execution::Parallel)).map_err(vdp_error)?;
-        Ok(Self { metric, fps: fps as f32, display: display.to_string() })
+        Ok(Self { metric, fps: fps as f32, grey, display: display.to_string() })
     }
 
     /// The JOD (10: no visible difference) of `render` against `reference`
@@ -78,18 +112,22 @@ impl Judge {
                 reference.len()
             )));
         }
-        let peak = reference[start..].iter().flatten().fold(1e-12f64, |a, &b| a.max(b));
-        let frames = |seq: &[Vec<f64>]| -> Result<Vec<Image>> {
-            seq[start..]
-                .iter()
+        let [test, reference] = shown(render, reference, start);
+        let frames = |seq: &[Vec<f32>]| -> Result<Vec<Image>> {
+            seq.iter()
                 .map(|f| {
-                    Image::new(n, n, 1, f.iter().map(|&v| srgb_encode(v / peak)).collect()).map_err(vdp_error)
+                    let encoded = f.iter().copied();
+                    match self.grey {
+                        Grey::Luminance => Image::new(n, n, 1, encoded.collect()),
+                        Grey::Rgb => Image::new(n, n, 3, encoded.flat_map(|e| [e, e, e]).collect()),
+                    }
+                    .map_err(vdp_error)
                 })
                 .collect()
         };
         let prediction = self
             .metric
-            .predict_video(&frames(render)?, &frames(reference)?, self.fps, Color::Srgb)
+            .predict_video(&frames(&test)?, &frames(&reference)?, self.fps, Color::Srgb)
             .map_err(vdp_error)?;
         let (channels, frames) = (prediction.channels, prediction.frames);
         let bands = prediction.band_frequencies.len();
@@ -144,7 +182,7 @@ mod tests {
 
     #[test]
     fn identical_sequences_score_ten_and_more_noise_scores_lower() {
-        let judge = Judge::new(DISPLAY, 60.0).unwrap();
+        let judge = Judge::new(DISPLAY, 60.0, Grey::Luminance).unwrap();
         let n = 32;
         let mut stream = crate::rng::Stream::new(3);
         let reference: Vec<Vec<f64>> = (0..12).map(|_| vec![0.5; n * n]).collect();

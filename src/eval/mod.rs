@@ -2,6 +2,7 @@
 //! as a display (TAA) and an eye would, and measure what is left.
 pub mod anatomy;
 pub mod eye;
+pub mod flip;
 pub mod integrands;
 pub mod jod;
 pub mod metric;

@@ -108,6 +108,10 @@ pub fn run_robustness(
         methods.push("fsot-planned");
     }
     let seeds = size.seeds as usize;
+    // fsot-planned as planned for the run's first display.
+    let first =
+        size.displays.first().ok_or_else(|| crate::error::Error::invalid("no display to judge on"))?;
+    let viewing = crate::kernel::Spatial::Display { ppd: crate::display::preset_ppd(first)? };
     // Each method's masks, read once (none for fsot-planned: its masks are per scene).
     let masks: Vec<Vec<Mask>> = methods
         .iter()
@@ -145,15 +149,8 @@ pub fn run_robustness(
                             render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement))
                         }
                         None => {
-                            let planned = planned_masks(
-                                scene,
-                                MADE_FOR_SIGMA,
-                                true,
-                                true,
-                                size,
-                                cache,
-                                seed as u64 + 1,
-                            )?;
+                            let planned =
+                                planned_masks(scene, viewing, true, true, size, cache, seed as u64 + 1)?;
                             render(scene, size.shot, &MaskSampler::planned(&planned.reads(), placement))
                         }
                     };

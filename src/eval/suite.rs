@@ -24,14 +24,15 @@ use crate::baselines::swap::SwapDevice;
 use crate::error::{Error, Result};
 use crate::eval::anatomy::{anatomy, Anatomy};
 use crate::eval::eye::Eye;
-use crate::eval::jod::{Judge, DISPLAY};
+use crate::eval::flip::Flip;
+use crate::eval::jod::{Grey, Judge, DISPLAY};
 use crate::eval::metric::relative_errors;
 use crate::eval::pictures::scene_pictures;
 use crate::eval::render::{references, render, taa, MaskSampler, Read, Shot};
 use crate::eval::scenes::Scene;
 use crate::eval::stats::Interval;
 use crate::io::atomic::AtomicFile;
-use crate::kernel::KernelSpec;
+use crate::kernel::{KernelSpec, Spatial};
 use crate::mask::Mask;
 use crate::method::{make, Method};
 use crate::plan::{CostModel, Plan};
@@ -54,7 +55,7 @@ pub const METHODS: [&str; 8] = [
 ];
 
 /// Sizes of an evaluation run.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct EvalSize {
     pub tile: Tile,
     pub iterations: u32,
@@ -73,8 +74,16 @@ pub struct EvalSize {
     /// Also the no-TAA plan's masks (`fsot-planned` without TAA); the quick run
     /// leaves them out for time.
     pub planned_without_taa: bool,
-    /// The ColorVideoVDP display model (`jod::DISPLAY` by default).
-    pub display: &'static str,
+    /// The ColorVideoVDP display models every render is judged on
+    /// (`jod::DISPLAY` by default); `fsot-planned` plans for each.
+    pub displays: Vec<&'static str>,
+    /// Whether the plans take the evaluation's tile (`tile`'s size) instead of
+    /// their own choice.
+    pub plan_tile: bool,
+    /// How grey frames reach ColorVideoVDP.
+    pub grey: Grey,
+    /// Also judge by FLIP, with this Python (`flip.rs`).
+    pub flip: Option<PathBuf>,
     /// Also dissect each record's error (`anatomy.rs`): its spectra and what
     /// ColorVideoVDP pools per channel and band.
     pub anatomy: bool,
@@ -94,7 +103,10 @@ impl EvalSize {
             reference_samples: 256,
             planned: true,
             planned_without_taa: false,
-            display: DISPLAY,
+            displays: vec![DISPLAY],
+            plan_tile: true,
+            grey: Grey::Luminance,
+            flip: None,
             anatomy: false,
         }
     }
@@ -111,7 +123,10 @@ impl EvalSize {
             reference_samples: 1024,
             planned: true,
             planned_without_taa: true,
-            display: DISPLAY,
+            displays: vec![DISPLAY],
+            plan_tile: false,
+            grey: Grey::Luminance,
+            flip: None,
             anatomy: false,
         }
     }
@@ -123,6 +138,8 @@ impl EvalSize {
 pub struct Record {
     pub scene: String,
     pub method: String,
+    /// The display it was judged on (ColorVideoVDP's name).
+    pub display: String,
     pub taa: bool,
     pub sigma: f64,
     pub prelmse: f64,
@@ -132,6 +149,11 @@ pub struct Record {
     /// ColorVideoVDP's JOD of the judged frames (10: no visible difference).
     pub jod: f64,
     pub jod_ci95: f64,
+    /// FLIP's mean error of the judged frames (0: no difference), when asked for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flip: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub flip_ci95: Option<f64>,
     /// Independent masks measured (1 for a mask given from outside).
     pub seeds: u32,
     /// The error dissected (mean over the renders), when asked for.
@@ -140,36 +162,59 @@ pub struct Record {
 }
 
 /// What one seed's renders measured, per TAA setting (without, with): the
-/// means of (pRelMSE, RelMSE, JOD) over its renders, and their anatomies
-/// when asked for.
+/// means of pRelMSE and RelMSE over its renders, per display judged the mean
+/// JOD, and the anatomies when asked for.
 #[derive(Clone, Default)]
 struct SeedValues {
-    values: [[f64; 3]; 2],
-    anatomy: [Vec<Anatomy>; 2],
+    errors: [[f64; 2]; 2],
+    jods: [Vec<f64>; 2],
+    flips: [Vec<f64>; 2],
+    anatomy: [Vec<Vec<Anatomy>>; 2],
 }
 
-/// The two records (without and with TAA) of a method's seeds.
-fn records_of(scene: Scene, method: &str, sigma: f64, seeds: u32, values: &[SeedValues]) -> [Record; 2] {
-    [false, true].map(|taa| {
-        let k = taa as usize;
-        let of = |j: usize| Interval::of(&values.iter().map(|v| v.values[k][j]).collect::<Vec<_>>());
-        let dissected: Vec<Anatomy> = values.iter().flat_map(|v| v.anatomy[k].iter().cloned()).collect();
-        let (p, r, j) = (of(0), of(1), of(2));
-        Record {
-            scene: scene.name().to_string(),
-            method: method.to_string(),
-            taa,
-            sigma,
-            prelmse: p.mean,
-            prelmse_ci95: p.ci95,
-            relmse: r.mean,
-            relmse_ci95: r.ci95,
-            jod: j.mean,
-            jod_ci95: j.ci95,
-            seeds,
-            anatomy: (!dissected.is_empty()).then(|| Anatomy::mean(&dissected)),
+/// The records (without and with TAA, per display judged: `displays` names the
+/// judges `values` hold, in order) of a method's seeds.
+fn records_of(
+    scene: Scene,
+    method: &str,
+    sigma: f64,
+    seeds: u32,
+    values: &[SeedValues],
+    displays: &[&str],
+) -> Vec<Record> {
+    let mut out = Vec::new();
+    for (d, display) in displays.iter().enumerate() {
+        for taa in [false, true] {
+            let k = taa as usize;
+            let of = |j: usize| Interval::of(&values.iter().map(|v| v.errors[k][j]).collect::<Vec<_>>());
+            let dissected: Vec<Anatomy> =
+                values.iter().flat_map(|v| v.anatomy[k].get(d).into_iter().flatten().cloned()).collect();
+            let (p, r) = (of(0), of(1));
+            let j = Interval::of(&values.iter().map(|v| v.jods[k][d]).collect::<Vec<_>>());
+            let flip = values
+                .iter()
+                .all(|v| v.flips[k].len() > d)
+                .then(|| Interval::of(&values.iter().map(|v| v.flips[k][d]).collect::<Vec<_>>()));
+            out.push(Record {
+                scene: scene.name().to_string(),
+                method: method.to_string(),
+                display: display.to_string(),
+                taa,
+                sigma,
+                prelmse: p.mean,
+                prelmse_ci95: p.ci95,
+                relmse: r.mean,
+                relmse_ci95: r.ci95,
+                jod: j.mean,
+                jod_ci95: j.ci95,
+                flip: flip.map(|f| f.mean),
+                flip_ci95: flip.map(|f| f.ci95),
+                seeds,
+                anatomy: (!dissected.is_empty()).then(|| Anatomy::mean(&dissected)),
+            });
         }
-    })
+    }
+    out
 }
 
 /// The mask of `method` for eye sigma `sigma` made from `seed`, from `cache`
@@ -256,51 +301,41 @@ impl PlannedMasks {
     }
 }
 
-/// The `fsot-planned` masks of a scene for eye sigma `sigma`, with TAA or not:
-/// the scene file's plan on the evaluation's tile (with `share` false, no
-/// decision reads another's mask); `seed` 1 is the plan's own seeds, others
-/// derive new ones from them; cached like the other methods' masks.
+/// The `fsot-planned` masks of a scene seen through `viewing` (the display's
+/// eye, or a Gaussian), with TAA or not: the scene file's plan (on the
+/// evaluation's tile where `size.plan_tile` says so; with `share` false, no
+/// decision reads another's mask). Seeds come from `seed` and the mask's place
+/// among the plan's masks of its shape, not from the scene, so masks of the
+/// same settings are made once and read from `cache` by every scene.
 pub fn planned_masks(
     scene: Scene,
-    sigma: f64,
+    viewing: Spatial,
     taa: bool,
     share: bool,
     size: &EvalSize,
     cache: &Path,
     seed: u64,
 ) -> Result<PlannedMasks> {
-    let text = SCENE_FILES
-        .iter()
-        .find(|(name, _)| *name == scene.name())
-        .map(|s| s.1)
-        .ok_or_else(|| Error::invalid(format!("no scene file for {}", scene.name())))?;
-    let mut file = crate::scene::Scene::parse(text, scene.name())
-        .map_err(|e| Error::invalid(format!("scenes/{}.toml: {e}", scene.name())))?;
-    file.display.sigma = sigma;
-    file.display.taa_alpha = taa.then_some(TAA_ALPHA);
-    let t = size.tile;
-    file.size = Some((t.width, t.height, t.frames));
-    for g in &mut file.groups {
-        g.share &= share;
-    }
-    let plan = Plan::new(&file, &CostModel::unmeasured())?;
+    let plan = scene_plan(scene, viewing, taa, share, size)?;
     let mut out = PlannedMasks { masks: Vec::new(), reads: Vec::new(), shares: false, seconds: 0.0 };
-    for planned in &plan.masks {
+    let cap = 10 * size.iterations;
+    for (i, planned) in plan.masks.iter().enumerate() {
         let tile = plan.tile(planned)?;
         let mut planned = planned.clone();
-        if seed != 1 {
-            planned.seed = crate::rng::derive(crate::rng::seed_key(planned.seed), seed as u32) as u64;
-        }
+        let same_shape =
+            plan.masks[..i].iter().filter(|m| (m.dims, m.spp) == (planned.dims, planned.spp)).count();
+        let key =
+            crate::rng::seed_key(0x9a11_0000 + (planned.dims * 1000 + planned.spp * 10 + same_shape) as u64);
+        planned.seed = crate::rng::derive(key, seed as u32) as u64;
         let planned = &planned;
+        let slug: String = plan
+            .kernel
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' })
+            .collect();
         let name = format!(
-            "planned-{}-{}-s{sigma}-{}x{}x{}-cap{}-seed{seed}-{}",
-            scene.name(),
-            if taa { "taa" } else { "no-taa" },
-            t.width,
-            t.height,
-            t.frames,
-            10 * size.iterations,
-            planned.file
+            "planned-{slug}-{}x{}x{}-d{}-spp{}-cap{cap}-seed{}.exr",
+            tile.width, tile.height, tile.frames, tile.dims, tile.spp, planned.seed
         );
         let path = cache.join(name);
         let cached = crate::io::exr::read(&path).ok().filter(|m| m.tile == tile);
@@ -309,7 +344,7 @@ pub fn planned_masks(
             (None, true) => Mask::white(tile, planned.seed),
             (None, false) => {
                 let mut s = plan.settings(planned);
-                s.iterations = 10 * size.iterations;
+                s.iterations = cap;
                 let start = std::time::Instant::now();
                 let m = crate::run::optimize(tile, s, None)?;
                 out.seconds += start.elapsed().as_secs_f64();
@@ -336,6 +371,31 @@ pub fn planned_masks(
     Ok(out)
 }
 
+/// The plan of an evaluation scene's file seen through `viewing`, with TAA or not.
+pub fn scene_plan(scene: Scene, viewing: Spatial, taa: bool, share: bool, size: &EvalSize) -> Result<Plan> {
+    let text = SCENE_FILES
+        .iter()
+        .find(|(name, _)| *name == scene.name())
+        .map(|s| s.1)
+        .ok_or_else(|| Error::invalid(format!("no scene file for {}", scene.name())))?;
+    let mut file = crate::scene::Scene::parse(text, scene.name())
+        .map_err(|e| Error::invalid(format!("scenes/{}.toml: {e}", scene.name())))?;
+    file.display.spatial = viewing;
+    file.display.seen_on = match viewing {
+        Spatial::Display { ppd } => format!("the judge's display: {ppd:.1} pixels per degree"),
+        Spatial::Gaussian { sigma } => format!("the eye as a Gaussian of sigma {sigma} pixels"),
+    };
+    file.display.taa_alpha = taa.then_some(TAA_ALPHA);
+    if size.plan_tile {
+        let t = size.tile;
+        file.size = Some((t.width, t.height, t.frames));
+    }
+    for g in &mut file.groups {
+        g.share &= share;
+    }
+    Plan::new(&file, &CostModel::unmeasured())
+}
+
 /// Filtered references of one scene: per TAA setting, the frames after TAA
 /// (or not) and what the eye sees of them.
 struct SceneReference {
@@ -344,62 +404,90 @@ struct SceneReference {
 }
 
 /// How a scene is judged: the references, the eye, the first judged frame and
-/// ColorVideoVDP.
+/// ColorVideoVDP on each display.
 struct Judging<'a> {
     scene: Scene,
     size: &'a EvalSize,
     reference: SceneReference,
     eye: Eye,
     start: usize,
-    judge: &'a Judge,
+    judges: &'a [Judge],
+    /// FLIP, with each display's pixels per degree, when asked for.
+    flip: Option<(&'a Flip, &'a [f64])>,
 }
 
 impl Judging<'_> {
-    /// One render's (pRelMSE, RelMSE, JOD) without and with TAA; the frames
-    /// (without and with TAA) too.
-    fn measure(&self, image: Vec<Vec<f64>>) -> Result<(SeedValues, crate::eval::pictures::Frames)> {
+    /// One render's pRelMSE and RelMSE without and with TAA, and its JOD on each
+    /// of the displays `which` indexes; the frames (without and with TAA) too.
+    fn measure(
+        &self,
+        image: Vec<Vec<f64>>,
+        which: &[usize],
+    ) -> Result<(SeedValues, crate::eval::pictures::Frames)> {
         let n = self.size.shot.image;
         let with_taa = taa(&image, TAA_ALPHA);
         let mut out = SeedValues::default();
         for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
             let r = &self.reference;
             let (p, rel) = relative_errors(frames, &r.frames[k], &r.seen[k], &self.eye, self.start, n);
-            let jod = match self.size.anatomy {
-                true => {
-                    let a = anatomy(frames, &r.frames[k], self.start, n, self.judge)?;
-                    let jod = a.jod;
-                    out.anatomy[k].push(a);
-                    jod
+            out.errors[k] = [p, rel];
+            for &d in which {
+                let judge = &self.judges[d];
+                let jod = match self.size.anatomy {
+                    true => {
+                        let a = anatomy(frames, &r.frames[k], self.start, n, judge)?;
+                        let jod = a.jod;
+                        out.anatomy[k].push(vec![a]);
+                        jod
+                    }
+                    false => judge.jod(frames, &r.frames[k], self.start, n)?,
+                };
+                out.jods[k].push(jod);
+                // FLIP judges the frames after TAA (a still-image metric, slow in Python).
+                if let (Some((flip, ppds)), 1) = (self.flip, k) {
+                    out.flips[k].push(flip.judge(frames, &r.frames[k], self.start, n, ppds[d])?);
                 }
-                false => self.judge.jod(frames, &r.frames[k], self.start, n)?,
-            };
-            out.values[k] = [p, rel, jod];
+            }
         }
         Ok((out, (image, with_taa)))
     }
 
-    /// Every seed's values: `sampler(seed index, placement seed)` gives the
-    /// numbers of a render; the first render of the first seed is kept in `kept`.
+    /// Every seed's values on the displays `which` indexes: `sampler(seed
+    /// index, placement seed)` gives the numbers of a render; the first render
+    /// of the first seed is kept in `kept`.
     fn seeds(
         &self,
         seeds: u32,
+        which: &[usize],
         mut render_with: impl FnMut(u32, u64) -> Result<Vec<Vec<f64>>>,
         mut kept: Option<&mut Vec<crate::eval::pictures::Frames>>,
     ) -> Result<Vec<SeedValues>> {
         let renders = self.size.renders.max(1);
         let mut values = Vec::with_capacity(seeds as usize);
         for k in 0..seeds {
-            let mut mean = SeedValues::default();
+            let flips = if self.flip.is_some() { which.len() } else { 0 };
+            let mut mean = SeedValues {
+                jods: [vec![0.0; which.len()], vec![0.0; which.len()]],
+                flips: [Vec::new(), vec![0.0; flips]],
+                anatomy: [vec![Vec::new(); which.len()], vec![Vec::new(); which.len()]],
+                ..Default::default()
+            };
             for r in 0..renders {
                 let image = render_with(k, 100 + 1000 * k as u64 + r as u64)?;
-                let (v, frames) = self.measure(image)?;
-                for (m, v) in mean.values.iter_mut().zip(v.values) {
-                    for (a, b) in m.iter_mut().zip(v) {
+                let (v, frames) = self.measure(image, which)?;
+                for t in 0..2 {
+                    for (a, b) in mean.errors[t].iter_mut().zip(v.errors[t]) {
                         *a += b / renders as f64;
                     }
-                }
-                for (m, v) in mean.anatomy.iter_mut().zip(v.anatomy) {
-                    m.extend(v);
+                    for (a, b) in mean.jods[t].iter_mut().zip(&v.jods[t]) {
+                        *a += b / renders as f64;
+                    }
+                    for (a, b) in mean.flips[t].iter_mut().zip(&v.flips[t]) {
+                        *a += b / renders as f64;
+                    }
+                    for (a, b) in mean.anatomy[t].iter_mut().zip(&v.anatomy[t]) {
+                        a.extend(b.iter().cloned());
+                    }
                 }
                 if let (Some(keep), 0, 0) = (kept.as_deref_mut(), k, r) {
                     keep.push(frames);
@@ -443,7 +531,14 @@ pub fn run_eval(
     mut log: impl FnMut(&str),
 ) -> Result<Vec<Record>> {
     let n = size.shot.image;
-    let judge = Judge::new(size.display, 60.0)?;
+    let judges: Vec<Judge> =
+        size.displays.iter().map(|d| Judge::new(d, 60.0, size.grey)).collect::<Result<_>>()?;
+    let every: Vec<usize> = (0..judges.len()).collect();
+    let flip = size.flip.as_deref().map(Flip::start).transpose()?;
+    let ppds: Vec<f64> = match flip {
+        Some(_) => size.displays.iter().map(|d| crate::display::preset_ppd(d)).collect::<Result<_>>()?,
+        None => Vec::new(),
+    };
     if size.seeds == 0 {
         return Err(Error::invalid("the evaluation needs at least one seed"));
     }
@@ -468,7 +563,8 @@ pub fn run_eval(
                 |frames: &Vec<Vec<f64>>| (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect();
             let reference =
                 SceneReference { seen: [seen(&refs), seen(&taa_frames)], frames: [refs.clone(), taa_frames] };
-            let judging = Judging { scene, size, reference, eye, start, judge: &judge };
+            let flip = flip.as_ref().map(|f| (f, &ppds[..]));
+            let judging = Judging { scene, size, reference, eye, start, judges: &judges, flip };
             // The first seed's first render of each method, for the pictures (first sigma only).
             let mut kept = Vec::new();
             let keep = pictures.is_some() && sigma_index == 0;
@@ -489,26 +585,30 @@ pub fn run_eval(
                 let seeds = if given.is_some() { size.seeds } else { masks.len() as u32 };
                 let values = judging.seeds(
                     seeds,
+                    &every,
                     |k, placement| {
                         let mask = &masks[(k as usize).min(masks.len() - 1)];
                         Ok(render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement)))
                     },
                     keep.then_some(&mut kept),
                 )?;
-                let pair = records_of(scene, method, sigma, masks.len() as u32, &values);
-                log(&format!(
-                    "{} sigma {sigma} {method}: pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3} (TAA: {:.4e} +- {:.1e}, JOD {:.3} +- {:.3})",
-                    scene.name(),
-                    pair[0].prelmse,
-                    pair[0].prelmse_ci95,
-                    pair[0].jod,
-                    pair[0].jod_ci95,
-                    pair[1].prelmse,
-                    pair[1].prelmse_ci95,
-                    pair[1].jod,
-                    pair[1].jod_ci95
-                ));
-                records.extend(pair);
+                let made = records_of(scene, method, sigma, masks.len() as u32, &values, &size.displays);
+                for pair in made.chunks(2) {
+                    log(&format!(
+                        "{} sigma {sigma} {method} on {}: pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3} (TAA: {:.4e} +- {:.1e}, JOD {:.3} +- {:.3})",
+                        scene.name(),
+                        pair[0].display,
+                        pair[0].prelmse,
+                        pair[0].prelmse_ci95,
+                        pair[0].jod,
+                        pair[0].jod_ci95,
+                        pair[1].prelmse,
+                        pair[1].prelmse_ci95,
+                        pair[1].jod,
+                        pair[1].jod_ci95
+                    ));
+                }
+                records.extend(made);
             }
             if size.planned && only.includes("fsot-planned") {
                 records.extend(planned_records(&judging, sigma, cache, &mut log)?);
@@ -524,8 +624,9 @@ pub fn run_eval(
     Ok(records)
 }
 
-/// The records of `fsot-planned` (without and with TAA, each from its own plan)
-/// for one scene and sigma; where the plan shares a mask between decisions, also
+/// The records of `fsot-planned` (without and with TAA, each from its own plan,
+/// and per display, each planned for that display) for one scene and sigma;
+/// where the plan shares a mask between decisions, also
 /// `fsot-planned-unshared`, the same plan with masks of their own, to show what
 /// sharing costs.
 fn planned_records(
@@ -536,42 +637,46 @@ fn planned_records(
 ) -> Result<Vec<Record>> {
     let (scene, size) = (judging.scene, judging.size);
     let mut records = Vec::new();
-    let mut any_shares = false;
-    for share in [true, false] {
-        if !share && !any_shares {
-            continue;
-        }
-        // Each TAA setting has its own plan (kernel); of each, the record of that setting.
-        for (k, with_taa) in [false, true].into_iter().enumerate() {
-            if !with_taa && !size.planned_without_taa {
+    for (d, display) in size.displays.iter().enumerate() {
+        let viewing = Spatial::Display { ppd: crate::display::preset_ppd(display)? };
+        let mut any_shares = false;
+        for share in [true, false] {
+            if !share && !any_shares {
                 continue;
             }
-            let planned: Vec<PlannedMasks> = (1..=size.seeds as u64)
-                .map(|seed| planned_masks(scene, sigma, with_taa, share, size, cache, seed))
-                .collect::<Result<_>>()?;
-            any_shares |= planned[0].shares;
-            let reads: Vec<Vec<Read>> = planned.iter().map(|p| p.reads()).collect();
-            let values = judging.seeds(
-                size.seeds,
-                |k, placement| {
-                    Ok(render(scene, size.shot, &MaskSampler::planned(&reads[k as usize], placement)))
-                },
-                None,
-            )?;
-            let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
-            let record = records_of(scene, method, sigma, size.seeds, &values)[k].clone();
-            let seconds: f64 = planned.iter().map(|p| p.seconds).sum();
-            log(&format!(
-                "{} sigma {sigma} {method} ({}): pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}; masks made in {seconds:.1} s{}",
-                scene.name(),
-                if with_taa { "TAA plan" } else { "no-TAA plan" },
-                record.prelmse,
-                record.prelmse_ci95,
-                record.jod,
-                record.jod_ci95,
-                if seconds == 0.0 { " (cached)" } else { "" }
-            ));
-            records.push(record);
+            // Each TAA setting has its own plan (kernel); of each, the record of that setting.
+            for (k, with_taa) in [false, true].into_iter().enumerate() {
+                if !with_taa && !size.planned_without_taa {
+                    continue;
+                }
+                let planned: Vec<PlannedMasks> = (1..=size.seeds as u64)
+                    .map(|seed| planned_masks(scene, viewing, with_taa, share, size, cache, seed))
+                    .collect::<Result<_>>()?;
+                any_shares |= planned[0].shares;
+                let reads: Vec<Vec<Read>> = planned.iter().map(|p| p.reads()).collect();
+                let values = judging.seeds(
+                    size.seeds,
+                    &[d],
+                    |k, placement| {
+                        Ok(render(scene, size.shot, &MaskSampler::planned(&reads[k as usize], placement)))
+                    },
+                    None,
+                )?;
+                let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
+                let record = records_of(scene, method, sigma, size.seeds, &values, &[display])[k].clone();
+                let seconds: f64 = planned.iter().map(|p| p.seconds).sum();
+                log(&format!(
+                    "{} sigma {sigma} {method} on {display} ({}): pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}; masks made in {seconds:.1} s{}",
+                    scene.name(),
+                    if with_taa { "TAA plan" } else { "no-TAA plan" },
+                    record.prelmse,
+                    record.prelmse_ci95,
+                    record.jod,
+                    record.jod_ci95,
+                    if seconds == 0.0 { " (cached)" } else { "" }
+                ));
+                records.push(record);
+            }
         }
     }
     Ok(records)
@@ -599,6 +704,7 @@ pub fn to_markdown(records: &[Record]) -> String {
     sigmas.dedup();
     let mut scenes: Vec<&str> = Vec::new();
     let mut methods: Vec<&str> = Vec::new();
+    let mut displays: Vec<&str> = Vec::new();
     for r in records {
         if !scenes.contains(&r.scene.as_str()) {
             scenes.push(&r.scene);
@@ -606,33 +712,59 @@ pub fn to_markdown(records: &[Record]) -> String {
         if !methods.contains(&r.method.as_str()) {
             methods.push(&r.method);
         }
+        if !displays.contains(&r.display.as_str()) {
+            displays.push(&r.display);
+        }
     }
-    for &sigma in &sigmas {
-        for taa in [true, false] {
-            let setting = if taa { "with TAA" } else { "without TAA" };
-            let find = |scene: &str, m: &str| {
-                records.iter().find(|r| r.scene == scene && r.method == m && r.taa == taa && r.sigma == sigma)
-            };
-            out += &format!(
-                "\n### pRelMSE, sigma {sigma}, {setting} (white: absolute; others: ratio to white; +- the 95% interval)\n\n"
+    for &display in &displays {
+        for &sigma in &sigmas {
+            for taa in [true, false] {
+                let setting = if taa { "with TAA" } else { "without TAA" };
+                let find = |scene: &str, m: &str| {
+                    records.iter().find(|r| {
+                        r.scene == scene
+                            && r.method == m
+                            && r.taa == taa
+                            && r.sigma == sigma
+                            && r.display == display
+                    })
+                };
+                out += &format!(
+                "\n### pRelMSE on {display}, sigma {sigma}, {setting} (white: absolute; others: ratio to white; +- the 95% interval)\n\n"
             );
-            out += &table(
-                &scenes,
-                &methods,
-                |scene, m| {
-                    // Absolute values where white noise was not measured.
-                    let white = find(scene, "white").map_or(0.0, |r| r.prelmse);
-                    find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
-                },
-                false,
-            );
-            out += &format!("\n### JOD, sigma {sigma}, {setting} (ColorVideoVDP; 10: no visible difference; +- the 95% interval)\n\n");
-            out += &table(
-                &scenes,
-                &methods,
-                |scene, m| find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, 0.0)),
-                true,
-            );
+                out += &table(
+                    &scenes,
+                    &methods,
+                    |scene, m| {
+                        // Absolute values where white noise was not measured.
+                        let white = find(scene, "white").map_or(0.0, |r| r.prelmse);
+                        find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
+                    },
+                    false,
+                    3,
+                );
+                out += &format!("\n### JOD on {display}, sigma {sigma}, {setting} (ColorVideoVDP; 10: no visible difference; +- the 95% interval)\n\n");
+                out += &table(
+                    &scenes,
+                    &methods,
+                    |scene, m| find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, 0.0)),
+                    true,
+                    3,
+                );
+                if records.iter().any(|r| r.flip.is_some() && r.display == display && r.taa == taa) {
+                    out += &format!("\n### FLIP on {display}, sigma {sigma}, {setting} (mean FLIP error of the judged frames; 0: no difference; +- the 95% interval)\n\n");
+                    out += &table(
+                        &scenes,
+                        &methods,
+                        |scene, m| {
+                            let r = find(scene, m)?;
+                            Some((Interval { mean: r.flip?, ci95: r.flip_ci95? }, 0.0))
+                        },
+                        false,
+                        4,
+                    );
+                }
+            }
         }
     }
     out
@@ -647,6 +779,7 @@ fn table(
     methods: &[&str],
     cell: impl Fn(&str, &str) -> Option<(Interval, f64)>,
     higher_better: bool,
+    digits: usize,
 ) -> String {
     let mut out =
         format!("| scene | {} |\n| --- |{}\n", methods.join(" | "), " ---: |".repeat(methods.len()));
@@ -678,7 +811,7 @@ fn table(
                 Some((i, white)) => {
                     let (v, c) =
                         if white > 0.0 { (i.mean / white, i.ci95 / white) } else { (i.mean, i.ci95) };
-                    let text = format!("{v:.3} +- {c:.3}");
+                    let text = format!("{v:.digits$} +- {c:.digits$}");
                     if winner == Some(*m) {
                         format!("**{text}**")
                     } else {
@@ -713,47 +846,60 @@ pub fn anatomy_markdown(records: &[Record]) -> String {
             .map(|w| format!("{}-{} {unit}", w[0], w[1].min(if unit == "Hz" { 30.0 } else { 0.71 })))
             .collect()
     };
-    for scene in scenes {
-        for taa in [true, false] {
-            let rows: Vec<&Record> =
-                records.iter().filter(|r| r.scene == scene && r.taa == taa && r.anatomy.is_some()).collect();
-            let Some(first) = rows.first().and_then(|r| r.anatomy.as_ref()) else { continue };
-            let white = rows.iter().find(|r| r.method == "white").and_then(|r| r.anatomy.clone());
-            let bands: Vec<String> = first.band_frequencies.iter().map(|f| format!("{f:.2} cpd")).collect();
-            let mut head = vec!["method".to_string(), "JOD".to_string()];
-            head.extend(edges(&SPATIAL_EDGES, "c/px"));
-            head.extend(edges(&TEMPORAL_EDGES, "Hz"));
-            head.extend(bands.iter().map(|b| format!("sust. {b}")));
-            head.extend(bands.iter().map(|b| format!("trans. {b}")));
-            out += &format!(
-                "\n### {scene}, {} (error power per band{}; ColorVideoVDP's weighted differences per band)\n\n",
+    let mut displays: Vec<&str> = Vec::new();
+    for r in records {
+        if !displays.contains(&r.display.as_str()) {
+            displays.push(&r.display);
+        }
+    }
+    for display in displays {
+        for &scene in &scenes {
+            for taa in [true, false] {
+                let rows: Vec<&Record> = records
+                    .iter()
+                    .filter(|r| {
+                        r.scene == scene && r.taa == taa && r.display == display && r.anatomy.is_some()
+                    })
+                    .collect();
+                let Some(first) = rows.first().and_then(|r| r.anatomy.as_ref()) else { continue };
+                let white = rows.iter().find(|r| r.method == "white").and_then(|r| r.anatomy.clone());
+                let bands: Vec<String> =
+                    first.band_frequencies.iter().map(|f| format!("{f:.2} cpd")).collect();
+                let mut head = vec!["method".to_string(), "JOD".to_string()];
+                head.extend(edges(&SPATIAL_EDGES, "c/px"));
+                head.extend(edges(&TEMPORAL_EDGES, "Hz"));
+                head.extend(bands.iter().map(|b| format!("sust. {b}")));
+                head.extend(bands.iter().map(|b| format!("trans. {b}")));
+                out += &format!(
+                "\n### {scene} on {display}, {} (error power per band{}; ColorVideoVDP's weighted differences per band)\n\n",
                 if taa { "with TAA" } else { "without TAA" },
                 if white.is_some() { " as a ratio to white noise's" } else { "" }
             );
-            out += &format!("| {} |\n|{}\n", head.join(" | "), " --- |".repeat(head.len()));
-            for r in rows {
-                let a = r.anatomy.as_ref().expect("filtered");
-                let ratio = |v: f64, w: Option<f64>| match w {
-                    Some(w) if w > 0.0 => format!("{:.3}", v / w),
-                    _ => format!("{v:.2e}"),
-                };
-                let mut cells = vec![r.method.clone(), format!("{:.3}", a.jod)];
-                cells.extend(
-                    a.spatial
-                        .iter()
-                        .enumerate()
-                        .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.spatial[k]))),
-                );
-                cells.extend(
-                    a.temporal
-                        .iter()
-                        .enumerate()
-                        .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.temporal[k]))),
-                );
-                for c in [0, 3] {
-                    cells.extend(a.bands.get(c).into_iter().flatten().map(|v| format!("{v:.4}")));
+                out += &format!("| {} |\n|{}\n", head.join(" | "), " --- |".repeat(head.len()));
+                for r in rows {
+                    let a = r.anatomy.as_ref().expect("filtered");
+                    let ratio = |v: f64, w: Option<f64>| match w {
+                        Some(w) if w > 0.0 => format!("{:.3}", v / w),
+                        _ => format!("{v:.2e}"),
+                    };
+                    let mut cells = vec![r.method.clone(), format!("{:.3}", a.jod)];
+                    cells.extend(
+                        a.spatial
+                            .iter()
+                            .enumerate()
+                            .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.spatial[k]))),
+                    );
+                    cells.extend(
+                        a.temporal
+                            .iter()
+                            .enumerate()
+                            .map(|(k, &v)| ratio(v, white.as_ref().map(|w| w.temporal[k]))),
+                    );
+                    for c in [0, 3] {
+                        cells.extend(a.bands.get(c).into_iter().flatten().map(|v| format!("{v:.4}")));
+                    }
+                    out += &format!("| {} |\n", cells.join(" | "));
                 }
-                out += &format!("| {} |\n", cells.join(" | "));
             }
         }
     }

@@ -51,6 +51,11 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     size.anatomy = args.anatomy;
+    size.flip = args.flip.clone();
+    size.grey = match args.grey {
+        GreyArg::Luminance => fsot::eval::jod::Grey::Luminance,
+        GreyArg::Rgb => fsot::eval::jod::Grey::Rgb,
+    };
     let anatomy_file = args.anatomy.then(|| AtomicFile::create(&args.out.join("anatomy.md"))).transpose()?;
     if let Some(i) = args.iterations {
         if !(1..=1_000_000).contains(&i) {
@@ -66,13 +71,29 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         }
         size.seeds = k;
     }
-    if let Some(d) = &args.display {
+    if !args.display.is_empty() {
         let names = colorvideovdp::DisplayModel::names()
             .map_err(|e| Error::invalid(format!("ColorVideoVDP: {e}")))?;
-        size.display =
-            names.iter().copied().find(|n| n == d).ok_or_else(|| {
+        let mut chosen = Vec::new();
+        for d in &args.display {
+            let name = names.iter().copied().find(|n| n == d).ok_or_else(|| {
                 Error::invalid(format!("unknown display {d:?}; one of {}", names.join(", ")))
             })?;
+            if !chosen.contains(&name) {
+                chosen.push(name);
+            }
+        }
+        size.displays = chosen;
+    }
+    let planned_measured = args.methods.is_empty() || args.methods.iter().any(|m| m == "fsot-planned");
+    if size.planned && planned_measured {
+        for d in &size.displays {
+            fsot::display::preset_ppd(d).map_err(|_| {
+                Error::invalid(format!(
+                    "fsot-planned needs the geometry of display {d:?}, which fsot does not know"
+                ))
+            })?;
+        }
     }
     if let Some(p) = args.passes {
         if !(1..=100_000).contains(&p) {
@@ -127,8 +148,8 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let table = format!(
         "# fsot eval{}\n\nfsot {} (commit {}) on {}.\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
          {} warm-up, {} mask seeds per method with {} render{} each, references {} samples per pixel; TAA alpha 0.1; eps 0.01; \
-         JOD: ColorVideoVDP (colorvideovdp {}) on the {} display at 60 fps, frames after the warm-up, tone-mapped by the \
-         reference's brightest pixel and sRGB-encoded.{} Run time {:.0} s.\n{}",
+         JOD: ColorVideoVDP (colorvideovdp {}) on the {} display{} at 60 fps, frames after the warm-up, tone-mapped by the \
+         reference's brightest pixel and sRGB-encoded, grey as {}.{} Run time {:.0} s.\n{}",
         if args.quick { " --quick" } else { "" },
         env!("CARGO_PKG_VERSION"),
         env!("FSOT_COMMIT"),
@@ -148,7 +169,12 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         if size.renders == 1 { "" } else { "s" },
         size.reference_samples,
         fsot::eval::jod::CRATE_VERSION,
-        size.display,
+        size.displays.join(" and "),
+        if size.displays.len() > 1 { "s" } else { "" },
+        match size.grey {
+            fsot::eval::jod::Grey::Luminance => "one luminance channel",
+            fsot::eval::jod::Grey::Rgb => "three equal RGB channels",
+        },
         if size.planned && !size.planned_without_taa {
             " fsot-planned: the TAA plan only (its no-TAA plan left out for time)."
         } else {
@@ -160,10 +186,10 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     md.commit(table.as_bytes())?;
     if let Some(f) = anatomy_file {
         let text = format!(
-            "# fsot eval: the error's anatomy\n\nfsot {} (commit {}); {} display; bands as in src/eval/anatomy.rs.\n{}",
+            "# fsot eval: the error's anatomy\n\nfsot {} (commit {}); judged on {}; bands as in src/eval/anatomy.rs.\n{}",
             env!("CARGO_PKG_VERSION"),
             env!("FSOT_COMMIT"),
-            size.display,
+            size.displays.join(" and "),
             fsot::eval::suite::anatomy_markdown(&records)
         );
         f.commit(text.as_bytes())?;

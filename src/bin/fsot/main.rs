@@ -95,9 +95,11 @@ struct EvalArgs {
     /// Mask seeds per method (each with its own renders) [default: 3 with --quick, else 5].
     #[arg(long, allow_negative_numbers = true)]
     seeds: Option<u32>,
-    /// ColorVideoVDP's display model for the JOD [default: standard_4k, the metric's own default].
-    #[arg(long)]
-    display: Option<String>,
+    /// ColorVideoVDP's display model for the JOD; repeatable (or comma-separated):
+    /// every render is judged on each, and `fsot-planned` plans for each
+    /// [default: standard_4k, the metric's own default].
+    #[arg(long, value_delimiter = ',')]
+    display: Vec<String>,
     /// Only these scenes (comma-separated names) [default: all].
     #[arg(long, value_delimiter = ',')]
     scenes: Vec<String>,
@@ -106,6 +108,15 @@ struct EvalArgs {
     /// [default: all].
     #[arg(long, value_delimiter = ',')]
     methods: Vec<String>,
+    /// How the grey frames reach ColorVideoVDP: `luminance` (one channel, which
+    /// the metric feeds to its achromatic and colour-opponent channels alike) or
+    /// `rgb` (three equal channels, as a display shows grey: achromatic only).
+    #[arg(long, value_enum, default_value = "luminance")]
+    grey: GreyArg,
+    /// Also judge the frames by FLIP (NVIDIA's flip-evaluator) run with this Python;
+    /// `bench/flip/setup.sh` installs it and prints the path.
+    #[arg(long, value_name = "PYTHON")]
+    flip: Option<PathBuf>,
     /// Also dissect each method's error into anatomy.md: its power per spatial and
     /// temporal frequency band, and ColorVideoVDP's differences per channel and band.
     #[arg(long)]
@@ -186,6 +197,12 @@ enum BenchSuite {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum GreyArg {
+    Luminance,
+    Rgb,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum KernelName {
     /// Frames independent (Salaün et al. 2022 per frame).
     Spatial,
@@ -252,11 +269,18 @@ struct KernelArgs {
     /// Temporal filter of the kernel.
     #[arg(long, value_enum, default_value = "perceptual-taa")]
     kernel: KernelName,
-    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels [default: 2.1; for --method
-    /// stbn, its energy's sigma, default 1.9].
+    /// The display the mask is seen on; the kernel's spatial filter is the eye's
+    /// contrast sensitivity at its pixels per degree: a number (pixels per
+    /// degree), a display's name (standard_fhd, standard_4k, sdr_4k_30,
+    /// standard_phone, ...) or WxH:DIAGONALin:DISTANCEm (e.g. 2560x1440:27in:0.7m)
+    /// [default: standard_fhd, unless --sigma is given].
+    #[arg(long, conflicts_with = "sigma")]
+    display: Option<String>,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels, instead of the display's
+    /// eye [for --method stbn: its energy's sigma, default 1.9].
     #[arg(long, allow_negative_numbers = true)]
     sigma: Option<f64>,
-    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
+    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma, else 2.1].
     #[arg(long, allow_negative_numbers = true)]
     sigma_t: Option<f64>,
     /// TAA blend weight of the current frame, in (0, 1].
@@ -269,13 +293,31 @@ struct KernelArgs {
 
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
-        KernelSpec::from_name(
+        kernel_spec(
             self.kernel.as_str(),
-            self.sigma.unwrap_or(DEFAULT_SIGMA),
+            self.display.as_deref(),
+            self.sigma,
             self.sigma_t,
             self.alpha,
             self.fps,
         )
+    }
+}
+
+/// The kernel of `name`: a Gaussian of `sigma` pixels when given, else the eye
+/// on `display` (by default `fsot::display::DEFAULT_DISPLAY`).
+fn kernel_spec(
+    name: &str,
+    display: Option<&str>,
+    sigma: Option<f64>,
+    sigma_t: Option<f64>,
+    alpha: f64,
+    fps: f64,
+) -> Result<KernelSpec> {
+    let spec = KernelSpec::from_name(name, sigma.unwrap_or(DEFAULT_SIGMA), sigma_t, alpha, fps)?;
+    match sigma {
+        Some(_) => Ok(spec),
+        None => spec.on_display(fsot::display::parse(display.unwrap_or(fsot::display::DEFAULT_DISPLAY))?),
     }
 }
 
@@ -407,8 +449,11 @@ struct ScoreArgs {
     /// attributes; perceptual-taa when a kernel flag below is given alone].
     #[arg(long, value_enum)]
     kernel: Option<KernelName>,
-    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels [default: 2.1 when
-    /// choosing the kernel here].
+    /// The display's eye as the spatial filter (as for `fsot optimize`)
+    /// [default: standard_fhd when choosing the kernel here without --sigma].
+    #[arg(long, conflicts_with = "sigma")]
+    display: Option<String>,
+    /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels, instead of the display's eye.
     #[arg(long, allow_negative_numbers = true)]
     sigma: Option<f64>,
     /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].

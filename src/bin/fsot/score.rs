@@ -8,6 +8,7 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
     }
     let mask = fsot::io::exr::read(&args.mask)?;
     let chosen = args.kernel.is_some()
+        || args.display.is_some()
         || args.sigma.is_some()
         || args.sigma_t.is_some()
         || args.alpha.is_some()
@@ -15,9 +16,10 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
     let (spec, whence) = match chosen {
         true => {
             let name = args.kernel.map(|k| k.as_str()).unwrap_or("perceptual-taa");
-            let spec = KernelSpec::from_name(
+            let spec = kernel_spec(
                 name,
-                args.sigma.unwrap_or(DEFAULT_SIGMA),
+                args.display.as_deref(),
+                args.sigma,
                 args.sigma_t,
                 args.alpha.unwrap_or(DEFAULT_ALPHA),
                 args.fps.unwrap_or(DEFAULT_FPS),
