@@ -3,10 +3,15 @@
 //!
 //! - The kernel follows the display: TAA -> `perceptual-taa` at its alpha and frame
 //!   rate, no TAA -> `perceptual`, a still camera (frames accumulated) -> `spatial`.
-//! - The tile: W = H from the scene or 64; T from the scene, or the TAA history
-//!   that carries 95% of the blend's weight rounded up to a power of two (alpha 0.1
-//!   -> 32), or a quarter second of the eye's temporal filter without TAA (60 fps
-//!   -> 16), or 16 for a still camera.
+//! - The kernel's spatial filter is the eye at the scene's display (its contrast
+//!   sensitivity at the display's pixels per degree; `csf.rs`), or a Gaussian
+//!   the scene gives in pixels.
+//! - The tile: W = H from the scene or 128; T from the scene, or twice the TAA
+//!   history that carries 95% of the blend's weight rounded up to a power of two
+//!   (alpha 0.1 -> 64), or a quarter second of the eye's temporal filter without
+//!   TAA (60 fps -> 16), or 16 for a still camera.
+//! - Reading: decisions of two or more dimensions read masks of pairs (vector),
+//!   or a scalar mask per dimension where the scene asks (`reading = "scalar"`).
 //! - Each visible group gets masks of its own, one per pair of dimensions and one
 //!   for a last single dimension (a 1-D decision a scalar mask, a 2-D one a 2-D
 //!   mask, a 3-D one a pair and a single): renderers consume dimensions in pairs,
@@ -34,12 +39,12 @@ use crate::kernel::KernelSpec;
 use crate::mask::Mask;
 use crate::problem::Tile;
 use crate::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-use crate::scene::{Display, Scene};
+use crate::scene::{Display, Reading, Scene};
 use crate::settings::{Settings, Until, DEFAULT_CAP};
 use crate::step_rule::Plateau;
 
 /// Tile width and height when the scene does not give them.
-pub const DEFAULT_SIZE: usize = 64;
+pub const DEFAULT_SIZE: usize = 128;
 /// Iterations the plateau rule took on the measured tiles (BENCHMARKS.md: 640 to
 /// 672 on 32x32x16 `taa` and 64x64x32 `perceptual-taa`): the plan's estimate.
 pub const EXPECTED_ITERATIONS: u32 = 660;
@@ -92,6 +97,9 @@ pub struct Plan {
     pub scene: String,
     pub tile: [usize; 3],
     pub tile_reason: String,
+    /// "scalar" or "vector", and why.
+    pub reading: String,
+    pub reading_reason: String,
     pub kernel: String,
     pub kernel_reason: String,
     /// The kernel itself (`kernel` is its description).
@@ -122,7 +130,7 @@ pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
         display.fps,
     )?;
     let spec = KernelSpec { spatial: display.spatial, ..spec };
-    Ok((spec, format!("{why}, seen on {}", display.seen_on)))
+    Ok((spec, format!("{why}; the eye: {}", display.seen_on)))
 }
 
 /// The tile's size, and why.
@@ -136,8 +144,16 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
         (true, Some(a)) => {
             // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight.
             let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (1.0 - a).ln()).ceil() };
-            let t = (frames as usize).clamp(1, 256).next_power_of_two();
-            (t, format!("TAA alpha {a}: {frames} frames carry 95% of the history, rounded up to {t}"))
+            // Twice that, so a pattern does not return within the history the
+            // judge integrates: at alpha 0.1, T = 32 scored 0.01 to 0.12 JOD
+            // below T = 64 (RESULTS.md, the leads).
+            let t = (2 * frames as usize).clamp(1, 256).next_power_of_two();
+            (
+                t,
+                format!(
+                    "TAA alpha {a}: {frames} frames carry 95% of the history; twice that, rounded up to {t}"
+                ),
+            )
         }
         (true, None) => {
             let frames = (0.25 * d.fps).ceil() as usize;
@@ -145,7 +161,8 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
             (t, format!("no TAA: the eye's filter spans about a quarter second, {frames} frames, rounded up to {t}"))
         }
     };
-    ((DEFAULT_SIZE, DEFAULT_SIZE, t), format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default); T {why}"))
+    let wh = format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default: the published masks' size, no repeat across a 128-pixel view)");
+    ((DEFAULT_SIZE, DEFAULT_SIZE, t), format!("{wh}; T {why}"))
 }
 
 /// Per-point cost of an iteration relative to d = 2 (the scaling suite: 64x64x16,
@@ -203,9 +220,26 @@ fn seed_of(scene: &str, file: &str) -> u64 {
     h
 }
 
-/// The parts of a visible decision of `dims` dimensions: pairs, then a single.
-fn split(dims: usize) -> Vec<(usize, usize)> {
-    (0..dims).step_by(2).map(|first| (first, (dims - first).min(2))).collect()
+/// The parts of a visible decision of `dims` dimensions: pairs then a single
+/// (vector reading), or one per dimension (scalar reading).
+fn split(dims: usize, reading: Reading) -> Vec<(usize, usize)> {
+    match reading {
+        Reading::Scalar => (0..dims).map(|first| (first, 1)).collect(),
+        Reading::Vector => (0..dims).step_by(2).map(|first| (first, (dims - first).min(2))).collect(),
+    }
+}
+
+/// The reading of a scene's decisions, and why.
+pub fn reading_for(scene: &Scene) -> (Reading, String) {
+    match scene.reading {
+        Some(r) => (r, "as the scene gives it".into()),
+        None => (
+            Reading::Vector,
+            "vector (default): masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.08 to \
+             0.5 JOD above a scalar mask per dimension in the 2-D to 4-D scenes under TAA (RESULTS.md, the leads)"
+                .into(),
+        ),
+    }
 }
 
 /// Where the k-th extra reader (k >= 1) of a mask reads it: the k-th point of
@@ -236,6 +270,7 @@ impl Plan {
     /// Plans a scene with the cost model `cost`.
     pub fn new(scene: &Scene, cost: &CostModel) -> Result<Self> {
         let (kernel, kernel_reason) = kernel_for(&scene.display)?;
+        let (reading, reading_reason) = reading_for(scene);
         let ((w, h, t), tile_reason) = tile_size(scene);
         let mut groups = Vec::new();
         let mut masks: Vec<PlannedMask> = Vec::new();
@@ -271,7 +306,7 @@ impl Plan {
                 });
                 (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
             } else {
-                let pieces = split(g.dims);
+                let pieces = split(g.dims, reading);
                 for &(first, dims) in &pieces {
                     let lender = lenders.iter_mut().find(|l| l.dims == dims && l.spp == g.spp && g.share);
                     if let Some(l) = lender {
@@ -319,10 +354,13 @@ impl Plan {
                         shares: None,
                     });
                 }
-                let what = match g.dims {
-                    1 => "a 1-D decision: a scalar mask".to_string(),
-                    2 => "a 2-D decision: a 2-D mask".to_string(),
-                    d => format!("{d}-D: split into pairs and a single, as renderers consume them"),
+                let what = match (g.dims, reading) {
+                    (1, _) => "a 1-D decision: a scalar mask".to_string(),
+                    (d, Reading::Scalar) => format!("a {d}-D decision: a scalar mask per dimension"),
+                    (2, Reading::Vector) => "a 2-D decision: a 2-D mask".to_string(),
+                    (d, Reading::Vector) => {
+                        format!("{d}-D: split into pairs and a single, as renderers consume them")
+                    }
                 };
                 let shared: Vec<String> = parts
                     .iter()
@@ -352,6 +390,11 @@ impl Plan {
             scene: scene.name.clone(),
             tile: [w, h, t],
             tile_reason,
+            reading: match reading {
+                Reading::Scalar => "scalar".into(),
+                Reading::Vector => "vector".into(),
+            },
+            reading_reason,
             kernel: kernel.describe(),
             kernel_reason,
             spec: kernel,

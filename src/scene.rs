@@ -13,7 +13,8 @@
 //! animated = true     # false: still camera and scene (accumulation)
 //!
 //! [tile]              # optional; the planner chooses what is absent
-//! size = "64x64x32"
+//! size = "128x128x64"
+//! reading = "scalar"  # "scalar": a 1-D mask per dimension; "vector": masks of pairs
 //!
 //! [[group]]           # one per sampling decision, in the order the renderer consumes them
 //! name = "pick"       # unique, [a-z0-9_]
@@ -63,6 +64,15 @@ pub struct Group {
 }
 
 /// A validated scene.
+/// How a decision of several dimensions reads its numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reading {
+    /// A 1-D mask per dimension, each read at its own offset and shift.
+    Scalar,
+    /// Masks of pairs of dimensions (and a single for an odd last one).
+    Vector,
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// The file's stem.
@@ -70,6 +80,8 @@ pub struct Scene {
     pub display: Display,
     /// W, H, T when the file gives them.
     pub size: Option<(usize, usize, usize)>,
+    /// How decisions of more than one dimension read masks, when the file says.
+    pub reading: Option<Reading>,
     /// In the order the renderer consumes them.
     pub groups: Vec<Group>,
 }
@@ -101,6 +113,7 @@ struct FileDisplay {
 #[serde(deny_unknown_fields)]
 struct FileTile {
     size: Option<Spanned<String>>,
+    reading: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -149,7 +162,20 @@ impl Scene {
             }
             groups.push(group);
         }
-        Ok(Self { name: name.to_string(), display, size, groups })
+        let reading = match file.tile.as_ref().and_then(|t| t.reading.as_ref()) {
+            Some(r) => Some(match r.get_ref().as_str() {
+                "scalar" => Reading::Scalar,
+                "vector" => Reading::Vector,
+                other => {
+                    return Err(at(
+                        r.span(),
+                        format!("reading must be \"scalar\" or \"vector\", got {other:?}"),
+                    ))
+                }
+            }),
+            None => None,
+        };
+        Ok(Self { name: name.to_string(), display, size, reading, groups })
     }
 }
 

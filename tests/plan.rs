@@ -35,12 +35,12 @@ fn the_display_chooses_the_kernel() {
 #[test]
 fn the_taa_history_that_matters_sets_the_frames() {
     let t = |d: &str| tile_size(&scene(d, ONE)).0;
-    assert_eq!(t("taa_alpha = 0.1"), (64, 64, 32), "0.9^29 < 5%: 29 frames, rounded up to 32");
-    assert_eq!(t("taa_alpha = 0.2"), (64, 64, 16));
-    assert_eq!(t("taa_alpha = 1.0"), (64, 64, 1));
-    assert_eq!(t("fps = 60"), (64, 64, 16), "no TAA: a quarter second of the eye's filter");
-    assert_eq!(t("fps = 120"), (64, 64, 32));
-    assert_eq!(t("animated = false"), (64, 64, 16));
+    assert_eq!(t("taa_alpha = 0.1"), (128, 128, 64), "0.9^29 < 5%: 29 frames, twice that rounded up to 64");
+    assert_eq!(t("taa_alpha = 0.2"), (128, 128, 32));
+    assert_eq!(t("taa_alpha = 1.0"), (128, 128, 2));
+    assert_eq!(t("fps = 60"), (128, 128, 16), "no TAA: a quarter second of the eye's filter");
+    assert_eq!(t("fps = 120"), (128, 128, 32));
+    assert_eq!(t("animated = false"), (128, 128, 16));
     let given = Scene::parse(&format!("[tile]\nsize = \"16x8x4\"\n{ONE}"), "t").unwrap();
     assert_eq!(tile_size(&given).0, (16, 8, 4));
 }
@@ -70,8 +70,8 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
     seeds.dedup();
     assert_eq!(seeds.len(), plan.masks.len());
     let lens = plan.masks.iter().find(|m| m.file == "lens.exr").unwrap();
-    let per = model().seconds_per_iteration(&Tile::new(64, 64, 32, 1, 2).unwrap());
-    assert!((per - 1e-6 * 64.0 * 64.0 * 32.0).abs() < 1e-12, "d = 2, spp 1 is the calibration's unit");
+    let per = model().seconds_per_iteration(&Tile::new(128, 128, 64, 1, 2).unwrap());
+    assert!((per - 1e-6 * 128.0 * 128.0 * 64.0).abs() < 1e-12, "d = 2, spp 1 is the calibration's unit");
     assert_eq!(lens.estimated_seconds, per * lens.estimated_iterations as f64);
     let total: f64 = plan.masks.iter().map(|m| m.estimated_seconds).sum();
     assert_eq!(plan.estimated_seconds, total);
@@ -97,7 +97,7 @@ fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_a
         ([0; 3], &[0.0f32, 0.0][..], &None)
     );
     for (k, p) in lent.iter().enumerate().skip(1) {
-        assert_eq!(p.offset, share_offset(k as u32, [64, 64, 32]));
+        assert_eq!(p.offset, share_offset(k as u32, [128, 128, 64]));
         assert_eq!(p.shift, share_shift(k as u32, 2));
         assert_eq!(p.shares.as_deref(), Some("light"));
     }
@@ -110,6 +110,27 @@ fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_a
     }
     assert!(plan.groups[1].reason.contains("sharing light.exr"), "{}", plan.groups[1].reason);
     assert!(plan.groups[4].reason.contains("share = false"), "{}", plan.groups[4].reason);
+}
+
+#[test]
+fn a_scene_may_ask_for_a_scalar_mask_per_dimension_read_at_offsets_of_one_mask() {
+    let groups = "[[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"pick\"\ndims = 1\n";
+    let text = format!("[display]\ntaa_alpha = 0.1\n[tile]\nreading = \"scalar\"\n{groups}");
+    let plan = Plan::new(&Scene::parse(&text, "scalar").unwrap(), &model()).unwrap();
+    assert_eq!(plan.reading, "scalar");
+    let files: Vec<&str> = plan.masks.iter().map(|m| m.file.as_str()).collect();
+    assert_eq!(files, ["light-0.exr"], "one scalar mask for every dimension");
+    let reads: Vec<(usize, usize, [u32; 3])> =
+        plan.groups.iter().flat_map(|g| g.parts.iter().map(|p| (p.first, p.dims, p.offset))).collect();
+    let tile = [128, 128, 64];
+    assert_eq!(reads, [(0, 1, [0; 3]), (1, 1, share_offset(1, tile)), (0, 1, share_offset(2, tile))]);
+    // The default: masks of pairs.
+    let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
+    assert_eq!(plan.reading, "vector");
+    assert_eq!(plan.masks.iter().map(|m| m.dims).collect::<Vec<_>>(), [2, 1]);
+    assert!(Scene::parse(&format!("[tile]\nreading = \"both\"\n{groups}"), "bad")
+        .unwrap_err()
+        .contains("line 2"));
 }
 
 #[test]

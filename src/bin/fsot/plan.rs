@@ -27,8 +27,14 @@ pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
 pub(crate) fn describe(plan: &Plan) -> String {
     let [w, h, t] = plan.tile;
     let mut s = format!(
-        "scene {}: tile {w}x{h}x{t} ({}); kernel {} ({}); backend {}\n",
-        plan.scene, plan.tile_reason, plan.kernel, plan.kernel_reason, plan.backend
+        "scene {}: tile {w}x{h}x{t} ({}); reading {} ({}); kernel {} ({}); backend {}\n",
+        plan.scene,
+        plan.tile_reason,
+        plan.reading,
+        plan.reading_reason,
+        plan.kernel,
+        plan.kernel_reason,
+        plan.backend
     );
     for g in &plan.groups {
         let reads: Vec<String> = g
