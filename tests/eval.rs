@@ -24,9 +24,11 @@ fn tiny() -> EvalSize {
         reference_samples: 16,
         planned: false,
         planned_without_taa: true,
+        planned_unshared: true,
+        planned_masks: 2,
         displays: vec![fsot::eval::jod::DISPLAY],
         plan_tile: true,
-        grey: fsot::eval::jod::Grey::Luminance,
+        grey: fsot::eval::jod::Grey::Rgb,
         flip: None,
         anatomy: false,
     }

@@ -30,11 +30,12 @@ pub const CRATE_VERSION: &str = "0.1.1";
 pub enum Grey {
     /// One channel: ColorVideoVDP then feeds the same luminance to its
     /// achromatic and both colour-opponent channels (the reference
-    /// implementation's path for single-channel input).
-    #[default]
+    /// implementation's path for single-channel input): the colour
+    /// channels' sensitivity then weighs achromatic noise.
     Luminance,
     /// Three equal sRGB channels, as a display shows a grey image: the colour
     /// channels see (almost) no contrast, the achromatic ones all of it.
+    #[default]
     Rgb,
 }
 

@@ -74,6 +74,14 @@ pub struct EvalSize {
     /// Also the no-TAA plan's masks (`fsot-planned` without TAA); the quick run
     /// leaves them out for time.
     pub planned_without_taa: bool,
+    /// Also `fsot-planned-unshared` where a plan shares masks: the full run
+    /// leaves it out for time.
+    pub planned_unshared: bool,
+    /// Masks `fsot-planned` makes per setting (display, TAA): seed k renders
+    /// with mask k mod `planned_masks` at its own placement. One mask judged at
+    /// every placement is how the published masks are judged (the full run);
+    /// `seeds` masks add the spread between masks to the interval.
+    pub planned_masks: u32,
     /// The ColorVideoVDP display models every render is judged on
     /// (`jod::DISPLAY` by default); `fsot-planned` plans for each.
     pub displays: Vec<&'static str>,
@@ -103,9 +111,11 @@ impl EvalSize {
             reference_samples: 256,
             planned: true,
             planned_without_taa: false,
+            planned_unshared: true,
+            planned_masks: 3,
             displays: vec![DISPLAY],
             plan_tile: true,
-            grey: Grey::Luminance,
+            grey: Grey::Rgb,
             flip: None,
             anatomy: false,
         }
@@ -123,9 +133,11 @@ impl EvalSize {
             reference_samples: 1024,
             planned: true,
             planned_without_taa: true,
+            planned_unshared: false,
+            planned_masks: 1,
             displays: vec![DISPLAY],
             plan_tile: false,
-            grey: Grey::Luminance,
+            grey: Grey::Rgb,
             flip: None,
             anatomy: false,
         }
@@ -641,7 +653,7 @@ fn planned_records(
         let viewing = Spatial::Display { ppd: crate::display::preset_ppd(display)? };
         let mut any_shares = false;
         for share in [true, false] {
-            if !share && !any_shares {
+            if !share && !(any_shares && size.planned_unshared) {
                 continue;
             }
             // Each TAA setting has its own plan (kernel); of each, the record of that setting.
@@ -649,7 +661,7 @@ fn planned_records(
                 if !with_taa && !size.planned_without_taa {
                     continue;
                 }
-                let planned: Vec<PlannedMasks> = (1..=size.seeds as u64)
+                let planned: Vec<PlannedMasks> = (1..=size.planned_masks.clamp(1, size.seeds) as u64)
                     .map(|seed| planned_masks(scene, viewing, with_taa, share, size, cache, seed))
                     .collect::<Result<_>>()?;
                 any_shares |= planned[0].shares;
@@ -658,7 +670,11 @@ fn planned_records(
                     size.seeds,
                     &[d],
                     |k, placement| {
-                        Ok(render(scene, size.shot, &MaskSampler::planned(&reads[k as usize], placement)))
+                        Ok(render(
+                            scene,
+                            size.shot,
+                            &MaskSampler::planned(&reads[k as usize % reads.len()], placement),
+                        ))
                     },
                     None,
                 )?;

@@ -70,6 +70,18 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             )));
         }
         size.seeds = k;
+        if args.quick {
+            size.planned_masks = k;
+        }
+    }
+    if let Some(k) = args.planned_masks {
+        if !(1..=size.seeds).contains(&k) {
+            return Err(Error::invalid(format!(
+                "--planned-masks must be in 1..={} (the seeds), got {k}",
+                size.seeds
+            )));
+        }
+        size.planned_masks = k;
     }
     if !args.display.is_empty() {
         let names = colorvideovdp::DisplayModel::names()
@@ -147,7 +159,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let t = size.tile;
     let table = format!(
         "# fsot eval{}\n\nfsot {} (commit {}) on {}.\n\nMasks {}x{}x{}, d = {}, {} iterations (fsot) or {} passes (swap methods); images {} x {}, {} frames, \
-         {} warm-up, {} mask seeds per method with {} render{} each, references {} samples per pixel; TAA alpha 0.1; eps 0.01; \
+         {} warm-up, {} mask seeds per method with {} render{} each (fsot-planned: {} mask{} per setting at the seeds' placements), references {} samples per pixel; TAA alpha 0.1; eps 0.01; \
          JOD: ColorVideoVDP (colorvideovdp {}) on the {} display{} at 60 fps, frames after the warm-up, tone-mapped by the \
          reference's brightest pixel and sRGB-encoded, grey as {}.{} Run time {:.0} s.\n{}",
         if args.quick { " --quick" } else { "" },
@@ -167,6 +179,8 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         size.seeds,
         size.renders,
         if size.renders == 1 { "" } else { "s" },
+        size.planned_masks,
+        if size.planned_masks == 1 { "" } else { "s" },
         size.reference_samples,
         fsot::eval::jod::CRATE_VERSION,
         size.displays.join(" and "),

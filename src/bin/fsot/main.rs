@@ -95,6 +95,11 @@ struct EvalArgs {
     /// Mask seeds per method (each with its own renders) [default: 3 with --quick, else 5].
     #[arg(long, allow_negative_numbers = true)]
     seeds: Option<u32>,
+    /// Masks `fsot-planned` makes per display and TAA setting, each judged at
+    /// its share of the seeds' placements [default: 1, judged at every
+    /// placement as the published masks are; the seeds with --quick].
+    #[arg(long)]
+    planned_masks: Option<u32>,
     /// ColorVideoVDP's display model for the JOD; repeatable (or comma-separated):
     /// every render is judged on each, and `fsot-planned` plans for each
     /// [default: standard_4k, the metric's own default].
@@ -111,7 +116,7 @@ struct EvalArgs {
     /// How the grey frames reach ColorVideoVDP: `luminance` (one channel, which
     /// the metric feeds to its achromatic and colour-opponent channels alike) or
     /// `rgb` (three equal channels, as a display shows grey: achromatic only).
-    #[arg(long, value_enum, default_value = "luminance")]
+    #[arg(long, value_enum, default_value = "rgb")]
     grey: GreyArg,
     /// Also judge the frames by FLIP (NVIDIA's flip-evaluator) run with this Python;
     /// `bench/flip/setup.sh` installs it and prints the path.
