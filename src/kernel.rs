@@ -95,9 +95,9 @@ pub const DEFAULT_TOLERANCE: f64 = 1e-3;
 /// filter at the display's pixels per degree would leave fewer (no TAA on a
 /// display of under about 60 pixels per degree: 7 at standard_fhd), its widths
 /// are widened until classes reach this. Sliced transport on classes of a
-/// handful of samples measures little of their spread; measured without TAA
-/// on standard_fhd, the unwidened eye (7 samples) scored 0.03 to 0.4 JOD below
-/// Gaussians of 18 to 74 samples, which scored alike (RESULTS.md, the leads).
+/// handful of samples measures little of their spread. Widened so, the eye
+/// scores level with a Gaussian of sigma 2.1 pixels without TAA on
+/// standard_fhd and standard_4k (RESULTS.md, the leads).
 pub const MIN_MEAN_CLASS: f64 = 20.0;
 
 /// Kernel names as the command line and files spell them.

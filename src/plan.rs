@@ -145,8 +145,8 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
             // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight.
             let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (1.0 - a).ln()).ceil() };
             // Twice that, so a pattern does not return within the history the
-            // judge integrates: at alpha 0.1, T = 32 scored 0.01 to 0.12 JOD
-            // below T = 64 (RESULTS.md, the leads).
+            // judge integrates: at alpha 0.1, T = 32 scored level with or up
+            // to 0.06 JOD below T = 64 (RESULTS.md, the leads).
             let t = (2 * frames as usize).clamp(1, 256).next_power_of_two();
             (
                 t,
@@ -235,8 +235,8 @@ pub fn reading_for(scene: &Scene) -> (Reading, String) {
         Some(r) => (r, "as the scene gives it".into()),
         None => (
             Reading::Vector,
-            "vector (default): masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.08 to \
-             0.5 JOD above a scalar mask per dimension in the 2-D to 4-D scenes under TAA (RESULTS.md, the leads)"
+            "vector (default): masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.04 to \
+             0.49 JOD above a scalar mask per dimension in the 2-D to 4-D scenes under TAA (RESULTS.md, the leads)"
                 .into(),
         ),
     }
