@@ -653,7 +653,7 @@ fn planned_records(
         let viewing = Spatial::Display { ppd: crate::display::preset_ppd(display)? };
         let mut any_shares = false;
         for share in [true, false] {
-            if !share && !(any_shares && size.planned_unshared) {
+            if !(share || any_shares && size.planned_unshared) {
                 continue;
             }
             // Each TAA setting has its own plan (kernel); of each, the record of that setting.
