@@ -1,6 +1,8 @@
 //! The command line: a working run, and clear errors (non-zero exit, a message, no
 //! panic) for bad flags and bad files, without touching existing outputs.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -476,7 +478,7 @@ fn a_c_header_compiles_and_holds_the_masks_levels() {
         .current_dir(dir.path())
         .output();
     let Ok(cc) = cc else {
-        eprintln!("SKIPPED the compile half: no C compiler (cc) on this machine");
+        let _ = common::skip("the compile half: no C compiler (cc) on this machine");
         return;
     };
     assert!(cc.status.success(), "{}", String::from_utf8_lossy(&cc.stderr));
@@ -743,8 +745,8 @@ fn fsot_lane_rounds_and_chunks_tune_the_per_lane_transport_and_bad_values_are_re
         assert!(capped.contains("one slice an invocation"), "{capped}");
         assert!(free.contains("transport: per lane") && !free.contains("an invocation"), "{free}");
     } else {
-        eprintln!(
-            "SKIPPED (in part): this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS"
+        let _ = common::skip(
+            "in part: this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS",
         );
     }
     assert_variable_refused(dir.path(), "FSOT_LANE_ROUNDS", &["0", "-1", "two"]);

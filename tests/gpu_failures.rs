@@ -5,10 +5,6 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn skip() -> bool {
-    std::env::var("FSOT_SKIP_GPU_TESTS").map(|v| v == "1").unwrap_or(false)
-}
-
 fn fsot(dir: &Path, env: &[(&str, &str)], args: &[&str]) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_fsot"));
     c.args(["optimize", "--size", "16x16x8", "--kernel", "taa", "--iterations", "120"]);
@@ -36,9 +32,6 @@ fn untouched(dir: &Path) -> bool {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_lost_device_stops_a_vulkan_run_with_a_clear_error_and_nothing_written() {
-    if skip() {
-        return;
-    }
     let dir = setup();
     let o = fsot(
         dir.path(),
@@ -54,9 +47,6 @@ fn a_lost_device_stops_a_vulkan_run_with_a_clear_error_and_nothing_written() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
-    if skip() {
-        return;
-    }
     let dir = setup();
     // Device 0 named explicitly, so that auto takes it even where it is lavapipe.
     let o = fsot(
@@ -77,9 +67,6 @@ fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn out_of_device_memory_is_an_error_for_vulkan_and_a_fall_back_for_auto() {
-    if skip() {
-        return;
-    }
     let dir = setup();
     let env = [("FSOT_FAULT", "device-memory:1024")];
     let o = fsot(dir.path(), &env, &["--backend", "vulkan", "--out", "existing.exr"]);

@@ -37,9 +37,10 @@ fn run_with(ctx: &fsot::vk::Context, lane_limit: Option<u32>, iterations: u32) -
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_class_cut_short_by_the_loop_cap_fails_the_run_clearly() {
-    let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().is_cpu() {
-        eprintln!("SKIPPED: only CPU implementations of Vulkan cap loops; this device is a GPU");
+    let ctx = common::gpu_context();
+    if !ctx.info().is_cpu()
+        && common::skip("only CPU implementations of Vulkan cap loops; this device is a GPU")
+    {
         return;
     }
     let err = run_with(&ctx, Some(200), 4).expect_err("classes of 200 at d = 8 per lane pass the cap");
@@ -62,9 +63,10 @@ fn lanes_whose_classes_need_different_sorts_stay_under_the_cap() {
     // worst, not for both in one slice (a SIMD driver runs both sides of a
     // branch): the lanes of a group sort alike. (Here the loops stay under the cap even when they do
     // not: the sorts' actual loops are well below their worst cases.)
-    let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().is_cpu() {
-        eprintln!("SKIPPED: only CPU implementations of Vulkan cap loops; this device is a GPU");
+    let ctx = common::gpu_context();
+    if !ctx.info().is_cpu()
+        && common::skip("only CPU implementations of Vulkan cap loops; this device is a GPU")
+    {
         return;
     }
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();

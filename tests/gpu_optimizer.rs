@@ -59,7 +59,7 @@ fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: Tr
 }
 
 fn compare_with_options(mask: &Mask, kernel: &str, options: VulkanOptions) {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let transport = options.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
@@ -118,7 +118,7 @@ fn per_lane_classes_past_2048_that_fit_the_loop_budget_need_no_large_class_stage
     // past 2048 of spread keys (float32 may rank two nearly tied projections
     // the other way), and one iteration where all keys tie (the heap sort at
     // its worst).
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     if refused_here(&ctx, TransportKind::PerLane) {
         return;
     }
@@ -184,7 +184,7 @@ fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
     // on distinct keys (the bucket sort, insertion within buckets), on keys that
     // all tie (every member in one bucket: the bitonic fallback), and in three
     // dimensions (the walk's targets over the sorted class).
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let mut tied = Mask::white(tile, 3);
     tied.samples.iter_mut().for_each(|v| *v = 0.375);
@@ -211,7 +211,7 @@ fn each_iterations_objective_estimate_is_the_cpu_paths() {
     // path's, iteration by iteration from the same samples: in each transport,
     // in a GPU's shape (the cost summed over 16 subgroups on lavapipe) and in
     // one whose last subgroup is partial, in two and three dimensions.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let shapes = [
         (TransportKind::Workgroup, Some((128, 1))),
         (TransportKind::Workgroup, Some((100, 2))),
@@ -259,7 +259,7 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
     // first pass limited to 1024 and a second up to 2048: classes of 1025 to
     // 2048 then take the second pass; at 4 spp the larger ones still take the
     // large-class stage, beside it.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let cases =
         [(Tile::new(16, 16, 8, 3, 2).unwrap(), "gaussian"), (Tile::new(16, 16, 8, 4, 2).unwrap(), "taa")];
     for (tile, kernel) in cases {
@@ -377,7 +377,7 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
 /// other and may rank the other way round on the GPU; such a point must then
 /// get exactly its neighbour's target.
 fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, large_stage: bool) {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let transport = options.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
@@ -441,9 +441,8 @@ fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, lar
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn float_atomics_agree_with_the_cpu_too() {
-    let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().float_atomic_add {
-        eprintln!("SKIPPED: no float atomics on {}", ctx.info().name);
+    let ctx = common::gpu_context();
+    if !ctx.info().float_atomic_add && common::skip(&format!("no float atomics on {}", ctx.info().name)) {
         return;
     }
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
@@ -466,7 +465,7 @@ fn float_atomics_agree_with_the_cpu_too() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn deterministic_mode_is_bit_identical_run_to_run() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let run = |transport| {
         let options =
@@ -492,7 +491,7 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let s = settings("taa", 70, 4);
     let options = VulkanOptions { deterministic: true, transport: None, ..VulkanOptions::default() };
@@ -525,7 +524,7 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_full_run_reaches_the_cpu_objective_within_five_percent() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
     let s = settings("taa", 150, 7);
     let cpu = optimize(tile, s, None).unwrap();
@@ -549,7 +548,7 @@ fn a_few_steps_of_momentum_and_of_adam_move_the_samples_as_the_cpu_path_does() {
     // The update pass in both variants (storage reads with the workgroup
     // transport; texel reads and the host's reset on CPU implementations with
     // the per-lane one) against the CPU path's f64 steps from the same start.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let torus = |a: f32, b: f32| {
         let d = (a - b).abs();
@@ -600,7 +599,7 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
     // path's f64 reference, on both transports. Per lane, a CPU implementation's
     // loop budget takes the f64 targets of classes up to the lane's limit only:
     // the larger classes of this kernel go to the large-class stage. The workgroups are sized so each invocation's share fits.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     for dims in [3, 4, 8] {
         let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
         for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
@@ -634,7 +633,7 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn full_runs_in_three_four_and_eight_dimensions_reach_the_cpu_objective_within_five_percent() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     for dims in [3, 4, 8] {
         let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
         let s = settings("perceptual-taa", 100, 7);
@@ -656,7 +655,7 @@ fn full_runs_in_three_four_and_eight_dimensions_reach_the_cpu_objective_within_f
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_device_without_f64_takes_float_pairs_and_classes_past_the_loop_budget_get_a_clear_error() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     // A device without shaderFloat64 (here: the same device, wrapped as a host
     // that did not enable it) takes d >= 3 with the float32-pair targets, whose
     // one iteration agrees with the CPU path's f64 within 1e-5.
@@ -688,7 +687,7 @@ fn a_device_without_f64_takes_float_pairs_and_classes_past_the_loop_budget_get_a
 fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     // The "host" here is an fsot context whose handles we hand over as if a
     // renderer had made them; fsot must use them and not destroy them.
-    let Some(host) = common::gpu_context() else { return };
+    let host = common::gpu_context();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     {
         let guest = fsot::vk::Context::wrap(host.external()).unwrap();

@@ -20,7 +20,7 @@ fn run(ctx: &fsot::vk::Context, tile: Tile, kernel: &str, seed: u64) -> VulkanRu
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn runs_stepped_together_make_bit_for_bit_the_masks_they_make_alone() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     // A 1-D and a 2-D mask, and one whose classes reach the large-class stage
     // (the global sort) at 64 spp.
     let cases = [
@@ -53,8 +53,8 @@ fn runs_stepped_together_make_bit_for_bit_the_masks_they_make_alone() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn runs_on_different_devices_are_not_stepped_together() {
-    let Some(a) = common::gpu_context() else { return };
-    let Some(b) = common::gpu_context() else { return };
+    let a = common::gpu_context();
+    let b = common::gpu_context();
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let (mut x, mut y) = (run(&a, tile, "taa", 1), run(&b, tile, "taa", 1));
     assert!(!x.shares_device_with(&y));
@@ -70,7 +70,7 @@ fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
     use fsot::plan::{CostModel, Plan, PlanEvent};
     use fsot::run::{CancelFlag, Outcome, RunOptions};
     use fsot::scene::Scene;
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
     let scene = Scene::parse(text, "together").unwrap();

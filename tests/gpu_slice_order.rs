@@ -29,13 +29,10 @@ fn lane_waste(lens: &[u32], lanes: usize) -> f64 {
 }
 
 /// Whether the device is a CPU implementation, which the per-lane transport is
-/// for (says SKIPPED where not).
+/// for (elsewhere the test fails unless skips are allowed: `common::skip`).
 fn takes_the_per_lane_transport(ctx: &Context) -> bool {
-    let cpu = ctx.info().is_cpu();
-    if !cpu {
-        eprintln!("SKIPPED: the per-lane transport is for CPU implementations; this device is a GPU");
-    }
-    cpu
+    ctx.info().is_cpu()
+        || !common::skip("the per-lane transport is for CPU implementations; this device is a GPU")
 }
 
 /// A whole deterministic per-lane run of 16x16x8 `taa` (seed 5, 40 iterations)
@@ -72,7 +69,7 @@ fn per_lane_run_and_its_slices(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn per_lane_slices_come_largest_class_first_and_each_exactly_once() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     if !takes_the_per_lane_transport(&ctx) {
         return;
     }
@@ -127,7 +124,7 @@ fn the_chunk_plan_gives_every_rank_to_one_chunk_within_the_loop_budget() {
     // the rounds the share allows make. At 16x16x8 (1 and 3 spp: classes
     // past LANE_MAX in the second, and at d = 3, where the f64 targets make a
     // slice dear), 32x32x16, and 32x32x16 with rounds capped at 3.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     if !takes_the_per_lane_transport(&ctx) {
         return;
     }
@@ -201,7 +198,7 @@ fn ordering_fewer_iterations_at_a_time_gives_the_same_run() {
     // Where one binding cannot hold a batch's orders (large tiles), the slices
     // are ordered a few iterations at a time within the batch; the run is the
     // same bit for bit (deterministic mode), whatever the slots.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     if !takes_the_per_lane_transport(&ctx) {
         return;
     }
@@ -222,7 +219,7 @@ fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
     // driver's threads; the sums do not (deterministic mode): the same run bit
     // for bit with one slice an invocation, two, and as many as the loop
     // budget allows (the default).
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     if !takes_the_per_lane_transport(&ctx) {
         return;
     }
@@ -243,7 +240,7 @@ fn per_lane_invocations_taking_one_slice_or_many_give_the_same_run() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_workgroup_transport_takes_slices_in_index_order() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let options = VulkanOptions { transport: Some(TransportKind::Workgroup), ..VulkanOptions::default() };
     let gpu = VulkanRun::new(&ctx, tile, settings(5), None, options).unwrap();

@@ -33,9 +33,7 @@ fn check(sort: &mut RadixSort, keys: Vec<u32>, what: &str) {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn sorts_like_the_cpu_at_awkward_sizes() {
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     // Up to 4M + 1 pairs, or the device's most.
     let most = RadixSort::max_capacity(&ctx).min((1 << 22) + 1);
     let mut sort = RadixSort::new(&ctx, most, SortCount::Host).unwrap();
@@ -56,9 +54,7 @@ fn sorts_like_the_cpu_at_awkward_sizes() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let mut sort = RadixSort::new(&ctx, 100_000, SortCount::Host).unwrap();
     let mut rng = Stream::new(derive(6, 6));
     // Heavy duplicates: 5 distinct keys.
@@ -108,9 +104,7 @@ fn keeps_equal_keys_in_input_order_and_orders_float_keys() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn refuses_more_pairs_than_it_can_hold() {
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let mut sort = RadixSort::new(&ctx, 1000, SortCount::Host).unwrap();
     assert!(sort.set_count(1001).is_err());
     assert!(RadixSort::new(&ctx, u32::MAX, SortCount::Host).is_err());
@@ -126,9 +120,7 @@ fn every_path_sorts_stably_by_any_number_of_low_bits() {
     // invocation: by default on CPU implementations), by 8, 20 and 32 bits
     // (one, three and four passes: an odd count ends in the second buffers), on
     // keys with many duplicates in their low bits.
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let mut sort = RadixSort::new(&ctx, 300_000, SortCount::Host).unwrap();
     let block = sort.shape().block;
     let tail_max = fsot::vk::sort::TAIL_MAX_BLOCKS * block;
@@ -196,9 +188,7 @@ fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
     // are sized by its items: a fixed size once broke every shape past 32). Each
     // path, at sizes around one block, several, the tail scan's last and the
     // scan's two levels' limit for the smallest blocks (64 x 64 / 256 x 64).
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let info = ctx.info().clone();
     let fits = |wg: u32, items: u32| {
         SortShape::fits(wg, items, info.subgroup_size, info.max_workgroup_invocations, info.max_shared_memory)
@@ -241,9 +231,7 @@ fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
 fn a_count_only_on_the_device_sorts_by_every_path() {
     // The optimizer's large-class stage sorts a count its passes wrote on the
     // device: every dispatch is sized there (indirect), for each path.
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
     let mut sort = RadixSort::new(&ctx, 200_000, SortCount::Device(&count)).unwrap();
     let block = sort.shape().block;
@@ -266,9 +254,7 @@ fn a_count_only_on_the_device_sorts_by_every_path() {
 fn the_lanes_path_reads_its_input_as_storage_where_texel_views_cannot_hold_it() {
     // The lanes path reads through texel views; a sort larger than the device's
     // maxTexelBufferElements reads the same pairs as storage instead.
-    let Some(ctx) = common::gpu_context() else {
-        return;
-    };
+    let ctx = common::gpu_context();
     let mut rng = Stream::new(derive(13, 13));
     let mut sort = RadixSort::with_storage_reads(&ctx, 100_000, SortCount::Host).unwrap();
     sort.path = SortPath::Lanes;

@@ -56,7 +56,7 @@ fn run_to_end(ctx: &Context, until: Until, host_rule: bool) -> Run {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_device_ends_a_plateau_run_where_the_host_rule_does_with_the_same_steps() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let device = run_to_end(&ctx, Until::Plateau(QUICK), false);
     let host = run_to_end(&ctx, Until::Plateau(QUICK), true);
     let (d, h) = (device.state().unwrap(), host.state().unwrap());
@@ -76,7 +76,7 @@ fn the_device_ends_a_plateau_run_where_the_host_rule_does_with_the_same_steps() 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_device_ends_an_objective_run_where_the_host_rule_does() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     // A target the run reaches after a few windows, well before the plateau rule ends it.
     let until = Until::Objective(1.25e-3);
     let device = run_to_end(&ctx, until, false);
@@ -93,7 +93,7 @@ fn the_device_ends_an_objective_run_where_the_host_rule_does() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_run_resumed_inside_a_window_hands_the_device_the_rule_where_it_stood() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("run.ckpt");
     let straight = run_to_end(&ctx, Until::Plateau(QUICK), false).state().unwrap();
@@ -195,9 +195,10 @@ fn wandering(seed: u64, n: usize, drift: f64) -> Vec<CostSlot> {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_device_pass_takes_the_host_rules_decisions_slot_by_slot() {
-    let Some(ctx) = common::gpu_context() else { return };
-    if !ctx.info().float64 {
-        eprintln!("SKIPPED: {} lacks shaderFloat64 (the host keeps the rule there)", ctx.info().name);
+    let ctx = common::gpu_context();
+    if !ctx.info().float64
+        && common::skip(&format!("{} lacks shaderFloat64 (the host keeps the rule there)", ctx.info().name))
+    {
         return;
     }
     let rule = Plateau { window: 4, decay_below: 0.01, stop_below: 0.003, factor: 0.5 };
@@ -232,7 +233,7 @@ fn the_device_pass_takes_the_host_rules_decisions_slot_by_slot() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_device_without_f64_leaves_the_rule_to_the_host_and_ends_at_the_same_iteration() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     // The same device wrapped as a host that did not enable shaderFloat64.
     let guest = Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
     let mut run = Run::start(tile(), settings(Until::Plateau(QUICK)), None, options(&guest, false)).unwrap();

@@ -52,7 +52,7 @@ fn both(energy: &PairEnergy, schedule: Schedule, ctx: &fsot::vk::Context) -> [(V
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn every_swap_applied_on_vulkan_is_exact_so_the_tracked_energy_is_the_summed_energy() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let annealing = Schedule { passes: 6, start_temperature: 0.1, greedy_share: 0.25 };
     for (tile, energy, schedule) in [
         (Tile::new(16, 16, 8, 1, 1).unwrap(), fast_energy as fn(Tile) -> PairEnergy, Schedule::greedy(4)),
@@ -89,7 +89,7 @@ fn every_swap_applied_on_vulkan_is_exact_so_the_tracked_energy_is_the_summed_ene
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_vulkan_search_goes_as_far_as_the_cpu_search_from_the_same_seed() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let annealing = Schedule { passes: 8, start_temperature: 0.1, greedy_share: 0.25 };
     for (tile, energy, schedule) in [
         (Tile::new(16, 16, 8, 1, 1).unwrap(), fast_energy as fn(Tile) -> PairEnergy, Schedule::greedy(8)),
@@ -128,7 +128,7 @@ fn fast_and_vector_stbn_masks_made_on_vulkan_pass_the_cpu_masks_bar_under_taa() 
     // tests/baselines.rs's bar for the CPU path's masks (perceived error under
     // TAA against white noise, an independent measure neither search optimizes),
     // held by the masks made on Vulkan from the same seeds.
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let setup = TestSetup { image: 64, frames: 64, warmup: 32, renders: 2, ..TestSetup::default() };
     let white = |tile: Tile| {
         (0..3).map(|s| perceived_error(&Mask::white(tile, 40 + s), &setup, 1)).sum::<f64>() / 3.0
@@ -150,7 +150,7 @@ fn fast_and_vector_stbn_masks_made_on_vulkan_pass_the_cpu_masks_bar_under_taa() 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn an_energy_past_the_loop_budget_is_refused_naming_the_cpu_backend() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     // A box filter as wide as the tile in x, y and t: every offset of a
     // 64x32x16 tile (32767 of them) is a neighbour.
     let tile = Tile::new(64, 32, 16, 1, 1).unwrap();

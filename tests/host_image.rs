@@ -36,7 +36,7 @@ const SAMPLED: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_it() {
-    let Some(host) = Host::new(true) else { return };
+    let host = Host::new(true);
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let mut settings =
         Settings::new(fsot::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 7);
@@ -90,7 +90,7 @@ void main() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_says() {
-    let Some(host) = Host::new(true) else { return };
+    let host = Host::new(true);
     let Some(spirv) = common::compile_glsl(PROBE) else { return };
     let tile = |d| Tile::new(8, 4, 3, 1, d).unwrap();
     let plan = SamplerPlan {
@@ -195,7 +195,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work() {
-    let Some(host) = Host::new(true) else { return };
+    let host = Host::new(true);
     let ctx = host.fsot();
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let mask = Mask::white(tile, 3);
@@ -244,7 +244,7 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image() {
-    let Some(host) = Host::new(true) else { return };
+    let host = Host::new(true);
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
                 [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";

@@ -100,7 +100,7 @@ fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
 #[test]
 fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one() {
     let _others = others();
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let s = settings(60);
     let vulkan = RunOptions {
@@ -126,7 +126,7 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
 #[test]
 fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_are_fast() {
     let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
     let options =
         RunOptions { backend: BackendChoice::Vulkan, context: Some(ctx.clone()), ..RunOptions::default() };
@@ -150,7 +150,7 @@ fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_ar
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
     let _others = others();
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let tile = Tile::new(8, 8, 2, 1, 3).unwrap();
     if ctx.info().is_cpu() {
         // Unhanded, auto looks for a GPU: a CPU implementation is not one.

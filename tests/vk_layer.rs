@@ -24,7 +24,7 @@ fn cpu_sort(keys: &[u32], vals: &[u32]) -> (Vec<u32>, Vec<u32>) {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn two_threads_sort_on_one_context_at_once() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let threads: Vec<_> = (0..2u32)
         .map(|t| {
             let ctx = ctx.clone();
@@ -49,7 +49,7 @@ fn two_threads_sort_on_one_context_at_once() {
 fn the_sort_runs_on_a_device_the_host_made() {
     // The host: its own instance (validation on, its own messenger), device and
     // queue, made with ash, without the 64-bit atomics the optimizer needs.
-    let Some(host) = common::host::Host::new(false) else { return };
+    let host = common::host::Host::new(false);
     {
         let ctx = host.fsot(); // fsot on the host's device, sharing the host's queue lock
         let mut sort = RadixSort::new(&ctx, 70_000, SortCount::Host).unwrap();
@@ -68,7 +68,7 @@ fn the_sort_runs_on_a_device_the_host_made() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_is_refused() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let usage =
         vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::SAMPLED;
     let desc =
@@ -105,7 +105,7 @@ void main() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_kind_is_refused() {
-    let Some(ctx) = common::gpu_context() else { return };
+    let ctx = common::gpu_context();
     let Some(spirv) = common::compile_glsl(TEXEL_PROBE) else { return };
     use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location, TexelView};
     let count = 1000usize;

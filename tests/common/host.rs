@@ -50,11 +50,10 @@ pub struct Host {
 
 impl Host {
     /// A host whose device has 64-bit buffer atomics on (the Vulkan optimizer
-    /// needs them) or not. None only where GPU tests are skipped
-    /// (FSOT_SKIP_GPU_TESTS=1).
-    pub fn new(int64_atomics: bool) -> Option<Self> {
-        super::gpu_context()?; // the same rule for skipping as every GPU test
-                               // SAFETY: loading the system's Vulkan loader.
+    /// needs them) or not; fails without Vulkan, as every GPU test does.
+    pub fn new(int64_atomics: bool) -> Self {
+        drop(super::gpu_context()); // the same requirement as every GPU test
+                                    // SAFETY: loading the system's Vulkan loader.
         let entry = unsafe { ash::Entry::load() }.expect("a Vulkan loader");
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
         let layers = [c"VK_LAYER_KHRONOS_validation".as_ptr()];
@@ -101,7 +100,7 @@ impl Host {
         // SAFETY: the queue was created with the device.
         let queue = unsafe { device.get_device_queue(family, 0) };
         let lock = Arc::new(Mutex::new(()));
-        Some(Self {
+        Self {
             messages,
             entry,
             instance,
@@ -113,7 +112,7 @@ impl Host {
             queue,
             lock,
             int64_atomics,
-        })
+        }
     }
 
     /// fsot's context on the host's device, sharing its queue lock.

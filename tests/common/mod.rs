@@ -6,17 +6,25 @@ pub mod host;
 use fsot::vk::{Context, ContextOptions};
 
 /// A Vulkan context with the validation layer on. GPU tests are mandatory (CI
-/// installs lavapipe and the layer); on a machine without Vulkan,
-/// FSOT_SKIP_GPU_TESTS=1 at build time marks them ignored (`fsot_skip_gpu`, from
-/// build.rs), so the harness counts them as skipped. Returns None only then.
-pub fn gpu_context() -> Option<Context> {
-    if std::env::var("FSOT_SKIP_GPU_TESTS").map(|v| v == "1").unwrap_or(false) {
-        eprintln!("FSOT_SKIP_GPU_TESTS=1: skipping a GPU test");
-        return None;
+/// installs lavapipe and the layer): without Vulkan they fail. On a machine
+/// without Vulkan, FSOT_SKIP_GPU_TESTS=1 at build time marks them ignored
+/// (`fsot_skip_gpu`, from build.rs), so the harness reports them as skipped.
+pub fn gpu_context() -> Context {
+    Context::new(&ContextOptions { validation: true, device: None })
+        .unwrap_or_else(|e| panic!("Vulkan with validation is required for this test: {e}"))
+}
+
+/// A test that cannot run here (a device of the other class, a missing
+/// capability or tool) fails with `reason`, unless FSOT_ALLOW_SKIPS=1 says
+/// such skips are expected on this machine: then it says SKIPPED and the
+/// caller returns. Returns whether to skip.
+#[must_use]
+pub fn skip(reason: &str) -> bool {
+    if std::env::var("FSOT_ALLOW_SKIPS").map(|v| v == "1").unwrap_or(false) {
+        eprintln!("SKIPPED (FSOT_ALLOW_SKIPS=1): {reason}");
+        return true;
     }
-    let ctx = Context::new(&ContextOptions { validation: true, device: None })
-        .unwrap_or_else(|e| panic!("Vulkan with validation is required for this test: {e}"));
-    Some(ctx)
+    panic!("cannot run here: {reason} (FSOT_ALLOW_SKIPS=1 allows the skip)");
 }
 
 /// Fails the test if the validation layer said anything.
@@ -31,8 +39,8 @@ pub fn assert_no_validation_messages(ctx: &Context) {
 }
 
 /// Compiles a compute shader against `glsl/include` (the public include) with
-/// glslangValidator for Vulkan 1.2; None when glslangValidator is missing (said
-/// on stderr as SKIPPED).
+/// glslangValidator for Vulkan 1.2; None when glslangValidator is missing and
+/// the skip is allowed (`skip`).
 pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("shader.comp");
@@ -47,7 +55,7 @@ pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
         .arg(&out)
         .output();
     let Ok(run) = run else {
-        eprintln!("SKIPPED: glslangValidator is not installed (scripts/install-deps.sh installs it)");
+        let _ = skip("glslangValidator is not installed (scripts/install-deps.sh installs it)");
         return None;
     };
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
