@@ -2,7 +2,7 @@
 //! quick evaluation's renders (after TAA and without) for white noise, STBN and
 //! fsot's perceptual-taa mask, on several display models, with the time each
 //! prediction takes. The display fsot eval uses was chosen from this output
-//! (bench/results/issue15-jod-probe.txt).
+//! (bench/results/jod-probe.txt).
 //!
 //! cargo run --release --example jod_probe -- [CACHE_DIR]
 use std::path::PathBuf;

@@ -94,7 +94,7 @@ pub const ORDER_BATCH: u32 = super::BATCH;
 /// starts costs a CPU implementation a few microseconds (at 32x32x16, 3 where
 /// one a slice took 37: one iteration's ordering, submission and download
 /// included, 0.38-0.44 -> 0.34-0.36 ms, `examples/slice_order_time.rs`,
-/// bench/results/issue16-order-workgroups.txt), and well within lavapipe's
+/// bench/results/order-workgroups.txt), and well within lavapipe's
 /// loop cap (a slice's draw and class search loop at most about 110 times).
 pub const ORDER_SLICES_PER_INVOCATION: u32 = 16;
 

@@ -663,7 +663,7 @@ impl RadixSort {
     /// implementation, whatever the count (on lavapipe, 2 cores: 2048 pairs in
     /// 0.77 ms where the tail scan took 2.43, 64k in 3.73 against 34.7 ms, 1M
     /// in 35.9 against 537.2 ms by the block passes;
-    /// `bench/results/issue16-sort-lanes-texels.txt`).
+    /// `bench/results/sort-lanes-texels.txt`).
     pub fn lanes_path(&self) -> bool {
         match self.path {
             SortPath::Lanes => true,
