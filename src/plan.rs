@@ -235,7 +235,7 @@ pub fn reading_for(scene: &Scene) -> (Reading, String) {
         Some(r) => (r, "as the scene gives it".into()),
         None => (
             Reading::Vector,
-            "vector (default): masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.04 to \
+            "the default: masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.04 to \
              0.49 JOD above a scalar mask per dimension in the 2-D to 4-D scenes under TAA (RESULTS.md, the leads)"
                 .into(),
         ),

@@ -63,7 +63,6 @@ pub struct Group {
     pub share: bool,
 }
 
-/// A validated scene.
 /// How a decision of several dimensions reads its numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reading {
@@ -73,6 +72,7 @@ pub enum Reading {
     Vector,
 }
 
+/// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
     /// The file's stem.

@@ -871,14 +871,13 @@ pub fn anatomy_markdown(records: &[Record]) -> String {
     for display in displays {
         for &scene in &scenes {
             for taa in [true, false] {
-                let rows: Vec<&Record> = records
+                let rows: Vec<(&Record, &Anatomy)> = records
                     .iter()
-                    .filter(|r| {
-                        r.scene == scene && r.taa == taa && r.display == display && r.anatomy.is_some()
-                    })
+                    .filter(|r| r.scene == scene && r.taa == taa && r.display == display)
+                    .filter_map(|r| Some((r, r.anatomy.as_ref()?)))
                     .collect();
-                let Some(first) = rows.first().and_then(|r| r.anatomy.as_ref()) else { continue };
-                let white = rows.iter().find(|r| r.method == "white").and_then(|r| r.anatomy.clone());
+                let Some(&(_, first)) = rows.first() else { continue };
+                let white = rows.iter().find(|(r, _)| r.method == "white").map(|&(_, a)| a.clone());
                 let bands: Vec<String> =
                     first.band_frequencies.iter().map(|f| format!("{f:.2} cpd")).collect();
                 let mut head = vec!["method".to_string(), "JOD".to_string()];
@@ -892,8 +891,7 @@ pub fn anatomy_markdown(records: &[Record]) -> String {
                 if white.is_some() { " as a ratio to white noise's" } else { "" }
             );
                 out += &format!("| {} |\n|{}\n", head.join(" | "), " --- |".repeat(head.len()));
-                for r in rows {
-                    let a = r.anatomy.as_ref().expect("filtered");
+                for (r, a) in rows {
                     let ratio = |v: f64, w: Option<f64>| match w {
                         Some(w) if w > 0.0 => format!("{:.3}", v / w),
                         _ => format!("{v:.2e}"),
