@@ -1,6 +1,35 @@
 //! fsot: perceptually optimized spatio-temporal sample masks by filtered sliced
 //! optimal transport. See the README's architecture section for how the modules
 //! fit together.
+/// The bytes of one embedded SPIR-V file: committed under `spirv/` (made from
+/// `glsl/` by `scripts/spirv.sh`), or compiled into OUT_DIR at build time with
+/// the `build-shaders` feature.
+#[cfg(not(feature = "build-shaders"))]
+macro_rules! spirv {
+    ($file:literal) => {
+        include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $file))
+    };
+}
+#[cfg(feature = "build-shaders")]
+macro_rules! spirv {
+    ($file:literal) => {
+        include_bytes!(concat!(env!("OUT_DIR"), "/spirv/", $file))
+    };
+}
+/// One shader family's constants (`spirv/FAMILY.rs`, or OUT_DIR's with `build-shaders`).
+#[cfg(not(feature = "build-shaders"))]
+macro_rules! spirv_module {
+    ($family:literal) => {
+        include!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $family, ".rs"));
+    };
+}
+#[cfg(feature = "build-shaders")]
+macro_rules! spirv_module {
+    ($family:literal) => {
+        include!(concat!(env!("OUT_DIR"), "/spirv/", $family, ".rs"));
+    };
+}
+
 pub mod backend;
 pub mod baselines;
 pub mod bench;

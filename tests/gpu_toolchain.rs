@@ -1,4 +1,4 @@
-//! The GPU toolchain works: shaders compiled by build.rs run on a Vulkan device
+//! The GPU toolchain works: the embedded shaders run on a Vulkan device
 //! (lavapipe in CI) with the validation layer on, and agree with the CPU.
 
 mod common;

@@ -1,8 +1,9 @@
 //! The compiled SPIR-V agrees with its Rust mirror: every storage block's and
 //! texel buffer's binding index, every push-constant struct's member names and
-//! offsets, and the layout of the structs inside buffers, read from the shaders
-//! build.rs compiled (with rspirv, an independent SPIR-V reader). GLSL and Rust
-//! cannot drift apart.
+//! offsets, and the layout of the structs inside buffers, read with rspirv (an
+//! independent SPIR-V reader) from the shaders compiled here with their names
+//! kept (the embedded SPIR-V has none; tests/spirv_fresh.rs ties it to the same
+//! GLSL). GLSL and Rust cannot drift apart.
 
 use std::collections::HashMap;
 
@@ -14,6 +15,33 @@ use fsot::gpu::swap::layout::{self as swap, SwapOffset, SwapProposal, SwapPush, 
 use fsot::vk::sort::{self, RadixPush};
 use rspirv::dr::{load_bytes, Module, Operand};
 use rspirv::spirv::{Decoration, Op, StorageClass};
+use std::sync::OnceLock;
+
+/// Every shader of a family, compiled with OpName/OpMemberName kept; the same
+/// names as the family the crate embeds.
+fn named(family: &str, embedded: &[(&str, &[u8])]) -> &'static [(&'static str, &'static [u8])] {
+    static FAMILIES: OnceLock<Vec<(String, Vec<(&'static str, &'static [u8])>)>> = OnceLock::new();
+    let all = FAMILIES.get_or_init(|| {
+        let glsl = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
+        shaderc_link::FAMILIES
+            .iter()
+            .map(|f| {
+                let shaders = shaderc_link::compile_family(&glsl, f, true).unwrap();
+                let leaked =
+                    shaders
+                        .into_iter()
+                        .map(|s| (&*s.name.leak(), &*s.spirv.leak()))
+                        .collect::<Vec<(&'static str, &'static [u8])>>();
+                (f.to_string(), leaked)
+            })
+            .collect()
+    });
+    let shaders = &all.iter().find(|(f, _)| f == family).unwrap().1;
+    let names: Vec<&str> = shaders.iter().map(|s| s.0).collect();
+    let want: Vec<&str> = embedded.iter().map(|s| s.0).collect();
+    assert_eq!(names, want, "{family}: the compiled and the embedded shaders differ");
+    shaders
+}
 
 /// (member name, byte offset) of a Rust struct, in declaration order.
 macro_rules! fields {
@@ -39,6 +67,10 @@ fn mirrors() -> Vec<Mirror> {
         fields!(SwapProposal; p, q, delta, state),
         fields!(SwapStats; energy, accepted, dropped, uphill, retried),
     ]
+}
+
+fn fsot_named() -> &'static [(&'static str, &'static [u8])] {
+    named("fsot", fsot::gpu::shaders::ALL)
 }
 
 /// What one shader declares.
@@ -221,7 +253,7 @@ fn check_family(
 fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
     let b = &layout::binding::BLOCKS;
     let t = &layout::binding::TEXEL_VARIABLES;
-    let seen = check_family("fsot", fsot::gpu::shaders::ALL, b, t, layout::binding::BINDINGS);
+    let seen = check_family("fsot", fsot_named(), b, t, layout::binding::BINDINGS);
     // Every Rust binding is used by some pass (no stale entry in the mirror).
     for (name, _) in b.iter().chain(t) {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no fsot pass");
@@ -232,7 +264,7 @@ fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
 #[test]
 fn every_sort_binding_and_struct_matches_its_rust_mirror() {
     let (b, t) = (&sort::binding::BLOCKS, &sort::binding::TEXEL_VARIABLES);
-    let seen = check_family("sort", fsot::vk::shaders::ALL, b, t, sort::binding::BINDINGS);
+    let seen = check_family("sort", named("sort", fsot::vk::shaders::ALL), b, t, sort::binding::BINDINGS);
     for (name, _) in b.iter().chain(t) {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no sort pass");
     }
@@ -244,7 +276,7 @@ fn every_sort_binding_and_struct_matches_its_rust_mirror() {
 fn every_swap_binding_and_struct_matches_its_rust_mirror() {
     let seen = check_family(
         "swap",
-        fsot::gpu::swap::shaders::ALL,
+        named("swap", fsot::gpu::swap::shaders::ALL),
         &swap::binding::BLOCKS,
         &[],
         swap::binding::BINDINGS,
@@ -262,14 +294,14 @@ fn a_mirror_that_drifted_is_caught() {
     (drifted[0].1, drifted[2].1) = (drifted[2].1, drifted[0].1);
     let caught = std::panic::catch_unwind(|| {
         let t = &layout::binding::TEXEL_VARIABLES;
-        check_family("fsot", fsot::gpu::shaders::ALL, &drifted, t, layout::binding::BINDINGS);
+        check_family("fsot", fsot_named(), &drifted, t, layout::binding::BINDINGS);
     });
     assert!(caught.is_err(), "a swapped binding went unnoticed");
     let mut drifted = layout::binding::TEXEL_VARIABLES;
     (drifted[0].1, drifted[1].1) = (drifted[1].1, drifted[0].1);
     let caught = std::panic::catch_unwind(|| {
         let b = &layout::binding::BLOCKS;
-        check_family("fsot", fsot::gpu::shaders::ALL, b, &drifted, layout::binding::BINDINGS);
+        check_family("fsot", fsot_named(), b, &drifted, layout::binding::BINDINGS);
     });
     assert!(caught.is_err(), "a swapped texel binding went unnoticed");
 }
@@ -277,7 +309,7 @@ fn a_mirror_that_drifted_is_caught() {
 #[test]
 fn the_cpu_passes_read_through_texel_views_and_no_other_pass_does() {
     // A texel view is read where some instruction of a function loads its variable.
-    for (shader, spirv) in fsot::gpu::shaders::ALL {
+    for (shader, spirv) in fsot_named() {
         let module = load_bytes(spirv).unwrap();
         let r = reflect(&module);
         let loaded = |var: u32| {

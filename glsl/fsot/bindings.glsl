@@ -4,7 +4,7 @@
 // layout (FSOT_BINDINGS bindings: storage buffers, and two uniform texel
 // buffers that view some of them again) and touches only the buffers it names.
 // Include first, right after #version and any extension of the pass's own.
-// FSOT_FLOAT_ATOMICS (set by build.rs for the `_FLOAT` variants): accumulators are
+// FSOT_FLOAT_ATOMICS (set by scripts/spirv.sh for the `_FLOAT` variants): accumulators are
 // floats added with VK_EXT_shader_atomic_float; otherwise int64 fixed point.
 #ifndef FSOT_BINDINGS_GLSL
 #define FSOT_BINDINGS_GLSL

@@ -5,7 +5,7 @@
 // r towards the exact target of rank r, and add the displacements into the
 // per-coordinate accumulators. Classes larger than FSOT_LOCAL_MAX are written out
 // for the global radix sort (transport_large.comp finishes them). Included by
-// build.rs as TRANSPORT (fixed point, deterministic) and TRANSPORT_FLOAT, and
+// scripts/spirv.sh as TRANSPORT (fixed point, deterministic) and TRANSPORT_FLOAT, and
 // for d >= 3 (f64 targets) as TRANSPORT_DIMS and TRANSPORT_DIMS_FLOAT.
 // variant FLOAT: FSOT_FLOAT_ATOMICS
 // variant DIMS: FSOT_ANY_DIMS

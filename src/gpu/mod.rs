@@ -18,8 +18,8 @@ pub use shape::{ClassSort, TransportKind, TransportShape};
 use crate::vk::SortPath;
 
 pub mod shaders {
-    //! SPIR-V of `glsl/fsot/*.comp` and their variants, compiled by `build.rs`.
-    include!(concat!(env!("OUT_DIR"), "/fsot_shaders.rs"));
+    //! SPIR-V of `glsl/fsot/*.comp` and their variants, embedded from `spirv/fsot/`.
+    spirv_module!("fsot");
 }
 
 /// Largest dimension whose exact targets the GPU path takes in float32 closed

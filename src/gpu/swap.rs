@@ -27,8 +27,8 @@ use crate::vk::commands::{barrier, copy, zero};
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context};
 
 pub mod shaders {
-    //! SPIR-V of `glsl/swap/*.comp`, compiled by `build.rs`.
-    include!(concat!(env!("OUT_DIR"), "/swap_shaders.rs"));
+    //! SPIR-V of `glsl/swap/*.comp`, embedded from `spirv/swap/`.
+    spirv_module!("swap");
 }
 
 /// The Rust mirror of `glsl/swap/bindings.glsl`; `tests/spirv_layout.rs` checks

@@ -46,8 +46,8 @@ pub use texel_view::TexelView;
 pub use timer::Timer;
 
 pub mod shaders {
-    //! SPIR-V of `glsl/sort/*.comp`, compiled by `build.rs`.
-    include!(concat!(env!("OUT_DIR"), "/sort_shaders.rs"));
+    //! SPIR-V of `glsl/sort/*.comp`, embedded from `spirv/sort/`.
+    spirv_module!("sort");
 }
 
 use ash::vk;

@@ -51,7 +51,7 @@ impl ComputePipeline {
         let device = ctx.device();
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv))
             .map_err(|e| Error::invalid(format!("bad SPIR-V: {e}")))?;
-        // SAFETY: the words are SPIR-V compiled by build.rs (or the caller's).
+        // SAFETY: the words are SPIR-V embedded from spirv/ (or the caller's).
         let module = check("vkCreateShaderModule", unsafe {
             device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
         })?;
