@@ -6,9 +6,9 @@
 use std::time::Instant;
 
 use fsot::cpu_backend::CpuRun;
-use fsot::eval::perceived::{ratio_to_white, TestSetup};
 use fsot::kernel::KernelSpec;
 use fsot::problem::Tile;
+use fsot::quality::perceived::{ratio_to_white, TestSetup};
 use fsot::score::{score, SCORE_SLICES};
 use fsot::settings::Settings;
 use fsot::step_rule::StepRule;

@@ -3,7 +3,7 @@
 //! to white noise of the same shape.
 //!
 //! cargo run --release --example perceived -- MASK.exr [MASK.exr ...]
-use fsot::eval::perceived::{ratio_to_white, TestSetup};
+use fsot::quality::perceived::{ratio_to_white, TestSetup};
 
 fn main() {
     let paths: Vec<String> = std::env::args().skip(1).collect();

@@ -6,6 +6,7 @@ use crate::error::Result;
 use crate::mask::Mask;
 use crate::settings::RunState;
 use crate::step_rule::{Plateau, PlateauState};
+#[cfg(feature = "vulkan")]
 use crate::vk::PathChoice;
 
 /// Where a run may go.
@@ -69,6 +70,7 @@ pub struct Report {
     pub validation_messages: Vec<String>,
     /// The large-class stage's sort path and how it was chosen (Vulkan, where
     /// the run has that stage and the path was timed or set).
+    #[cfg(feature = "vulkan")]
     pub large_sort: Option<PathChoice>,
     /// The transport pass, its shape and its class sort, in words (Vulkan).
     pub transport: Option<String>,
@@ -120,9 +122,11 @@ pub trait Backend: Send {
     fn report(&self) -> Report;
     /// The Vulkan run behind this backend, when it is one (runs on one device
     /// can step together: `VulkanRun::step_together`).
+    #[cfg(feature = "vulkan")]
     fn as_vulkan(&self) -> Option<&crate::gpu::VulkanRun> {
         None
     }
+    #[cfg(feature = "vulkan")]
     fn as_vulkan_mut(&mut self) -> Option<&mut crate::gpu::VulkanRun> {
         None
     }

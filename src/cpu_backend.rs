@@ -177,6 +177,25 @@ pub fn iterate(
     mean_cost(&costs)
 }
 
+/// The CPU path's summed displacement per coordinate for one iteration's slices,
+/// in f64 (the reference the GPU's float32 is held to).
+pub fn reference_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
+    let tile = mask.tile;
+    let kernel = Kernel::new(s.kernel, &tile);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let mut out = vec![0.0f64; tile.values()];
+    let mut scratch = Scratch::default();
+    for i in 0..slices {
+        let slice = sampler.draw(iteration, i);
+        transport_slice(&mask.samples, &tile, &kernel, &slice, &mut scratch, |p, delta| {
+            for k in 0..tile.dims {
+                out[p as usize * tile.dims + k] += delta * slice.theta[k];
+            }
+        });
+    }
+    out
+}
+
 /// An optimization in progress on the CPU.
 pub struct CpuRun {
     pub tile: Tile,

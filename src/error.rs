@@ -20,11 +20,13 @@ pub enum Error {
     },
     /// A Vulkan call failed; `call` names it.
     #[error("Vulkan: {call} failed: {result}{}", vulkan_hint(*.result))]
+    #[cfg(feature = "vulkan")]
     Vulkan { call: &'static str, result: ash::vk::Result },
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
     #[error("GPU memory: {0} (a smaller tile may fit)")]
+    #[cfg(feature = "vulkan")]
     Allocation(#[from] gpu_allocator::AllocationError),
     /// A checkpoint is in the way of a run that does not resume it.
     #[error("checkpoint {} exists: continue it, or remove it to start over", .0.display())]
@@ -34,6 +36,7 @@ pub enum Error {
 }
 
 /// What a Vulkan result means for the user.
+#[cfg(feature = "vulkan")]
 fn vulkan_hint(result: ash::vk::Result) -> &'static str {
     use ash::vk::Result as R;
     match result {
@@ -49,7 +52,11 @@ fn vulkan_hint(result: ash::vk::Result) -> &'static str {
 impl Error {
     /// The GPU failed in a way the CPU path does not share: worth a fall-back.
     pub fn is_device_failure(&self) -> bool {
-        matches!(self, Error::Vulkan { .. } | Error::Allocation(_) | Error::VulkanUnavailable(_))
+        #[cfg(feature = "vulkan")]
+        if matches!(self, Error::Vulkan { .. } | Error::Allocation(_)) {
+            return true;
+        }
+        matches!(self, Error::VulkanUnavailable(_))
     }
 
     pub fn invalid(msg: impl Into<String>) -> Self {
@@ -66,7 +73,10 @@ impl Error {
 impl Error {
     /// Out of GPU memory (an allocation, or a Vulkan call that said so).
     pub fn is_out_of_device_memory(&self) -> bool {
-        matches!(self, Error::Allocation(_))
-            || matches!(self, Error::Vulkan { result, .. } if *result == ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY)
+        #[cfg(feature = "vulkan")]
+        return matches!(self, Error::Allocation(_))
+            || matches!(self, Error::Vulkan { result, .. } if *result == ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY);
+        #[cfg(not(feature = "vulkan"))]
+        false
     }
 }

@@ -4,26 +4,26 @@
 /// The bytes of one embedded SPIR-V file: committed under `spirv/` (made from
 /// `glsl/` by `scripts/spirv.sh`), or compiled into OUT_DIR at build time with
 /// the `build-shaders` feature.
-#[cfg(not(feature = "build-shaders"))]
+#[cfg(all(feature = "vulkan", not(feature = "build-shaders")))]
 macro_rules! spirv {
     ($file:literal) => {
         include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $file))
     };
 }
-#[cfg(feature = "build-shaders")]
+#[cfg(all(feature = "vulkan", feature = "build-shaders"))]
 macro_rules! spirv {
     ($file:literal) => {
         include_bytes!(concat!(env!("OUT_DIR"), "/spirv/", $file))
     };
 }
 /// One shader family's constants (`spirv/FAMILY.rs`, or OUT_DIR's with `build-shaders`).
-#[cfg(not(feature = "build-shaders"))]
+#[cfg(all(feature = "vulkan", not(feature = "build-shaders")))]
 macro_rules! spirv_module {
     ($family:literal) => {
         include!(concat!(env!("CARGO_MANIFEST_DIR"), "/spirv/", $family, ".rs"));
     };
 }
-#[cfg(feature = "build-shaders")]
+#[cfg(all(feature = "vulkan", feature = "build-shaders"))]
 macro_rules! spirv_module {
     ($family:literal) => {
         include!(concat!(env!("OUT_DIR"), "/spirv/", $family, ".rs"));
@@ -32,13 +32,12 @@ macro_rules! spirv_module {
 
 pub mod backend;
 pub mod baselines;
-pub mod bench;
 pub mod checkpoint;
 pub mod cpu_backend;
 pub mod csf;
 pub mod display;
 pub mod error;
-pub mod eval;
+#[cfg(feature = "vulkan")]
 pub mod gpu;
 pub mod io;
 pub mod kernel;
@@ -46,6 +45,8 @@ pub mod mask;
 pub mod method;
 pub mod plan;
 pub mod problem;
+pub mod quality;
+#[cfg(feature = "vulkan")]
 pub mod renderer;
 pub mod rng;
 pub mod run;
@@ -55,7 +56,7 @@ pub mod score;
 pub mod settings;
 pub mod slice;
 pub mod step_rule;
-pub mod stress;
 pub mod targets;
 pub mod transport;
+#[cfg(feature = "vulkan")]
 pub mod vk;

@@ -14,12 +14,14 @@ use crate::baselines::swap::SwapDevice;
 use crate::checkpoint;
 use crate::cpu_backend::CpuRun;
 use crate::error::{Error, Result};
+#[cfg(feature = "vulkan")]
 use crate::gpu::{VulkanOptions, VulkanRun};
 use crate::io::atomic::AtomicFile;
 use crate::mask::Mask;
 use crate::problem::Tile;
 use crate::settings::{RunState, Settings, Until};
 use crate::step_rule::{Plateau, PlateauState};
+#[cfg(feature = "vulkan")]
 use crate::vk::{Context, ContextOptions};
 
 /// Checkpoints of a run.
@@ -43,9 +45,11 @@ pub struct RunOptions {
     pub device: Option<String>,
     /// Work on this context (a renderer's wrapped device, or one the caller made)
     /// instead of making one; `Auto` then takes it whatever its type.
+    #[cfg(feature = "vulkan")]
     pub context: Option<Context>,
     /// Vulkan's validation layer on (its messages in `Backend::report`).
     pub validation: bool,
+    #[cfg(feature = "vulkan")]
     pub vulkan: VulkanOptions,
     pub checkpoint: Option<Checkpointing>,
 }
@@ -73,7 +77,7 @@ pub enum Outcome {
 }
 
 /// A flag the caller sets to stop a run between iterations (a renderer wires its
-/// own; `on_interrupt` wires Ctrl-C and SIGTERM).
+/// own; the command line sets it on Ctrl-C and SIGTERM).
 #[derive(Clone, Debug, Default)]
 pub struct CancelFlag(Arc<AtomicBool>);
 
@@ -86,14 +90,6 @@ impl CancelFlag {
     }
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::SeqCst)
-    }
-    /// A flag that Ctrl-C (SIGINT) and SIGTERM set. Once per process.
-    pub fn on_interrupt() -> Result<Self> {
-        let flag = Self::new();
-        let set = flag.clone();
-        ctrlc::set_handler(move || set.cancel())
-            .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
-        Ok(flag)
     }
 }
 
@@ -354,19 +350,7 @@ impl Run {
                 let iteration = runs[open[0]].iteration();
                 return Ok(Outcome::Cancelled { iteration, saved });
             }
-            // The runs that can share a submission with the first open Vulkan run.
-            let lead = open.iter().copied().find(|&r| runs[r].backend.as_vulkan().is_some());
-            let group: Vec<usize> = match lead {
-                Some(l) => open
-                    .iter()
-                    .copied()
-                    .filter(|&r| {
-                        let (a, b) = (runs[l].backend.as_vulkan(), runs[r].backend.as_vulkan());
-                        matches!((a, b), (Some(a), Some(b)) if a.shares_device_with(b))
-                    })
-                    .collect(),
-                None => Vec::new(),
-            };
+            let group = shared_device_group(runs, &open);
             if group.len() < 2 {
                 // Alone: the run's own step, with its fall-back.
                 let r = open[0];
@@ -378,44 +362,8 @@ impl Run {
                 }
                 continue;
             }
-            let counts: Vec<u32> = group
-                .iter()
-                .map(|&r| {
-                    let to = runs[r].settings.iterations;
-                    runs[r].next_step(to)
-                })
-                .collect();
-            let start = std::time::Instant::now();
-            let result = {
-                let mut members: Vec<&mut VulkanRun> = Vec::with_capacity(group.len());
-                for (r, run) in runs.iter_mut().enumerate() {
-                    if group.contains(&r) {
-                        if let Some(v) = run.backend.as_vulkan_mut() {
-                            members.push(v);
-                        }
-                    }
-                }
-                VulkanRun::step_together(&mut members, &counts)
-            };
-            let seconds = start.elapsed().as_secs_f64();
-            let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));
-            for &r in &group {
-                runs[r].busy += seconds;
-                runs[r].paced(seconds, most);
-            }
-            match result {
-                Ok(costs) => {
-                    for (&r, c) in group.iter().zip(&costs) {
-                        runs[r].stepped(c, &mut |e| on(r, e))?;
-                    }
-                }
-                Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {
-                    for &r in &group {
-                        runs[r].fall_back(&e, &mut |ev| on(r, ev))?;
-                    }
-                }
-                Err(e) => return Err(e),
-            }
+            #[cfg(feature = "vulkan")]
+            step_shared(runs, &group, on)?;
         }
     }
 
@@ -485,6 +433,69 @@ impl Run {
 /// The iterations a step may take at `pace` seconds per iteration (the last
 /// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
 /// known.
+/// Of the open runs, those that can share a submission with the first open
+/// Vulkan run (empty where there is none).
+fn shared_device_group(runs: &[Run], open: &[usize]) -> Vec<usize> {
+    #[cfg(feature = "vulkan")]
+    if let Some(l) = open.iter().copied().find(|&r| runs[r].backend.as_vulkan().is_some()) {
+        return open
+            .iter()
+            .copied()
+            .filter(|&r| {
+                let (a, b) = (runs[l].backend.as_vulkan(), runs[r].backend.as_vulkan());
+                matches!((a, b), (Some(a), Some(b)) if a.shares_device_with(b))
+            })
+            .collect();
+    }
+    let _ = (runs, open);
+    Vec::new()
+}
+
+/// One step of every run in `group` (Vulkan runs on one device), in one
+/// submission; a GPU that fails hands each over to the CPU path.
+#[cfg(feature = "vulkan")]
+fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Event)) -> Result<()> {
+    let counts: Vec<u32> = group
+        .iter()
+        .map(|&r| {
+            let to = runs[r].settings.iterations;
+            runs[r].next_step(to)
+        })
+        .collect();
+    let start = std::time::Instant::now();
+    let result = {
+        let mut members: Vec<&mut VulkanRun> = Vec::with_capacity(group.len());
+        for (r, run) in runs.iter_mut().enumerate() {
+            if group.contains(&r) {
+                if let Some(v) = run.backend.as_vulkan_mut() {
+                    members.push(v);
+                }
+            }
+        }
+        VulkanRun::step_together(&mut members, &counts)
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));
+    for &r in group {
+        runs[r].busy += seconds;
+        runs[r].paced(seconds, most);
+    }
+    match result {
+        Ok(costs) => {
+            for (&r, c) in group.iter().zip(&costs) {
+                runs[r].stepped(c, &mut |e| on(r, e))?;
+            }
+        }
+        Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {
+            for &r in group {
+                runs[r].fall_back(&e, &mut |ev| on(r, ev))?;
+            }
+        }
+        Err(e) => return Err(e),
+    }
+    Ok(())
+}
+
 fn paced_iterations(pace: Option<f64>) -> u32 {
     match pace {
         Some(pace) if pace > 0.0 => (STEP_SECONDS / pace).clamp(1.0, u32::MAX as f64) as u32,
@@ -524,10 +535,7 @@ fn start_backend(
     init: Option<&Mask>,
     options: &RunOptions,
 ) -> Result<(Box<dyn Backend>, String)> {
-    let gpu = |require_gpu_type: bool| -> Result<Box<dyn Backend>> {
-        let ctx = context_for(options, require_gpu_type)?;
-        Ok(Box::new(VulkanRun::new(&ctx, tile, settings, init, options.vulkan)?))
-    };
+    let gpu = |require_gpu_type: bool| gpu_backend(tile, settings, init, options, require_gpu_type);
     let cpu = || -> Result<Box<dyn Backend>> { Ok(Box::new(CpuRun::new(tile, settings, init)?)) };
     let backend = match options.backend {
         BackendChoice::Cpu => cpu()?,
@@ -536,7 +544,7 @@ fn start_backend(
         // too large for a binding) falls back to the CPU path, which reports input
         // that is wrong everywhere itself. A device the caller named or handed in
         // is taken whatever its type; otherwise only a GPU.
-        BackendChoice::Auto => match gpu(options.device.is_none() && options.context.is_none()) {
+        BackendChoice::Auto => match gpu(options.device.is_none() && !has_context(options)) {
             Ok(b) => b,
             Err(e) => {
                 let b = cpu()?;
@@ -549,8 +557,43 @@ fn start_backend(
     Ok((backend, note))
 }
 
+/// A Vulkan backend for the run on the context `options` give.
+#[cfg(feature = "vulkan")]
+fn gpu_backend(
+    tile: Tile,
+    settings: Settings,
+    init: Option<&Mask>,
+    options: &RunOptions,
+    require_gpu_type: bool,
+) -> Result<Box<dyn Backend>> {
+    let ctx = context_for(options, require_gpu_type)?;
+    Ok(Box::new(VulkanRun::new(&ctx, tile, settings, init, options.vulkan)?))
+}
+#[cfg(not(feature = "vulkan"))]
+fn gpu_backend(_: Tile, _: Settings, _: Option<&Mask>, _: &RunOptions, _: bool) -> Result<Box<dyn Backend>> {
+    Err(without_vulkan())
+}
+
+/// The error of a Vulkan call in a build without the `vulkan` feature.
+#[cfg(not(feature = "vulkan"))]
+fn without_vulkan() -> Error {
+    Error::VulkanUnavailable("fsot was built without its `vulkan` feature".into())
+}
+
+/// Whether the caller handed in a Vulkan context.
+fn has_context(options: &RunOptions) -> bool {
+    #[cfg(feature = "vulkan")]
+    return options.context.is_some();
+    #[cfg(not(feature = "vulkan"))]
+    {
+        let _ = options;
+        false
+    }
+}
+
 /// The Vulkan context of a run: the caller's, or one made on the named device
 /// (or the first); with `require_gpu_type`, a CPU implementation is refused.
+#[cfg(feature = "vulkan")]
 pub(crate) fn context_for(options: &RunOptions, require_gpu_type: bool) -> Result<Context> {
     let ctx = match &options.context {
         Some(c) => c.clone(),
@@ -570,29 +613,40 @@ pub(crate) fn context_for(options: &RunOptions, require_gpu_type: bool) -> Resul
 /// Where the peers' swap searches run under `options`, by the rule of a run:
 /// `cpu`, `vulkan` (an error without a device), or `auto` (a GPU, or a device
 /// named or handed in, else the CPU). Returns the device and the choice in words.
+#[cfg(not(feature = "vulkan"))]
 pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
-    let device = match options.backend {
-        BackendChoice::Cpu => SwapDevice::Cpu,
-        BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
-        BackendChoice::Auto => {
-            let usable = context_for(options, options.device.is_none() && options.context.is_none())
-                .and_then(|ctx| match ctx.info().int64_atomics {
-                    true => Ok(ctx),
-                    false => Err(Error::VulkanUnavailable(format!(
-                        "{} lacks 64-bit buffer atomics",
-                        ctx.info().name
-                    ))),
-                });
-            match usable {
-                Ok(ctx) => SwapDevice::Vulkan(ctx),
-                Err(e) => {
-                    let cpu = SwapDevice::Cpu;
-                    let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
-                    return Ok((cpu, note));
+    match options.backend {
+        BackendChoice::Vulkan => Err(without_vulkan()),
+        _ => Ok((SwapDevice::Cpu, SwapDevice::Cpu.describe())),
+    }
+}
+
+/// Where the peers' swap searches run (see above).
+#[cfg(feature = "vulkan")]
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    let device =
+        match options.backend {
+            BackendChoice::Cpu => SwapDevice::Cpu,
+            BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
+            BackendChoice::Auto => {
+                let usable = context_for(options, options.device.is_none() && !has_context(options))
+                    .and_then(|ctx| match ctx.info().int64_atomics {
+                        true => Ok(ctx),
+                        false => Err(Error::VulkanUnavailable(format!(
+                            "{} lacks 64-bit buffer atomics",
+                            ctx.info().name
+                        ))),
+                    });
+                match usable {
+                    Ok(ctx) => SwapDevice::Vulkan(ctx),
+                    Err(e) => {
+                        let cpu = SwapDevice::Cpu;
+                        let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
+                        return Ok((cpu, note));
+                    }
                 }
             }
-        }
-    };
+        };
     let note = device.describe();
     Ok((device, note))
 }
@@ -601,6 +655,16 @@ pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
 /// plan's masks, stepped together): the context `options` would open, made once,
 /// under the same rule (`auto`: a GPU, or a device named or handed in). Where
 /// `auto` finds none, or the choice is the CPU, `options` as they are.
+#[cfg(not(feature = "vulkan"))]
+pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
+    match options.backend {
+        BackendChoice::Vulkan => Err(without_vulkan()),
+        _ => Ok(options.clone()),
+    }
+}
+
+/// Options for several runs that share one Vulkan device (see above).
+#[cfg(feature = "vulkan")]
 pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
     if options.context.is_some() || options.backend == BackendChoice::Cpu {
         return Ok(options.clone());

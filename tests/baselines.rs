@@ -4,9 +4,9 @@
 use fsot::baselines::fast::{fast_mask, FastSpec};
 use fsot::baselines::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
 use fsot::baselines::swap::{PairEnergy, SwapDevice, ValueTerm};
-use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
+use fsot::quality::perceived::{perceived_error, TestSetup};
 
 #[test]
 fn void_and_cluster_gives_every_rank_exactly_once() {

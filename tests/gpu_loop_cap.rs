@@ -3,6 +3,7 @@
 //! budgeted to stay under that; should a class still run past it, the run fails
 //! with a clear error (a device failure: `auto` goes on with the CPU path) rather
 //! than moving samples by garbage targets (lavapipe, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 

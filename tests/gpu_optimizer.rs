@@ -1,4 +1,5 @@
 //! The Vulkan optimizer against the CPU path (lavapipe in CI, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 
@@ -40,7 +41,7 @@ fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
 /// The CPU path's summed displacement per coordinate for one iteration's slices
 /// (f64).
 fn cpu_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
-    fsot::stress::reference_displacements(mask, s, slices, iteration)
+    fsot::cpu_backend::reference_displacements(mask, s, slices, iteration)
 }
 
 fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {

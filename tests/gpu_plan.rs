@@ -1,6 +1,7 @@
 //! Several masks in flight on one Vulkan device (a scene plan's runs stepped
 //! together, a batch of each in one submission) against each run stepped alone
 //! (lavapipe in CI, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 

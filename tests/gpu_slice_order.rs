@@ -2,6 +2,7 @@
 //! implementation of Vulkan, each iteration's slices are taken largest class
 //! first, so the lanes that run together have classes of about the same size.
 //! Checked against the CPU's own slice draws (lavapipe in CI, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 

@@ -1,5 +1,6 @@
 //! The GPU radix sort against the CPU's stable sort: random keys, duplicates,
 //! signed zeros, extremes, and awkward sizes. Equal keys keep their input order.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

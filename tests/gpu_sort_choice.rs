@@ -6,6 +6,7 @@
 //! several threads does not promise to let run, so this binary runs lavapipe
 //! with one thread (LP_NUM_THREADS=1, set before the device is made); on a GPU
 //! the variable is ignored.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

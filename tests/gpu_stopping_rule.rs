@@ -3,6 +3,7 @@
 //! the CPU path's, forced with `VulkanOptions::host_stopping_rule`) ends the same
 //! run, with the same step scales on the way: bit for bit, in deterministic mode
 //! (lavapipe in CI, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 

@@ -1,15 +1,16 @@
 //! The peers' swap search on Vulkan (FAST's greedy swaps, vector STBN's
 //! annealing) against the CPU path's search and against the energy summed
 //! afresh in f64 (lavapipe in CI, validation on).
+#![cfg(feature = "vulkan")]
 
 mod common;
 
 use fsot::baselines::fast::{fast_mask, FastSpec, Filter};
 use fsot::baselines::stbn::{stbn_mask_with, stbn_offsets};
 use fsot::baselines::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
-use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
+use fsot::quality::perceived::{perceived_error, TestSetup};
 
 fn fast_energy(tile: Tile) -> PairEnergy {
     PairEnergy::new(tile, &FastSpec::default().offsets(&tile), ValueTerm::NegDistance).unwrap()

@@ -1,5 +1,6 @@
 //! The GPU toolchain works: the embedded shaders run on a Vulkan device
 //! (lavapipe in CI) with the validation layer on, and agree with the CPU.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

@@ -7,6 +7,7 @@
 //! over the image fsot wrote, must give what `SamplerPlan::value` says; images
 //! that cannot hold the mask are refused before any GPU work; validation stays
 //! silent throughout.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

@@ -1,9 +1,9 @@
 //! The optimizer, end to end on small tiles.
 
-use fsot::eval::perceived::{perceived_error, TestSetup};
 use fsot::kernel::KernelSpec;
 use fsot::mask::Mask;
 use fsot::problem::Tile;
+use fsot::quality::perceived::{perceived_error, TestSetup};
 use fsot::run::optimize;
 use fsot::score::score;
 use fsot::settings::Settings;

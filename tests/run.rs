@@ -4,8 +4,11 @@
 
 mod common;
 
-use fsot::backend::{BackendChoice, BackendKind};
+use fsot::backend::BackendChoice;
+#[cfg(feature = "vulkan")]
+use fsot::backend::BackendKind;
 use fsot::error::Error;
+#[cfg(feature = "vulkan")]
 use fsot::gpu::VulkanOptions;
 use fsot::kernel::KernelSpec;
 use fsot::mask::Mask;
@@ -96,6 +99,7 @@ fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
     assert_eq!(bits(&resumed), bits(&reference), "resumed and uninterrupted runs differ");
 }
 
+#[cfg(feature = "vulkan")]
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one() {
@@ -122,6 +126,7 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
 /// at the last step's pace, so that the flag and the progress report answer
 /// within that much even on a slow device: the first step is one iteration; on a
 /// device that is fast for the tile, the steps after it are whole batches.
+#[cfg(feature = "vulkan")]
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_are_fast() {
@@ -146,6 +151,7 @@ fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_ar
     common::assert_no_validation_messages(&ctx);
 }
 
+#[cfg(feature = "vulkan")]
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {

@@ -2,6 +2,7 @@
 //! of `glsl/`, compiled now with shaderc by the same recipe, equals the bytes
 //! under `spirv/` and the ones the crate embeds, and `spirv/FAMILY.rs` lists
 //! exactly them. A shader changed without `scripts/spirv.sh` fails here.
+#![cfg(feature = "vulkan")]
 
 use std::fs;
 use std::path::{Path, PathBuf};

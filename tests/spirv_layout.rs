@@ -4,6 +4,7 @@
 //! independent SPIR-V reader) from the shaders compiled here with their names
 //! kept (the embedded SPIR-V has none; tests/spirv_fresh.rs ties it to the same
 //! GLSL). GLSL and Rust cannot drift apart.
+#![cfg(feature = "vulkan")]
 
 use std::collections::HashMap;
 

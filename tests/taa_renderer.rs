@@ -3,6 +3,7 @@
 //! on: it makes its mask on the device, renders with fsot's include and with
 //! white noise, and fsot's frames after TAA are well under white noise's; bad
 //! flags get a clear error and a non-zero exit.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

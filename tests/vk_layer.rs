@@ -1,6 +1,7 @@
 //! The generic Vulkan layer on its own (no sampling): submissions from two
 //! threads on one context, and the radix sort on a device that a host
 //! application (this test) made itself and hands to fsot.
+#![cfg(feature = "vulkan")]
 
 mod common;
 

@@ -270,6 +270,7 @@ pub enum SwapDevice {
     #[default]
     Cpu,
     /// Compute passes on a Vulkan device (`gpu::swap`).
+    #[cfg(feature = "vulkan")]
     Vulkan(crate::vk::Context),
 }
 
@@ -278,6 +279,7 @@ impl SwapDevice {
     pub fn describe(&self) -> String {
         match self {
             SwapDevice::Cpu => format!("cpu ({} threads)", rayon::current_num_threads()),
+            #[cfg(feature = "vulkan")]
             SwapDevice::Vulkan(ctx) => format!("vulkan ({})", ctx.info().name),
         }
     }
@@ -286,6 +288,7 @@ impl SwapDevice {
     pub fn kind(&self) -> &'static str {
         match self {
             SwapDevice::Cpu => "cpu",
+            #[cfg(feature = "vulkan")]
             SwapDevice::Vulkan(_) => "vulkan",
         }
     }
@@ -301,6 +304,7 @@ impl SwapDevice {
     ) -> Result<SwapReport> {
         match self {
             SwapDevice::Cpu => swap_search(energy, values, schedule, key, on_pass),
+            #[cfg(feature = "vulkan")]
             SwapDevice::Vulkan(ctx) => {
                 crate::gpu::swap::swap_search(ctx, energy, values, schedule, key, on_pass)
             }

@@ -70,3 +70,16 @@ pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
     }
     Ok(names)
 }
+
+/// 8-bit grey pixels (row-major) as PNG bytes.
+pub fn grey_png(pixels: &[u8], rows: usize, cols: usize) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut bytes, cols as u32, rows as u32);
+        encoder.set_color(png::ColorType::Grayscale);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(|e| Error::invalid(format!("PNG: {e}")))?;
+        writer.write_image_data(pixels).map_err(|e| Error::invalid(format!("PNG: {e}")))?;
+    }
+    Ok(bytes)
+}

@@ -33,7 +33,7 @@ pub fn read(path: &Path) -> Result<Mask> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::eval::spectrum::grey_png;
+    use crate::io::png::grey_png;
 
     #[test]
     fn stacked_frames_read_in_order_and_bad_shapes_are_refused() {

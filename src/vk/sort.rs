@@ -114,7 +114,7 @@ pub enum SortPath {
     /// (GPUs; not lavapipe with several threads: `../shared/notes`). `Auto`
     /// never takes it; `sort_choice::choose_sort_path` picks it on a GPU where it
     /// was timed faster there (the optimizer's large-class stage does so).
-    /// Tested on lavapipe with one thread (`tests/gpu_sort_look_back.rs`,
+    /// Tested on lavapipe with one thread (`crates/fsot-cli/tests/gpu_sort_look_back.rs`,
     /// `tests/gpu_sort_choice.rs`).
     LookBack,
     /// A run of `LANE_RUN` pairs an invocation, counted and placed by that

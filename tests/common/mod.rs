@@ -1,14 +1,17 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+#[cfg(feature = "vulkan")]
 pub mod host;
 
+#[cfg(feature = "vulkan")]
 use fsot::vk::{Context, ContextOptions};
 
 /// A Vulkan context with the validation layer on. GPU tests are mandatory (CI
 /// installs lavapipe and the layer): without Vulkan they fail. On a machine
 /// without Vulkan, FSOT_SKIP_GPU_TESTS=1 at build time marks them ignored
 /// (`fsot_skip_gpu`, from build.rs), so the harness reports them as skipped.
+#[cfg(feature = "vulkan")]
 pub fn gpu_context() -> Context {
     Context::new(&ContextOptions { validation: true, device: None })
         .unwrap_or_else(|e| panic!("Vulkan with validation is required for this test: {e}"))
@@ -28,6 +31,7 @@ pub fn skip(reason: &str) -> bool {
 }
 
 /// Fails the test if the validation layer said anything.
+#[cfg(feature = "vulkan")]
 pub fn assert_no_validation_messages(ctx: &Context) {
     let messages = ctx.validation_messages();
     assert!(
@@ -65,6 +69,7 @@ pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
 /// Sorts `keys` and `vals` by all 32 bits with a sort made with
 /// `SortCount::Device(count)`: the count written to that buffer, the dispatches
 /// sized on the device (indirect); the sorted pairs read back.
+#[cfg(feature = "vulkan")]
 pub fn sort_with_device_count(
     ctx: &Context,
     sort: &mut fsot::vk::RadixSort,

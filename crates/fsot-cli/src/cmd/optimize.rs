@@ -1,0 +1,334 @@
+//! `fsot optimize`: the optimizer with checkpoints and interruption, and the peers' methods.
+
+use crate::*;
+
+pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
+    set_threads(args.threads)?;
+    if let Some(scene) = &args.scene {
+        return super::plan::optimize_scene(&args, scene);
+    }
+    let spec = args.kernel.spec()?;
+    let init = args.init.as_deref().map(fsot::io::exr::read).transpose()?;
+    let (w, h, t) = match (&args.size, &init) {
+        (Some(s), _) => Tile::parse_size(s)?,
+        (None, Some(m)) => (m.tile.width, m.tile.height, m.tile.frames),
+        (None, None) => (64, 64, 16),
+    };
+    let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
+    let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
+    let tile = Tile::new(w, h, t, spp, dims)?;
+    let until = parse_until(args.until.as_deref())?;
+    let iterations = args.iterations.unwrap_or(match until {
+        Until::Iterations => fsot::settings::DEFAULT_ITERATIONS,
+        _ => fsot::settings::DEFAULT_CAP,
+    });
+    if iterations == 0 {
+        return Err(Error::invalid("--iterations must be at least 1"));
+    }
+    // Check the output's kind and reserve it before the long work: a bad path or
+    // a format that cannot hold d fails now.
+    let file_kind = MaskFile::for_path(&args.out, dims, args.ktx2_format.as_deref())?;
+    let out = AtomicFile::create(&args.out)?;
+    if let Some(dir) = &args.png {
+        if dir.exists() && !dir.is_dir() {
+            return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
+        }
+    }
+    if args.method != Method::Fsot {
+        if args.checkpoint.is_some() || args.resume {
+            return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
+        }
+        return make_baseline(&args, tile, spec, file_kind, out);
+    }
+    let mut settings = Settings::new(spec, args.seed);
+    settings.iterations = iterations;
+    settings.until = until;
+    settings.slices = args.slices;
+    let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
+    eprintln!("backend: {}", run.note());
+    if let (Some(from), Some(p)) = (run.resumed_from(), &args.checkpoint) {
+        eprintln!("resumed from {} at iteration {from}", p.display());
+    }
+    let length = match until {
+        Until::Iterations => format!("{iterations} iterations"),
+        Until::Plateau(_) => format!("until iterations no longer pay (at most {iterations})"),
+        Until::Objective(x) => {
+            format!("until the objective is at most {x:e} (at most {iterations} iterations)")
+        }
+    };
+    eprintln!(
+        "optimizing {} for kernel {}: {length} x {} slices",
+        tile.describe(),
+        spec.describe(),
+        run.backend().slices_per_iteration()
+    );
+    let start_samples = fsot::settings::initial_samples(&tile, &settings, init.as_ref())?;
+    let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
+    let bar = iteration_bar(iterations, run.iteration());
+    // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
+    let cancel = cmd::env::interrupt_flag()?;
+    let start = Instant::now();
+    let outcome = run.run(&cancel, &mut |event| match event {
+        Event::Progress { iteration, objective, .. } => {
+            bar.set_position(iteration as u64);
+            if let Some(c) = objective {
+                bar.set_message(format!("{c:.3e}"));
+            }
+        }
+        Event::Checkpoint { .. } => {}
+        Event::FellBack { error, at, backend, from, checkpoint } => {
+            bar.suspend(|| {
+                eprintln!("warning: the GPU failed at iteration {at}: {error}");
+                let source = match checkpoint {
+                    Some(p) => format!("its checkpoint {} (iteration {from})", p.display()),
+                    None => "the start".to_string(),
+                };
+                eprintln!("backend: {backend}; continuing from {source}");
+            });
+            bar.set_position(from as u64);
+        }
+    })?;
+    bar.finish_and_clear();
+    if let Outcome::Cancelled { iteration, saved } = outcome {
+        match saved {
+            Some(p) => eprintln!(
+                "interrupted at iteration {iteration} of {iterations}: state saved to {}; continue with the same command and --resume",
+                p.display()
+            ),
+            None => eprintln!(
+                "interrupted at iteration {iteration} of {iterations}: nothing written, {} untouched (--checkpoint FILE makes runs resumable)",
+                args.out.display()
+            ),
+        }
+        return Err(Error::Interrupted);
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
+    let mask = run.finish()?;
+    let after = score(&mask, spec, SCORE_SLICES);
+    file_kind.write(&mask, out)?;
+    if let Some(dir) = &args.png {
+        let files = fsot::io::png::write(&mask, dir)?;
+        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    println!(
+        "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
+        args.out.display(),
+        tile.describe(),
+        spec.describe(),
+        kind.name(),
+        before.objective,
+        after.objective,
+        after.ratio()
+    );
+    backend_report(&report)
+}
+
+/// `--until`: plateau, objective:X, or none (a fixed count).
+fn parse_until(text: Option<&str>) -> Result<Until> {
+    let Some(text) = text else { return Ok(Until::Iterations) };
+    if text == "plateau" {
+        return Ok(Until::Plateau(fsot::step_rule::Plateau::DEFAULT));
+    }
+    match text.strip_prefix("objective:").map(|x| x.trim().parse::<f64>()) {
+        Some(Ok(x)) if x.is_finite() && x > 0.0 => Ok(Until::Objective(x)),
+        _ => Err(Error::invalid(format!(
+            "--until must be `plateau` or `objective:X` with X > 0, got {text:?}"
+        ))),
+    }
+}
+
+/// The library run's options from the flags and the environment.
+fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
+    let checkpoint = match (&args.checkpoint, args.resume) {
+        (None, true) => {
+            return Err(Error::invalid("--resume needs --checkpoint FILE (the file to continue)"))
+        }
+        (None, false) => None,
+        (Some(_), _) if args.checkpoint_every == 0 => {
+            return Err(Error::invalid("--checkpoint-every must be at least 1"))
+        }
+        (Some(path), resume) => {
+            Some(Checkpointing { path: path.clone(), every: args.checkpoint_every, resume })
+        }
+    };
+    let backend = args.backend.choice();
+    let vulkan = VulkanOptions {
+        deterministic: args.deterministic,
+        profile: args.profile,
+        transport: None,
+        transport_shape: env::transport_shape(),
+        float_pair_targets: env::float_pair_targets(),
+        host_stopping_rule: env::host_stopping_rule(),
+        unchecked_lane_limit: None,
+        slice_order_slots: None,
+        large_sort: env::large_sort()?,
+        class_sort: env::class_sort()?,
+        defer: env::defer()?,
+        local_max: env::local_max()?,
+        defer_groups: None,
+        lane_rounds: env::lane_rounds()?,
+        lane_chunks: env::lane_chunks()?,
+    };
+    Ok(RunOptions {
+        backend,
+        device: env::device(args.device.clone()),
+        context: None,
+        validation: env::validation(),
+        vulkan,
+        checkpoint,
+    })
+}
+
+/// The progress bar of a run (hidden when stderr is not a terminal).
+fn iteration_bar(iterations: u32, at: u32) -> ProgressBar {
+    let bar = ProgressBar::new(iterations as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} iterations, {elapsed} elapsed, {eta} left, objective {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_position(at as u64);
+    bar
+}
+
+/// After a run: skipped large classes, the profile, validation messages.
+fn backend_report(report: &Report) -> Result<()> {
+    if report.skipped_large_classes > 0 {
+        eprintln!(
+            "warning: {} large classes did not fit their buffer and were skipped",
+            report.skipped_large_classes
+        );
+    }
+    if let Some(p) = &report.profile {
+        let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
+        println!(
+            "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
+            p.iterations,
+            per(p.transport_ns),
+            per(p.large_ns),
+            per(p.update_ns)
+        );
+        // The least bytes each pass must move, and the rate its time gives.
+        let rate = |bytes: f64, ns: f64| {
+            let ms = per(ns);
+            if ms > 0.0 {
+                format!("{:.2} MB, {:.1} GB/s", bytes * 1e-6, bytes / (ms * 1e-3) * 1e-9)
+            } else {
+                format!("{:.2} MB", bytes * 1e-6)
+            }
+        };
+        println!(
+            "  least bytes per iteration (a model): transport {}; large classes {}; update {}",
+            rate(p.transport_bytes, p.transport_ns),
+            rate(p.large_bytes, p.large_ns),
+            rate(p.update_bytes, p.update_ns)
+        );
+    }
+    if let (Some(_), Some(transport)) = (&report.profile, &report.transport) {
+        println!("  transport: {transport}");
+    }
+    if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
+        println!("  large-class sort: {}", choice.describe());
+    }
+    let messages = &report.validation_messages;
+    if !messages.is_empty() {
+        eprintln!("{} validation messages:", messages.len());
+        for m in messages.iter().take(10) {
+            eprintln!("  {m}");
+        }
+        return Err(Error::invalid("the Vulkan validation layer reported errors"));
+    }
+    Ok(())
+}
+
+/// Progress of a swap search, hidden when there is none (void-and-cluster).
+pub(crate) fn swap_bar(passes: u32, shown: bool) -> ProgressBar {
+    if !shown {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(passes as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} passes, {elapsed} elapsed, {eta} left, energy {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// The peers' methods: same tile, same files, time reported.
+pub(crate) fn make_baseline(
+    args: &OptimizeArgs,
+    tile: Tile,
+    spec: KernelSpec,
+    kind: MaskFile,
+    out: AtomicFile,
+) -> Result<()> {
+    let swaps = args.method == Method::Fast || (args.method == Method::Stbn && tile.dims > 1);
+    if swaps && !(1..=100_000).contains(&args.passes) {
+        return Err(Error::invalid(format!("--passes must be in 1..=100000, got {}", args.passes)));
+    }
+    let method = match args.method {
+        Method::White => fsot::method::Method::White,
+        Method::Stbn => {
+            let sigma = args.kernel.sigma.unwrap_or(fsot::baselines::stbn::DEFAULT_SIGMA);
+            fsot::method::Method::Stbn {
+                sigma,
+                sigma_t: args.kernel.sigma_t.unwrap_or(sigma),
+                passes: args.passes,
+            }
+        }
+        Method::Fast => fsot::method::Method::Fast {
+            spec: fsot::baselines::fast::FastSpec {
+                spatial: Filter::parse(&args.fast_spatial, false)?,
+                temporal: Filter::parse(&args.fast_temporal, true)?,
+                combine: Combine::parse(&args.fast_combine)
+                    .map_err(|e| Error::invalid(format!("--fast-combine: {e}")))?,
+            },
+            passes: args.passes,
+        },
+        Method::Fsot => return Err(Error::invalid("fsot runs through the library run")),
+    };
+    // The swap searches go where --backend says, as fsot's runs do; white noise
+    // and void-and-cluster are made on the CPU.
+    let device = if method.swaps(&tile) {
+        let (device, note) = fsot::run::swap_device(&run_options(args)?)?;
+        eprintln!("backend: {note}");
+        device
+    } else {
+        SwapDevice::Cpu
+    };
+    let start = Instant::now();
+    let bar = swap_bar(args.passes, method.swaps(&tile));
+    let made = fsot::method::make(&method, tile, args.seed, &device, &mut |_, e| {
+        bar.inc(1);
+        bar.set_message(format!("{e:.6e}"));
+    })?;
+    bar.finish_and_clear();
+    if let Some(note) = &made.note {
+        eprintln!("{note}");
+    }
+    if let SwapDevice::Vulkan(ctx) = &device {
+        backend_report(&Report { validation_messages: ctx.validation_messages(), ..Report::default() })?;
+    }
+    let mask = made.mask;
+    let seconds = start.elapsed().as_secs_f64();
+    let s = score(&mask, spec, SCORE_SLICES);
+    kind.write(&mask, out)?;
+    if let Some(dir) = &args.png {
+        let files = fsot::io::png::write(&mask, dir)?;
+        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    println!(
+        "wrote {}: {}, method {:?}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
+        args.out.display(),
+        tile.describe(),
+        args.method,
+        spec.describe(),
+        s.objective,
+        s.ratio()
+    );
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! `fsot plan`: what a scene needs, with the reasons; `fsot optimize --scene`
+//! runs it.
+
+use crate::*;
+use fsot::plan::{CostModel, Plan, PlanEvent};
+use fsot::scene::Scene;
+
+pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
+    let scene = Scene::read(&args.scene)?;
+    let options = RunOptions {
+        backend: args.backend.choice(),
+        device: env::device(args.device.clone()),
+        validation: env::validation(),
+        ..RunOptions::default()
+    };
+    let cost = CostModel::calibrate(&options)?;
+    let plan = Plan::new(&scene, &cost)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&plan).map_err(|e| Error::invalid(e.to_string()))?);
+    } else {
+        print!("{}", describe(&plan));
+    }
+    Ok(())
+}
+
+/// The plan in words.
+pub(crate) fn describe(plan: &Plan) -> String {
+    let [w, h, t] = plan.tile;
+    let mut s = format!(
+        "scene {}: tile {w}x{h}x{t} ({}); reading {} ({}); kernel {} ({}); backend {}\n",
+        plan.scene,
+        plan.tile_reason,
+        plan.reading,
+        plan.reading_reason,
+        plan.kernel,
+        plan.kernel_reason,
+        plan.backend
+    );
+    for g in &plan.groups {
+        let reads: Vec<String> = g
+            .parts
+            .iter()
+            .map(|p| {
+                let at = match p.shares {
+                    Some(_) => format!(" at offset {:?}, shift {:.4?}", p.offset, p.shift),
+                    None => String::new(),
+                };
+                format!("{} (dims {}..{}){at}", p.mask, p.first, p.first + p.dims)
+            })
+            .collect();
+        s += &format!(
+            "  {} (d = {}, spp {}): reads {}; {}{}\n",
+            g.name,
+            g.dims,
+            g.spp,
+            reads.join(", "),
+            g.reason,
+            g.skipped.as_ref().map(|k| format!(" [skipped: {k}]")).unwrap_or_default()
+        );
+    }
+    for m in plan.masks.iter().filter(|m| !m.white) {
+        s += &format!(
+            "  mask {}: d = {}, spp {}, about {} iterations, about {:.1} s\n",
+            m.file, m.dims, m.spp, m.estimated_iterations, m.estimated_seconds
+        );
+    }
+    s += &format!("  total: about {:.1} s ({})\n", plan.estimated_seconds, plan.cost_model);
+    s
+}
+
+/// `fsot optimize --scene SCENE --out DIR`: the plan's masks and plan.json.
+pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Result<()> {
+    let refused = [
+        (args.method != Method::Fsot, "--method"),
+        (args.init.is_some(), "--init"),
+        (args.checkpoint.is_some(), "--checkpoint (a scene's runs checkpoint into the output folder)"),
+        (
+            args.size.is_some() || args.dims.is_some() || args.spp.is_some(),
+            "--size, --dims and --spp (the scene gives them)",
+        ),
+        (
+            args.iterations.is_some() || args.until.is_some(),
+            "--iterations and --until (each mask stops when iterations no longer pay)",
+        ),
+    ];
+    if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
+        return Err(Error::invalid(format!("--scene does not take {flag}")));
+    }
+    if args.out.extension().is_some_and(|e| e == "exr") {
+        return Err(Error::invalid(format!(
+            "with --scene, --out names a folder, not {}",
+            args.out.display()
+        )));
+    }
+    if args.checkpoint_every == 0 {
+        return Err(Error::invalid("--checkpoint-every must be at least 1"));
+    }
+    let scene = Scene::read(path)?;
+    let options = RunOptions {
+        backend: args.backend.choice(),
+        device: env::device(args.device.clone()),
+        validation: env::validation(),
+        vulkan: VulkanOptions { deterministic: args.deterministic, ..VulkanOptions::default() },
+        ..RunOptions::default()
+    };
+    let cost = CostModel::calibrate(&options)?;
+    let plan = Plan::new(&scene, &cost)?;
+    eprint!("{}", describe(&plan));
+    // KTX2 beside each mask: every format checked before any work.
+    let ktx2: Vec<Option<fsot::io::ktx2::Format>> = plan
+        .masks
+        .iter()
+        .map(|m| args.ktx2_format.as_deref().map(|f| fsot::io::ktx2::format_for(m.dims, Some(f))).transpose())
+        .collect::<Result<_>>()?;
+    let estimated: u64 = plan.masks.iter().map(|m| m.estimated_iterations as u64).sum();
+    let bar = ProgressBar::new(estimated.max(1));
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos} iterations (about {len} planned), {elapsed} elapsed, {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let cancel = cmd::env::interrupt_flag()?;
+    // Iterations of each mask so far (the masks run side by side).
+    let mut done = vec![0u64; plan.masks.len()];
+    let outcome =
+        plan.execute(&args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| match e {
+            PlanEvent::Start { index, iteration, .. } => {
+                done[index] = iteration as u64;
+                bar.set_position(done.iter().sum());
+            }
+            PlanEvent::Run { index, event: Event::Progress { iteration, .. } } => {
+                done[index] = iteration as u64;
+                bar.set_position(done.iter().sum());
+                bar.set_message(plan.masks[index].file.clone());
+            }
+            PlanEvent::Run { .. } => {}
+            PlanEvent::Done { file, iterations, seconds, .. } => {
+                bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
+            }
+        })?;
+    bar.finish_and_clear();
+    if let Outcome::Cancelled { iteration, .. } = outcome {
+        eprintln!(
+            "interrupted at iteration {iteration} of a mask: its state is saved in {}; continue with the same command and --resume",
+            args.out.display()
+        );
+        return Err(Error::Interrupted);
+    }
+    for (m, format) in plan.masks.iter().zip(&ktx2) {
+        if let Some(format) = format {
+            let mask = fsot::io::exr::read(&args.out.join(&m.file))?;
+            let path = args.out.join(&m.file).with_extension("ktx2");
+            fsot::io::ktx2::write(&mask, *format, AtomicFile::create(&path)?)?;
+        }
+    }
+    let also = if args.ktx2_format.is_some() { " (each also as KTX2)" } else { "" };
+    println!("wrote {} masks{also} and plan.json into {}", plan.masks.len(), args.out.display());
+    Ok(())
+}

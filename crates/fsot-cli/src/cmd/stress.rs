@@ -1,0 +1,43 @@
+//! `fsot stress`: the numerical stress suite.
+
+use crate::*;
+
+pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
+    use fsot_cli::stress::{run_stress, to_markdown, StressSize};
+    let out = AtomicFile::create(&args.out)?;
+    let ctx = if args.cpu_only {
+        None
+    } else {
+        match super::env::context(args.device.clone()) {
+            Ok(c) => Some(c),
+            Err(e) => {
+                eprintln!("no Vulkan device, CPU checks only: {e}");
+                None
+            }
+        }
+    };
+    let size = if args.quick { StressSize::quick() } else { StressSize::full() };
+    let mut machine = fsot_cli::bench::machine::cpu_description();
+    if let Some(c) = &ctx {
+        machine += &format!("; Vulkan: {} ({})", c.info().name, c.info().driver);
+    }
+    eprintln!("stress suite on {machine}");
+    let checks = run_stress(size, ctx.as_ref(), &mut |c| {
+        eprintln!("[{}] {}: {}: {}", if c.passed { "ok" } else { "FAILED" }, c.group, c.name, c.figure)
+    })?;
+    if let Some(c) = &ctx {
+        let messages = c.validation_messages();
+        if !messages.is_empty() {
+            return Err(Error::invalid(format!("validation layer: {}", messages[0])));
+        }
+    }
+    let table = to_markdown(&checks, &machine);
+    out.commit(table.as_bytes())?;
+    let failed = checks.iter().filter(|c| !c.passed).count();
+    println!("{table}");
+    if failed > 0 {
+        return Err(Error::invalid(format!("{failed} of {} stress checks failed", checks.len())));
+    }
+    eprintln!("all {} checks held; table in {}", checks.len(), args.out.display());
+    Ok(())
+}

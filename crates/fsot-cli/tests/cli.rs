@@ -1,0 +1,758 @@
+//! The command line: a working run, and clear errors (non-zero exit, a message, no
+//! panic) for bad flags and bad files, without touching existing outputs.
+
+#[path = "../../../tests/common/mod.rs"]
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn fsot(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fsot")).args(args).current_dir(dir).output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn optimize_writes_exr_and_png_and_score_reads_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--size",
+            "8x8x4",
+            "--iterations",
+            "20",
+            "--kernel",
+            "taa",
+            "--seed",
+            "3",
+            "--out",
+            "m.exr",
+            "--png",
+            "slices",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("wrote m.exr") && out.contains("objective"), "{out}");
+    assert!(dir.path().join("m.exr").is_file());
+    assert_eq!(std::fs::read_dir(dir.path().join("slices")).unwrap().count(), 4);
+    let s = fsot(&["score", "m.exr", "--kernel", "taa"], dir.path());
+    assert!(s.status.success(), "{}", stderr(&s));
+    let asked = String::from_utf8_lossy(&s.stdout).into_owned();
+    assert!(asked.contains("ratio") && asked.contains("(as asked)"), "{asked}");
+    // Without a kernel flag: the kernel recorded in the mask, the same figures here.
+    let s = fsot(&["score", "m.exr"], dir.path());
+    assert!(s.status.success(), "{}", stderr(&s));
+    let recorded = String::from_utf8_lossy(&s.stdout).into_owned();
+    assert!(recorded.contains("kernel taa (ppd = 37.84, alpha = 0.1) (recorded in the mask)"), "{recorded}");
+    assert_eq!(recorded.split(": objective").nth(1), asked.split(": objective").nth(1));
+    // --init continues from the file, taking its shape.
+    let c = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--init",
+            "m.exr",
+            "--iterations",
+            "5",
+            "--kernel",
+            "taa",
+            "--out",
+            "m2.exr",
+        ],
+        dir.path(),
+    );
+    assert!(c.status.success(), "{}", stderr(&c));
+    assert!(String::from_utf8_lossy(&c.stdout).contains("8x8x4"));
+}
+
+#[test]
+fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    std::fs::write(dir.path().join("garbage.exr"), b"not an exr at all").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--size", "0x8x8"], "width must be at least 1"),
+        (&["--size", "8x8"], ""), // valid: one frame (checked below to succeed)
+        (&["--size", "99999999x99999999x9999"], "more than"),
+        (&["--size", "axb"], "size must look like"),
+        (&["--dims", "0"], "dimensions per sample"),
+        (&["--dims", "9"], "dimensions per sample"),
+        (&["--spp", "0"], "samples per pixel"),
+        (&["--kernel", "box"], "invalid value 'box'"),
+        (&["--kernel", "taa", "--alpha", "1.5"], "alpha"),
+        (&["--kernel", "taa", "--alpha", "NaN"], "alpha"),
+        (&["--sigma", "-2"], "sigma"),
+        (&["--fps", "0"], "fps"),
+        (&["--iterations", "0"], "iterations"),
+        (&["--iterations", "-3"], "invalid value"),
+        (&["--slices", "0"], "slices"),
+        (&["--threads", "0"], "threads"),
+        (&["--init", "missing.exr"], "cannot read"),
+        (&["--init", "garbage.exr"], "not a readable EXR"),
+        (&["--out", "no/such/folder/m.exr"], "does not exist"),
+        (&["--backend", "vulkan", "--device", "no-such-gpu"], "no device matches"),
+        (&["--until", "sometimes"], "--until must be"),
+        (&["--until", "objective:-1"], "--until must be"),
+    ];
+    for (extra, expect) in cases {
+        // Small defaults, each replaced when the case gives that flag itself.
+        let mut args = vec!["optimize"];
+        for (flag, value) in [("--size", "4x4x2"), ("--iterations", "3"), ("--out", "existing.exr")] {
+            if !extra.contains(&flag) {
+                args.extend_from_slice(&[flag, value]);
+            }
+        }
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!err.contains("panicked"), "{extra:?} panicked: {err}");
+        if expect.is_empty() {
+            assert!(o.status.success(), "{extra:?}: {err}");
+            std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+            continue;
+        }
+        assert!(!o.status.success(), "{extra:?} should fail");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"keep me", "{extra:?}");
+    }
+    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    let s = fsot(&["score", "garbage.exr"], dir.path());
+    assert!(!s.status.success() && stderr(&s).contains("not a readable EXR"));
+}
+
+#[test]
+fn every_flag_has_help() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(&["optimize", "--help"], dir.path());
+    assert!(o.status.success());
+    let help = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = help.lines().collect();
+    for flag in [
+        "--size",
+        "--dims",
+        "--spp",
+        "--kernel",
+        "--sigma",
+        "--sigma-t",
+        "--alpha",
+        "--fps",
+        "--iterations",
+        "--slices",
+        "--seed",
+        "--backend",
+        "--threads",
+        "--init",
+        "--out",
+        "--png",
+    ] {
+        let i = lines
+            .iter()
+            .position(|l| l.trim_start().starts_with(&format!("{flag} <")))
+            .unwrap_or_else(|| panic!("{flag} missing from --help"));
+        assert!(!lines[i + 1].trim().is_empty(), "{flag} has no description");
+    }
+}
+
+#[test]
+fn every_method_writes_valid_masks_for_one_to_four_dimensions() {
+    let dir = tempfile::tempdir().unwrap();
+    for method in ["fsot", "white", "stbn", "fast"] {
+        for dims in ["1", "2", "3", "4"] {
+            let out = format!("{method}{dims}.exr");
+            let o = fsot(
+                &[
+                    "optimize",
+                    "--method",
+                    method,
+                    "--size",
+                    "8x8x4",
+                    "--dims",
+                    dims,
+                    "--iterations",
+                    "5",
+                    "--passes",
+                    "2",
+                    "--backend",
+                    "cpu",
+                    "--out",
+                    &out,
+                ],
+                dir.path(),
+            );
+            assert!(o.status.success(), "{method} d = {dims}: {}", stderr(&o));
+            let m = fsot::io::exr::read(&dir.path().join(&out)).unwrap();
+            assert_eq!((m.tile.width, m.tile.height, m.tile.frames), (8, 8, 4));
+            assert_eq!(m.tile.dims.to_string(), dims);
+            assert_eq!(m.meta("method"), Some(method));
+            assert!(
+                m.samples.iter().all(|v| (0.0..1.0).contains(v)),
+                "{method} d = {dims}: a value outside [0, 1)"
+            );
+            if method == "stbn" || method == "fast" {
+                // Ranks (d = 1) or swaps of stratified values (d >= 2): every
+                // dimension holds each of the 256 strata exactly once.
+                let d = m.tile.dims;
+                for k in 0..d {
+                    let mut values: Vec<f32> = m.samples.iter().skip(k).step_by(d).copied().collect();
+                    values.sort_by(|a, b| a.total_cmp(b));
+                    for (r, v) in values.iter().enumerate() {
+                        assert_eq!(
+                            *v,
+                            ((r as f64 + 0.5) / 256.0) as f32,
+                            "{method} d = {dims}, dimension {k}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn swap_methods_refuse_bad_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--method", "fast", "--passes", "0"], "--passes"),
+        (&["--method", "stbn", "--dims", "2", "--passes", "0"], "--passes"),
+        (&["--method", "fast", "--fast-spatial", "sinc:2"], "unknown filter"),
+        (&["--method", "fast", "--fast-spatial", "ema:0.1:0.1"], "unknown filter"),
+        (&["--method", "fast", "--fast-temporal", "ema:1.5:0.1"], "out of range"),
+        (&["--method", "fast", "--fast-temporal", "gaussian:-1"], "out of range"),
+        (&["--method", "fast", "--fast-combine", "sum:2"], "--fast-combine"),
+        (&["--method", "fast", "--spp", "2"], "1 spp"),
+        (&["--method", "stbn", "--spp", "2"], "1 spp"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["optimize", "--size", "4x4x2", "--out", "m.exr"];
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
+    }
+}
+
+#[test]
+fn a_run_killed_mid_way_leaves_the_existing_output_untouched_and_nothing_else() {
+    // A long run over an existing file, killed (SIGKILL: no chance to clean up)
+    // after a second and a half of its work.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--backend", "cpu", "--size", "64x64x16", "--iterations", "100000"])
+        .args(["--out", "existing.exr"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "the run ended before it was killed");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+    let names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["existing.exr".to_string()], "files left behind");
+}
+
+/// `fsot ARGS` in `dir` with the validation layer on and `vars` set.
+fn fsot_with(dir: &Path, vars: &[(&str, &str)], args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(args)
+        .env("FSOT_VALIDATION", "1")
+        .envs(vars.iter().copied())
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// A run refused for the environment variable `named` (`NAME=value`): a
+/// non-zero exit naming it, no panic, and the existing output in `dir` kept.
+fn assert_refused_keeping_output(o: &Output, named: &str, dir: &Path) {
+    let err = stderr(o);
+    assert!(!o.status.success() && !err.contains("panicked"), "{named}: {err}");
+    assert!(err.contains(named), "{named}: {err}");
+    assert_eq!(std::fs::read(dir.join("existing.exr")).unwrap(), b"keep me", "{named}");
+}
+
+/// A CPU run with the variable `name` set to each of `bad` is refused with a
+/// message naming the setting, keeping `dir`'s existing.exr (written here).
+fn assert_variable_refused(dir: &Path, name: &str, bad: &[&str]) {
+    std::fs::write(dir.join("existing.exr"), b"keep me").unwrap();
+    let args =
+        ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "2", "--out", "existing.exr"];
+    for value in bad {
+        let o = fsot_with(dir, &[(name, value)], &args);
+        assert_refused_keeping_output(&o, &format!("{name}={value}"), dir);
+    }
+}
+
+fn read_samples(path: &Path) -> Vec<u32> {
+    fsot::io::exr::read(path).unwrap().samples.iter().map(|v| v.to_bits()).collect()
+}
+
+#[test]
+fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let run: Vec<&str> = vec![
+        "optimize",
+        "--backend",
+        "cpu",
+        "--size",
+        "16x16x8",
+        "--kernel",
+        "taa",
+        "--seed",
+        "5",
+        "--iterations",
+        "4000",
+    ];
+    let straight = fsot(&[&run[..], &["--out", "straight.exr"]].concat(), dir.path());
+    assert!(straight.status.success(), "{}", stderr(&straight));
+
+    std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
+    let with_checkpoint = [&run[..], &["--checkpoint", "run.ckpt", "--checkpoint-every", "50"]].concat();
+    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(&with_checkpoint)
+        .args(["--out", "existing.exr"])
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Interrupt once the first checkpoint is on disk, as a user's Ctrl-C would.
+    let ckpt = dir.path().join("run.ckpt");
+    let started = std::time::Instant::now();
+    while !ckpt.exists() {
+        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let pid = child.id().to_string();
+    assert!(Command::new("kill").args(["-INT", &pid]).status().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    let message = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{message}");
+    assert!(message.contains("interrupted at iteration") && message.contains("--resume"), "{message}");
+    assert!(!message.contains("panicked"), "{message}");
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+    assert!(ckpt.exists());
+
+    // The same command again without --resume refuses to overwrite the checkpoint.
+    let again = fsot(&[&with_checkpoint[..], &["--out", "existing.exr"]].concat(), dir.path());
+    assert!(!again.status.success() && stderr(&again).contains("--resume"), "{}", stderr(&again));
+    // A different run cannot resume it.
+    let mut other = with_checkpoint.clone();
+    other[8] = "6"; // the seed
+    let wrong = fsot(&[&other[..], &["--out", "existing.exr", "--resume"]].concat(), dir.path());
+    assert!(!wrong.status.success() && stderr(&wrong).contains("different run"), "{}", stderr(&wrong));
+    assert_eq!(std::fs::read(dir.path().join("existing.exr")).unwrap(), b"the user's mask");
+
+    let resumed = fsot(&[&with_checkpoint[..], &["--out", "existing.exr", "--resume"]].concat(), dir.path());
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    assert!(stderr(&resumed).contains("resumed from"), "{}", stderr(&resumed));
+    assert!(!ckpt.exists(), "the checkpoint of a completed run is removed");
+    assert_eq!(
+        read_samples(&dir.path().join("existing.exr")),
+        read_samples(&dir.path().join("straight.exr")),
+        "resumed and uninterrupted runs differ"
+    );
+}
+
+#[test]
+fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let plan = fsot(&["plan", "s.toml", "--backend", "cpu"], dir.path());
+    assert!(plan.status.success(), "{}", stderr(&plan));
+    let text = String::from_utf8_lossy(&plan.stdout);
+    assert!(text.contains("pick (d = 1") && text.contains("skipped: not visible"), "{text}");
+    let json = fsot(&["plan", "s.toml", "--backend", "cpu", "--json"], dir.path());
+    let doc: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(doc["tile"], serde_json::json!([8, 8, 4]));
+
+    let o = fsot(&["optimize", "--scene", "s.toml", "--out", "masks", "--backend", "cpu"], dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.exr", "deep.exr", "plan.json"] {
+        assert!(dir.path().join("masks").join(f).exists(), "{f}");
+    }
+    // KTX2 beside each mask, in the format asked for.
+    let o = fsot(
+        &["optimize", "--scene", "s.toml", "--out", "k", "--backend", "cpu", "--ktx2-format", "r8g8_unorm"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.ktx2", "deep.ktx2"] {
+        let bytes = std::fs::read(dir.path().join("k").join(f)).unwrap();
+        let r = ktx2::Reader::new(&bytes[..]).unwrap();
+        assert_eq!(r.header().format, Some(ktx2::Format::R8G8_UNORM), "{f}");
+    }
+
+    std::fs::write(dir.path().join("bad.toml"), "[[group]]\nname = \"a\"\ndims = 2\nsppp = 1\n").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["optimize", "--scene", "bad.toml", "--out", "bad"], "line 4"),
+        (&["optimize", "--scene", "missing.toml", "--out", "bad"], "cannot read the scene"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--ktx2-format", "r8_unorm"], "d = 2"),
+        (&["plan", "bad.toml"], "line 4"),
+    ];
+    for (args, expect) in cases {
+        let o = fsot(args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: expected {expect:?} in {err:?}");
+        assert!(!dir.path().join("bad").exists() && !dir.path().join("bad.exr").exists(), "{args:?} wrote");
+    }
+}
+
+#[test]
+fn a_ktx2_from_optimize_decodes_to_the_exr_of_the_same_command_within_one_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &str, extra: &[&str]| {
+        let mut args =
+            vec!["optimize", "--backend", "cpu", "--size", "32x32x16", "--dims", "2", "--kernel", "taa"];
+        args.extend(["--seed", "7", "--iterations", "20", "--out", out]);
+        args.extend(extra);
+        let o = fsot(&args, dir.path());
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run("m.exr", &[]);
+    run("m.ktx2", &["--ktx2-format", "r16g16_unorm"]);
+    let exr = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+    let bytes = std::fs::read(dir.path().join("m.ktx2")).unwrap();
+    let r = ktx2::Reader::new(&bytes[..]).unwrap();
+    assert_eq!(r.header().format, Some(ktx2::Format::R16G16_UNORM));
+    assert_eq!(r.header().layer_count, 16);
+    let data = r.levels().next().unwrap().data;
+    let mut worst = 0.0f64;
+    for (i, pair) in data.chunks_exact(4).enumerate() {
+        let (x, y, t) = (i % 32, (i / 32) % 32, i / 1024);
+        for c in 0..2 {
+            let q = u16::from_le_bytes([pair[2 * c], pair[2 * c + 1]]) as f64 / 65535.0;
+            worst = worst.max((q - exr.sample(x, y, t, 0)[c] as f64).abs());
+        }
+    }
+    assert!(worst <= 1.0 / 65535.0, "worst {worst}");
+}
+
+#[test]
+fn a_c_header_compiles_and_holds_the_masks_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(
+        &["optimize", "--backend", "cpu", "--size", "4x4x2", "--spp", "2", "--iterations", "5"]
+            .into_iter()
+            .chain(["--out", "blue-4.h"])
+            .collect::<Vec<_>>(),
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let header = std::fs::read_to_string(dir.path().join("blue-4.h")).unwrap();
+    assert!(header.contains("static const uint16_t blue_4[128]"), "{header}");
+    assert!(header.contains("BLUE_4_SPP = 2"));
+    let c = "#include <stdio.h>\n#include \"blue-4.h\"\nint main(void) { for (int i = 0; i < 128; i++) \
+             printf(\"%u\\n\", blue_4[i]); return BLUE_4_WIDTH * BLUE_4_HEIGHT * BLUE_4_FRAMES * BLUE_4_SPP * \
+             BLUE_4_DIMS == 128 ? 0 : 1; }\n";
+    std::fs::write(dir.path().join("main.c"), c).unwrap();
+    let cc = Command::new("cc")
+        .args(["-std=c99", "-Wall", "-Werror", "main.c", "-o", "main"])
+        .current_dir(dir.path())
+        .output();
+    let Ok(cc) = cc else {
+        let _ = common::skip("the compile half: no C compiler (cc) on this machine");
+        return;
+    };
+    assert!(cc.status.success(), "{}", String::from_utf8_lossy(&cc.stderr));
+    let run = Command::new(dir.path().join("main")).output().unwrap();
+    assert!(run.status.success());
+    let levels: Vec<u32> = String::from_utf8_lossy(&run.stdout).lines().map(|l| l.parse().unwrap()).collect();
+    // The same mask again as EXR: every level the nearest to v * 65535, in the
+    // documented order (((t * spp + s) * H + y) * W + x) * D + k.
+    let o = fsot(
+        &[
+            "optimize",
+            "--backend",
+            "cpu",
+            "--size",
+            "4x4x2",
+            "--spp",
+            "2",
+            "--iterations",
+            "5",
+            "--out",
+            "m.exr",
+        ],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+    let mut i = 0;
+    for t in 0..2 {
+        for s in 0..2 {
+            for y in 0..4 {
+                for x in 0..4 {
+                    for &v in m.sample(x, y, t, s) {
+                        assert!(
+                            (levels[i] as f64 - v as f64 * 65535.0).abs() <= 0.5,
+                            "{} against {v}",
+                            levels[i]
+                        );
+                        i += 1;
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn vulkan_takes_three_four_and_eight_dimensions_with_the_validation_layer_on() {
+    // FSOT_VALIDATION=1: the command fails if the layer says anything.
+    let dir = tempfile::tempdir().unwrap();
+    for dims in ["3", "4", "8"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args([
+                "optimize",
+                "--backend",
+                "vulkan",
+                "--dims",
+                dims,
+                "--size",
+                "8x8x4",
+                "--iterations",
+                "20",
+            ])
+            .args(["--out", "m.exr"])
+            .env("FSOT_VALIDATION", "1")
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = format!("{}{}", stderr(&o), String::from_utf8_lossy(&o.stdout));
+        assert!(o.status.success(), "d = {dims}: {err}");
+        assert!(err.contains("backend: vulkan") && err.contains("(vulkan)"), "d = {dims}: {err}");
+        assert!(err.contains(&format!("d = {dims}")), "{err}");
+        let mask = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+        assert_eq!(mask.tile.dims, dims.parse::<usize>().unwrap());
+    }
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fast_and_vector_stbn_search_on_vulkan_with_the_validation_layer_on() {
+    // FSOT_VALIDATION=1: the command fails, writing nothing, if the layer says anything.
+    let dir = tempfile::tempdir().unwrap();
+    for method in [&["--method", "fast"][..], &["--method", "stbn", "--dims", "2"]] {
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--passes", "4", "--out", "m.exr"])
+            .args(method)
+            .env("FSOT_VALIDATION", "1")
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        let err = format!("{}{}", stderr(&o), String::from_utf8_lossy(&o.stdout));
+        assert!(o.status.success(), "{method:?}: {err}");
+        assert!(err.contains("backend: vulkan"), "{method:?}: {err}");
+        let mask = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
+        assert_eq!(mask.tile.pixels(), 8 * 8 * 4);
+        assert!(err.contains("on vulkan") && err.contains("proposed swaps taken"), "{err}");
+        if method[1] == "fast" {
+            assert_eq!(
+                mask.meta.iter().find(|(k, _)| k == "backend").map(|(_, v)| v.as_str()),
+                Some("vulkan")
+            );
+        } else {
+            assert!(mask.meta.iter().any(|(_, v)| v.contains("passes on vulkan")), "{:?}", mask.meta);
+        }
+    }
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_scene_plan_runs_on_vulkan_its_masks_side_by_side_with_the_validation_layer_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
+                 [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--scene", "s.toml", "--out", "masks", "--backend", "vulkan"])
+        .env("FSOT_VALIDATION", "1")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["pick.exr", "lens.exr"] {
+        let mask = fsot::io::exr::read(&dir.path().join("masks").join(f)).unwrap();
+        let backend = mask.meta.iter().find(|(k, _)| k == "backend").map(|(_, v)| v.clone());
+        assert!(backend.as_deref().is_some_and(|b| b.starts_with("vulkan")), "{f}: {backend:?}");
+    }
+    let plan: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("masks/plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["groups"].as_array().unwrap().len(), 3);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn profile_prints_each_pass_s_time_and_the_bytes_it_must_move() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"])
+        .args(["--kernel", "perceptual-taa", "--profile", "--out", "m.exr"])
+        .env("FSOT_VALIDATION", "1")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{out}", stderr(&o));
+    assert!(out.contains("profile (4 iterations, per iteration): transport"), "{out}");
+    // 8x8x4 x 16 spp x 2 coordinates, each read (4 bytes) and added into (a 4-byte
+    // float or 8-byte fixed-point atomic) at least once per iteration.
+    let line = out.lines().find(|l| l.contains("least bytes per iteration")).expect("the bytes line");
+    let mb: f64 = line.split("transport ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!(mb * 1e6 >= 8.0 * (8 * 8 * 4 * 16 * 2) as f64, "{line}");
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_sort_keeps_the_block_passes_when_asked_and_refuses_any_other_value() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let run = |value: &str, out: &str| {
+        let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--spp", "16", "--iterations", "4"];
+        let more = ["--kernel", "perceptual-taa", "--sigma", "2.1", "--profile", "--out", out];
+        // On a GPU the workgroup transport's second pass would take these
+        // classes (up to 4096): off, so that the large-class stage runs.
+        let vars = [("FSOT_SORT", value), ("FSOT_DEFER", "0")];
+        fsot_with(dir.path(), &vars, &[&args[..], &more[..]].concat())
+    };
+    // 16 spp: classes past the transport's limit, so the run has a large-class stage.
+    let o = run("blocks", "m.exr");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{out}", stderr(&o));
+    assert!(out.contains("large-class sort: block passes (set, not timed)"), "{out}");
+    for bad in ["look-back", "fast", "Blocks"] {
+        assert_refused_keeping_output(&run(bad, "existing.exr"), &format!("FSOT_SORT={bad}"), dir.path());
+    }
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_class_sort_makes_the_same_mask_every_way_and_any_other_value_is_refused() {
+    // The workgroup transport forced (FSOT_TRANSPORT: 32 invocations, on
+    // lavapipe four subgroups of 8), d = 2: by default its classes that fit a
+    // subgroup go by the subgroup alone and the rest by buckets; `buckets` sorts
+    // every class by buckets, `bitonic` by the network. The same total order
+    // each way, so the same mask bit for bit in deterministic mode. At d = 3
+    // (no subgroup path: its targets are not closed forms) the profile says
+    // buckets.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("existing.exr"), b"keep me").unwrap();
+    let run = |value: &str, dims: &str, out: &str| {
+        let args =
+            ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", dims, "--iterations", "4"];
+        let more = ["--kernel", "taa", "--deterministic", "--profile", "--out", out];
+        let vars = [("FSOT_CLASS_SORT", value), ("FSOT_TRANSPORT", "32,1")];
+        fsot_with(dir.path(), &vars, &[&args[..], &more[..]].concat())
+    };
+    let subgroup = "sorted by buckets, those that fit a subgroup by the subgroup alone";
+    let mut masks = Vec::new();
+    for (value, said) in [
+        ("", subgroup),
+        ("subgroup", subgroup),
+        ("buckets", "sorted by buckets\n"),
+        ("bitonic", "sorted by the bitonic network (set)"),
+    ] {
+        let out = format!("m{}.exr", masks.len());
+        let o = run(value, "2", &out);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{value}: {}{text}", stderr(&o));
+        assert!(text.contains("  transport: workgroups of") && text.contains(said), "{value}: {text}");
+        masks.push(read_samples(&dir.path().join(out)));
+    }
+    assert!(masks.iter().all(|m| *m == masks[0]), "the sorts made different masks");
+    let o = run("", "3", "d3.exr");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && text.contains("sorted by buckets\n"), "{}{text}", stderr(&o));
+    for bad in ["radix", "Bitonic"] {
+        let named = format!("FSOT_CLASS_SORT={bad}");
+        assert_refused_keeping_output(&run(bad, "2", "existing.exr"), &named, dir.path());
+    }
+}
+
+#[test]
+fn fsot_defer_takes_0_or_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    assert_variable_refused(dir.path(), "FSOT_DEFER", &["1", "4096", "off"]);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_local_max_sets_the_workgroup_transports_class_limit_and_bad_values_are_refused() {
+    // d = 3: the workgroup transport on every device. At 64 the classes past it
+    // leave the first pass (for the second pass on a GPU, the large-class stage
+    // on lavapipe); the profile names the limit.
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--dims", "3", "--iterations", "2"];
+    let more = ["--kernel", "taa", "--sigma", "2.1", "--profile", "--out", "m.exr"];
+    let o = fsot_with(dir.path(), &[("FSOT_LOCAL_MAX", "64")], &[&args[..], &more[..]].concat());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}{text}", stderr(&o));
+    assert!(
+        text.contains("  transport: workgroups of") && text.contains("classes up to 64 sorted"),
+        "{text}"
+    );
+    assert_variable_refused(dir.path(), "FSOT_LOCAL_MAX", &["100", "32", "4096", "off"]);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn fsot_lane_rounds_and_chunks_tune_the_per_lane_transport_and_bad_values_are_refused() {
+    // The per-lane transport (CPU implementations of Vulkan) takes as many
+    // slices an invocation as its loop budget allows at each chunk's classes;
+    // FSOT_LANE_ROUNDS=1 one each, which the profile says.
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["optimize", "--backend", "vulkan", "--size", "8x8x4", "--iterations", "2"];
+    let more = ["--kernel", "taa", "--profile", "--out", "m.exr"];
+    let profile = |rounds: Option<&str>| {
+        let env: Vec<(&str, &str)> = rounds.map(|r| ("FSOT_LANE_ROUNDS", r)).into_iter().collect();
+        let o = fsot_with(dir.path(), &env, &[&args[..], &more[..]].concat());
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(o.status.success(), "{}{text}", stderr(&o));
+        text
+    };
+    let (capped, free) = (profile(Some("1")), profile(None));
+    if capped.contains("transport: per lane") {
+        assert!(capped.contains("one slice an invocation"), "{capped}");
+        assert!(free.contains("transport: per lane") && !free.contains("an invocation"), "{free}");
+    } else {
+        let _ = common::skip(
+            "in part: this device takes the workgroup transport, which ignores FSOT_LANE_ROUNDS",
+        );
+    }
+    assert_variable_refused(dir.path(), "FSOT_LANE_ROUNDS", &["0", "-1", "two"]);
+    // FSOT_LANE_CHUNKS=N aims at N chunks of slices an iteration, to compare.
+    let o = fsot_with(dir.path(), &[("FSOT_LANE_CHUNKS", "1")], &[&args[..], &more[..]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_variable_refused(dir.path(), "FSOT_LANE_CHUNKS", &["0", "-1", "two"]);
+}

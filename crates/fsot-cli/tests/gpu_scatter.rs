@@ -1,0 +1,36 @@
+//! The gradient scatter benchmarked on its own (`fsot bench scatter`): the GPU's
+//! sums against sums in f64, fixed point exact to its rounding, float atomics
+//! within float rounding.
+
+#[path = "../../../tests/common/mod.rs"]
+mod common;
+
+use fsot_cli::bench::scatter::{bench_scatter, contributions, reference_sums, FAN_IN};
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_benchmarked_scatter_sums_like_f64() {
+    let ctx = common::gpu_context();
+    for n in [1u32, 1000, 1 << 16] {
+        let b = bench_scatter(&ctx, n, 1).unwrap();
+        assert_eq!(b.targets, (n / FAN_IN).max(1));
+        // Fixed point: one rounding to 2^-40 per contribution, at most a few dozen
+        // per accumulator.
+        assert!(b.fixed_error < 64.0 * 0.5 / (1u64 << 40) as f64, "{n}: {}", b.fixed_error);
+        if let Some(e) = b.float_error {
+            // Float: sums of values below 2^-10 carry errors near 2^-33 each add.
+            assert!(e < 1e-8, "{n}: {e}");
+        }
+        assert!(b.fixed_seconds > 0.0 && b.cpu_seconds > 0.0);
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_reference_sums_are_the_sums() {
+    let (idx, val) = contributions(64);
+    let sums = reference_sums(&idx, &val, 64 / FAN_IN);
+    let total: f64 = val.iter().map(|&v| v as f64).sum();
+    assert!((sums.iter().sum::<f64>() - total).abs() < 1e-15);
+}
