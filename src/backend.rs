@@ -11,6 +11,7 @@ use crate::vk::PathChoice;
 
 /// Where a run may go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum BackendChoice {
     /// A Vulkan GPU when there is one (not a CPU implementation such as
     /// lavapipe, which is slower than the CPU path, unless a device is named),

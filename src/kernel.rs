@@ -104,6 +104,19 @@ pub const MIN_MEAN_CLASS: f64 = 20.0;
 pub const KERNEL_NAMES: [&str; 5] = ["spatial", "gaussian", "taa", "perceptual", "perceptual-taa"];
 
 impl KernelSpec {
+    /// The kernel of that name (one of [`KERNEL_NAMES`]) with the default eye
+    /// (sigma 2.1 pixels) and display (TAA alpha 0.1 at 60 fps).
+    ///
+    /// ```
+    /// let taa = fsot::KernelSpec::named("perceptual-taa")?;
+    /// assert_eq!(taa.name(), "perceptual-taa");
+    /// assert!(fsot::KernelSpec::named("no such kernel").is_err());
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn named(name: &str) -> Result<Self> {
+        Self::from_name(name, DEFAULT_SIGMA, None, DEFAULT_ALPHA, DEFAULT_FPS)
+    }
+
     /// Builds a spec from a kernel name and its parameters, validating each.
     pub fn from_name(name: &str, sigma: f64, sigma_t: Option<f64>, alpha: f64, fps: f64) -> Result<Self> {
         if !(sigma.is_finite() && sigma > 0.0 && sigma <= 64.0) {

@@ -1,6 +1,98 @@
-//! fsot: perceptually optimized spatio-temporal sample masks by filtered sliced
-//! optimal transport. See the README's architecture section for how the modules
-//! fit together.
+//! fsot makes sample masks for Monte Carlo rendering at one sample per pixel:
+//! a tile of W x H pixels x T frames (wrapping) whose per-pixel samples are
+//! optimized by filtered sliced optimal transport under a spatio-temporal
+//! kernel (the eye's filter, and the display's temporal antialiasing), so that
+//! the error a renderer leaves is noise the eye barely sees.
+//!
+//! It runs on the CPU and, with the default `vulkan` feature, on Vulkan compute
+//! (on its own device, or on the host renderer's). Without that feature the
+//! crate has no Vulkan dependency at all.
+//!
+//! # A mask on the CPU
+//!
+//! ```
+//! use fsot::{KernelSpec, Settings, Tile};
+//!
+//! // 16 x 16 pixels, 4 frames, 1 sample of 2 dimensions per pixel.
+//! let tile = Tile::new(16, 16, 4, 1, 2)?;
+//! let mut settings = Settings::new(KernelSpec::named("perceptual-taa")?, 7);
+//! settings.iterations = 50;
+//! let mask = fsot::optimize(tile, settings, None)?;
+//! assert_eq!(mask.samples.len(), 16 * 16 * 4 * 2);
+//! assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+//! # Ok::<(), fsot::Error>(())
+//! ```
+//!
+//! # A scene's plan
+//!
+//! A scene names its display and its sampling decisions; the plan says which
+//! masks it needs (tile, kernel, reading) and why.
+//!
+//! ```
+//! use fsot::{CostModel, Plan, Scene};
+//!
+//! let scene = Scene::parse(
+//!     r#"
+//! [display]
+//! name = "standard_fhd"
+//! fps = 60
+//! taa_alpha = 0.1
+//!
+//! [[group]]
+//! name = "light"
+//! dims = 2
+//! "#,
+//!     "example",
+//! )
+//! .map_err(fsot::Error::invalid)?;
+//! let plan = Plan::new(&scene, &CostModel::unmeasured())?;
+//! assert!(!plan.masks.is_empty());
+//! for mask in &plan.masks {
+//!     println!("{}: d = {}, {} spp", mask.file, mask.dims, mask.spp);
+//! }
+//! # Ok::<(), fsot::Error>(())
+//! ```
+//!
+//! # Into a host renderer's image
+//!
+//! A renderer hands fsot its device and an image it created; fsot optimizes on
+//! that device and writes the mask's frames into the image's layers.
+//!
+//! ```no_run
+//! # #[cfg(feature = "vulkan")]
+//! # fn host(external: fsot::vk::ExternalDevice, image: fsot::ash::vk::Image) -> fsot::Result<()> {
+//! use fsot::ash::vk;
+//! use fsot::vk::{Context, ImageTarget};
+//! use fsot::{CancelFlag, KernelSpec, Settings, Tile};
+//!
+//! let ctx = Context::wrap(external)?; // the renderer's instance, device and queue
+//! let tile = Tile::new(64, 64, 32, 1, 2)?;
+//! let target = ImageTarget {
+//!     image,
+//!     format: vk::Format::R8G8_UNORM,
+//!     width: 64,
+//!     height: 64,
+//!     layers: 32,
+//!     usage: vk::ImageUsageFlags::TRANSFER_DST | vk::ImageUsageFlags::SAMPLED,
+//!     layout_before: vk::ImageLayout::UNDEFINED,
+//!     layout_after: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+//! };
+//! let settings = Settings::new(KernelSpec::named("perceptual-taa")?, 1);
+//! let mask = fsot::make_into_image(&ctx, tile, settings, &target, &CancelFlag::new(), &mut |_| {})?;
+//! # let _ = mask;
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! # Features
+//!
+//! - `vulkan` (default): the Vulkan backend, `vk` (a small Vulkan layer that
+//!   knows nothing of sampling) and the renderer's calls.
+//! - `build-shaders`: compile `glsl/` with shaderc at build time instead of
+//!   embedding the committed SPIR-V (needs shaderc's libraries, or cmake and a
+//!   C++ compiler to build them).
+#![warn(missing_docs)]
+
 /// The bytes of one embedded SPIR-V file: committed under `spirv/` (made from
 /// `glsl/` by `scripts/spirv.sh`), or compiled into OUT_DIR at build time with
 /// the `build-shaders` feature.
@@ -30,33 +122,77 @@ macro_rules! spirv_module {
     };
 }
 
+#[doc(hidden)]
 pub mod backend;
+#[doc(hidden)]
 pub mod baselines;
+#[doc(hidden)]
 pub mod checkpoint;
+#[doc(hidden)]
 pub mod cpu_backend;
+#[doc(hidden)]
 pub mod csf;
+#[doc(hidden)]
 pub mod display;
+#[doc(hidden)]
 pub mod error;
 #[cfg(feature = "vulkan")]
+#[doc(hidden)]
 pub mod gpu;
+#[doc(hidden)]
 pub mod io;
+#[doc(hidden)]
 pub mod kernel;
+#[doc(hidden)]
 pub mod mask;
+#[doc(hidden)]
 pub mod method;
+#[doc(hidden)]
 pub mod plan;
+#[doc(hidden)]
 pub mod problem;
+#[doc(hidden)]
 pub mod quality;
 #[cfg(feature = "vulkan")]
+#[doc(hidden)]
 pub mod renderer;
+#[doc(hidden)]
 pub mod rng;
+#[doc(hidden)]
 pub mod run;
+#[doc(hidden)]
 pub mod sampler;
+#[doc(hidden)]
 pub mod scene;
+#[doc(hidden)]
 pub mod score;
+#[doc(hidden)]
 pub mod settings;
+#[doc(hidden)]
 pub mod slice;
+#[doc(hidden)]
 pub mod step_rule;
+#[doc(hidden)]
 pub mod targets;
+#[doc(hidden)]
 pub mod transport;
 #[cfg(feature = "vulkan")]
 pub mod vk;
+
+pub use backend::BackendChoice;
+pub use error::{Error, Result};
+pub use kernel::KernelSpec;
+pub use mask::Mask;
+pub use plan::{CostModel, Plan, PlanEvent, PlannedMask};
+pub use problem::Tile;
+pub use run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+pub use sampler::SamplerPlan;
+pub use scene::Scene;
+pub use settings::{Settings, Until};
+
+#[cfg(feature = "vulkan")]
+pub use ash;
+#[cfg(feature = "vulkan")]
+pub use gpu::VulkanOptions;
+#[cfg(feature = "vulkan")]
+pub use renderer::{make_into_image, make_plan_into_image, upload, write_mask, write_plan};

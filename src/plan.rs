@@ -425,6 +425,7 @@ impl Plan {
 
 /// What running a plan tells its observer.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum PlanEvent<'a> {
     /// Mask `index` of the plan's masks starts (`iteration` when it resumes).
     Start { index: usize, file: &'a str, iteration: u32 },

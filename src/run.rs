@@ -56,6 +56,7 @@ pub struct RunOptions {
 
 /// What a run tells its observer.
 #[derive(Debug)]
+#[non_exhaustive]
 pub enum Event<'a> {
     /// Iterations done; the objective estimate of the last one.
     Progress { iteration: u32, iterations: u32, objective: Option<f64> },
@@ -68,6 +69,7 @@ pub enum Event<'a> {
 
 /// How `Run::advance` ended.
 #[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum Outcome {
     /// The asked iteration was reached.
     Reached,

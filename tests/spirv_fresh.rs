@@ -44,7 +44,10 @@ fn drift(spirv_root: &Path, family: &str, embedded: &[(&str, &[u8])]) -> Vec<Str
     found
 }
 
-fn families() -> [(&'static str, &'static [(&'static str, &'static [u8])]); 3] {
+/// A family's embedded shaders: (name, SPIR-V).
+type Family = &'static [(&'static str, &'static [u8])];
+
+fn families() -> [(&'static str, Family); 3] {
     [
         ("sort", fsot::vk::shaders::ALL),
         ("fsot", fsot::gpu::shaders::ALL),

@@ -21,7 +21,8 @@ use std::sync::OnceLock;
 /// Every shader of a family, compiled with OpName/OpMemberName kept; the same
 /// names as the family the crate embeds.
 fn named(family: &str, embedded: &[(&str, &[u8])]) -> &'static [(&'static str, &'static [u8])] {
-    static FAMILIES: OnceLock<Vec<(String, Vec<(&'static str, &'static [u8])>)>> = OnceLock::new();
+    type Compiled = Vec<(&'static str, &'static [u8])>;
+    static FAMILIES: OnceLock<Vec<(String, Compiled)>> = OnceLock::new();
     let all = FAMILIES.get_or_init(|| {
         let glsl = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
         shaderc_link::FAMILIES

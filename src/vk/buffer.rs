@@ -23,11 +23,15 @@ pub enum Location {
     Readback,
 }
 
+/// A buffer and its memory, freed on drop.
 pub struct Buffer {
     ctx: Context,
+    /// The Vulkan handle.
     pub raw: vk::Buffer,
     allocation: Option<Allocation>,
+    /// Its size in bytes.
     pub size: u64,
+    /// Where its memory lies.
     pub location: Location,
 }
 
@@ -260,6 +264,7 @@ pub fn download_batch(
 /// cannot be asked): what a fill checks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BufferTarget {
+    /// The caller's buffer.
     pub buffer: vk::Buffer,
     /// The buffer's size as created.
     pub size: u64,

@@ -38,13 +38,21 @@ pub struct ContextOptions {
 /// and the third for d >= 3; the second is optional).
 #[derive(Clone)]
 pub struct ExternalDevice {
+    /// The loader the host's instance was made with.
     pub entry: ash::Entry,
+    /// The host's instance.
     pub instance: ash::Instance,
+    /// The physical device behind `device`.
     pub physical_device: vk::PhysicalDevice,
+    /// The host's logical device.
     pub device: ash::Device,
+    /// The family of the queue fsot submits to (it must support compute).
     pub queue_family: u32,
+    /// The queue's index in its family.
     pub queue_index: u32,
+    /// shaderBufferInt64Atomics was enabled on the device.
     pub int64_atomics: bool,
+    /// shaderBufferFloat32AtomicAdd was enabled on the device.
     pub float_atomic_add: bool,
     /// shaderFloat64.
     pub float64: bool,
@@ -79,6 +87,7 @@ pub struct Context {
 }
 
 impl Context {
+    /// A context on its own instance and device, chosen by `options`.
     pub fn new(options: &ContextOptions) -> Result<Self> {
         let messages: MessageSink = Box::new(Mutex::new(Vec::new()));
         let instance = Instance::new(options.validation, &messages)?;
@@ -211,9 +220,11 @@ impl Context {
         }
     }
 
+    /// What the device is and can do.
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
     }
+    /// The logical device.
     pub fn device(&self) -> &ash::Device {
         &self.shared.device
     }

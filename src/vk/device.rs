@@ -8,16 +8,25 @@ use crate::error::{Error, Result};
 /// What a compute user needs to know about the chosen device.
 #[derive(Clone, Debug)]
 pub struct DeviceInfo {
+    /// The device's name.
     pub name: String,
+    /// The driver's name and version.
     pub driver: String,
+    /// Discrete, integrated, CPU, ...
     pub device_type: vk::PhysicalDeviceType,
+    /// Invocations per subgroup.
     pub subgroup_size: u32,
+    /// Bytes one storage-buffer binding may hold (maxStorageBufferRange).
     pub max_storage_buffer_range: u64,
     /// Texels one texel-buffer view may hold (maxTexelBufferElements).
     pub max_texel_buffer_elements: u64,
+    /// maxComputeWorkGroupInvocations.
     pub max_workgroup_invocations: u32,
+    /// maxComputeSharedMemorySize, in bytes.
     pub max_shared_memory: u32,
+    /// Nanoseconds per timestamp tick.
     pub timestamp_period_ns: f32,
+    /// shaderBufferFloat32AtomicAdd.
     pub float_atomic_add: bool,
     /// shaderInt64 and shaderBufferInt64Atomics.
     pub int64_atomics: bool,

@@ -34,9 +34,13 @@ use crate::error::{Error, Result};
 /// host states it here and fsot checks it against what it writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImageTarget {
+    /// The host's image.
     pub image: vk::Image,
+    /// Its format (R8/R16 UNORM for d = 1, R8G8/R16G16 for d = 2, RGBA for more).
     pub format: vk::Format,
+    /// Its width, the tile's.
     pub width: u32,
+    /// Its height, the tile's.
     pub height: u32,
     /// Array layers the image was created with.
     pub layers: u32,
@@ -52,10 +56,15 @@ pub struct ImageTarget {
 /// What an owned image is made as.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImageDesc {
+    /// The texel format.
     pub format: vk::Format,
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// Array layers.
     pub layers: u32,
+    /// How it will be used.
     pub usage: vk::ImageUsageFlags,
 }
 
@@ -64,14 +73,19 @@ pub struct ImageDesc {
 /// `layout` tracks the layout fsot's own calls leave it in.
 pub struct Image {
     ctx: Context,
+    /// The Vulkan handle.
     pub raw: vk::Image,
+    /// A 2-D array view of every layer.
     pub view: vk::ImageView,
     allocation: Option<Allocation>,
+    /// What it was made as.
     pub desc: ImageDesc,
+    /// The layout fsot's own calls left it in.
     pub layout: vk::ImageLayout,
 }
 
 impl Image {
+    /// A device-local image as `desc` says, named `name` for debuggers.
     pub fn new(ctx: &Context, desc: ImageDesc, name: &str) -> Result<Self> {
         if desc.width == 0 || desc.height == 0 || desc.layers == 0 {
             return Err(Error::invalid(format!(
@@ -177,10 +191,12 @@ impl Drop for Image {
 /// image-sampler binding, destroyed on drop.
 pub struct Sampler {
     ctx: Context,
+    /// The Vulkan handle.
     pub raw: vk::Sampler,
 }
 
 impl Sampler {
+    /// Nearest filtering, repeating addresses: a mask read as a tile.
     pub fn nearest(ctx: &Context) -> Result<Self> {
         let info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::NEAREST)

@@ -22,29 +22,46 @@
 //! Every handle is destroyed in `Drop` and holds the context alive. Errors are
 //! the crate's one `Error`; `FSOT_FAULT` injects failures for tests (`fault`).
 
+#[doc(hidden)]
 pub mod buffer;
+#[doc(hidden)]
 pub mod commands;
+#[doc(hidden)]
 pub mod context;
+#[doc(hidden)]
 pub mod device;
 pub(crate) mod fault;
+#[doc(hidden)]
 pub mod image;
+#[doc(hidden)]
 pub mod instance;
+#[doc(hidden)]
 pub mod pipeline;
+#[doc(hidden)]
 pub mod sort;
+#[doc(hidden)]
 pub mod sort_choice;
+#[doc(hidden)]
 pub mod texel_view;
+#[doc(hidden)]
 pub mod timer;
 
 pub use buffer::{Buffer, BufferTarget, Location};
 pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
+#[doc(hidden)]
 pub use pipeline::{ComputeDesc, ComputePipeline};
+#[doc(hidden)]
 pub use sort::{RadixSort, SortCount, SortPath};
+#[doc(hidden)]
 pub use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes};
+#[doc(hidden)]
 pub use texel_view::TexelView;
+#[doc(hidden)]
 pub use timer::Timer;
 
+#[doc(hidden)]
 pub mod shaders {
     //! SPIR-V of `glsl/sort/*.comp`, embedded from `spirv/sort/`.
     spirv_module!("sort");

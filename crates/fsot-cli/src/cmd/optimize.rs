@@ -87,6 +87,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
             });
             bar.set_position(from as u64);
         }
+        _ => {}
     })?;
     bar.finish_and_clear();
     if let Outcome::Cancelled { iteration, saved } = outcome {

@@ -138,6 +138,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             PlanEvent::Done { file, iterations, seconds, .. } => {
                 bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
             }
+            _ => {}
         })?;
     bar.finish_and_clear();
     if let Outcome::Cancelled { iteration, .. } = outcome {
