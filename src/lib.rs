@@ -195,4 +195,7 @@ pub use ash;
 #[cfg(feature = "vulkan")]
 pub use gpu::VulkanOptions;
 #[cfg(feature = "vulkan")]
-pub use renderer::{make_into_image, make_plan_into_image, upload, write_mask, write_plan};
+pub use renderer::{
+    layers_for, make_into_image, make_plan_into_image, upload, write_mask, write_mask_to_buffer, write_plan,
+    write_plan_block,
+};
