@@ -1,9 +1,7 @@
 #!/usr/bin/env bash
 # Every d on the Vulkan path against the CPU path: the same problem (perceptual-taa,
 # seed 7) on both backends, objective (fsot score) and time, with the validation
-# layer on for Vulkan (FSOT_VALIDATION=1: the command fails on any message);
-# `vulkan-pairs` is Vulkan with the float32-pair targets (FSOT_FLOAT_PAIRS=1), as a
-# device without shaderFloat64 runs them.
+# layer on for Vulkan (FSOT_VALIDATION=1: the command fails on any message).
 # OLD_BIN=path adds a `vulkan-old` row per d: that binary's Vulkan path (f64), run
 # just before this build's, to compare builds in one sitting.
 # Usage: [OLD_BIN=path] bench/vulkan-dims.sh OUT_FILE   (VK_DRIVER_FILES picks the device; lavapipe by default)
@@ -23,10 +21,9 @@ head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl ||
   echo "---|---|---|---|---|---|---|---"
   for case in 3:32x32x16:300 4:32x32x16:300 8:16x16x8:100; do
     IFS=: read -r d size its <<< "$case"
-    for backend in cpu ${OLD_BIN:+vulkan-old} vulkan vulkan-pairs; do
-      pairs=0; [ $backend = vulkan-pairs ] && pairs=1
+    for backend in cpu ${OLD_BIN:+vulkan-old} vulkan; do
       exe=$f; [ $backend = vulkan-old ] && exe=$OLD_BIN
-      log=$(FSOT_FLOAT_PAIRS=$pairs FSOT_VALIDATION=1 $exe optimize --backend ${backend%-*} --dims "$d" --size "$size" --kernel perceptual-taa \
+      log=$(FSOT_VALIDATION=1 $exe optimize --backend ${backend%-*} --dims "$d" --size "$size" --kernel perceptual-taa \
         --seed 7 --iterations "$its" --out "$work/m.exr" 2>&1)
       device=$(echo "$log" | grep -m1 '^backend:' | sed 's/^backend: //; s/ (.*//' || true)
       time=$(echo "$log" | grep -o 'iterations in [0-9.]* s' | awk '{print $3}')

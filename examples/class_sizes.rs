@@ -1,6 +1,6 @@
 //! How a kernel's class sizes spread, and what share of the slices and of the
 //! members lies past each limit: what the workgroup transport's first pass hands
-//! on at that limit (`FSOT_LOCAL_MAX`). From the level thresholds alone: a
+//! on at that limit (`VulkanHooks::local_max` in tests). From the level thresholds alone: a
 //! slice's class holds the taps whose threshold exceeds its uniform level, so
 //! P(size >= k) = threshold[k - 1] / 2^32. d = 2, 1 spp.
 //!

@@ -20,7 +20,7 @@ fn main() {
     let mask = Mask::white(tile, 21);
     let kernel = Kernel::new(s.kernel, &tile);
     let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
-    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let options = VulkanOptions::default().deterministic(true);
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     let mut worst = (0.0f64, String::new());
     let mut hist = [0usize; 8];

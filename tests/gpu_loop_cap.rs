@@ -7,7 +7,7 @@
 
 mod common;
 
-use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
+use fsot::gpu::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 use fsot::kernel::KernelSpec;
 use fsot::problem::Tile;
 use fsot::settings::Settings;
@@ -22,12 +22,11 @@ fn run_with(ctx: &fsot::vk::Context, lane_limit: Option<u32>, iterations: u32) -
     // d = 8: each quantile of the f64 targets takes a loop of 257 per Newton
     // step, so a class of 200 samples per lane is far past the cap.
     let tile = Tile::new(16, 16, 8, 1, 8).unwrap();
-    let options = VulkanOptions {
-        deterministic: true,
+    let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
         transport: Some(TransportKind::PerLane),
         unchecked_lane_limit: lane_limit,
-        ..VulkanOptions::default()
-    };
+        ..VulkanHooks::default()
+    });
     let mut run = VulkanRun::new(ctx, tile, settings(iterations), None, options)?;
     while !run.finished() {
         run.step_batch(u32::MAX)?;
@@ -76,14 +75,9 @@ fn lanes_whose_classes_need_different_sorts_stay_under_the_cap() {
     mask.samples[..half].iter_mut().for_each(|v| *v = 0.25);
     let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 3);
     s.iterations = 64;
-    // One chunk aimed at: the top tier takes the two rounds the budget allows,
-    // however many lanes share it (with the default aim and more lanes, its
-    // share of the iteration can hold it to one).
-    let options = VulkanOptions {
-        transport: Some(TransportKind::PerLane),
-        lane_chunks: Some(1),
-        ..VulkanOptions::default()
-    };
+    // The top tier takes the two rounds the budget allows.
+    let options = VulkanOptions::default()
+        .hooks(VulkanHooks { transport: Some(TransportKind::PerLane), ..VulkanHooks::default() });
     let mut run = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     let order = run.slice_order(0).unwrap().expect("a per-lane run orders its slices");
     assert_eq!(order.tiers[0].rounds, 2, "{:?}", order.tiers[0]);

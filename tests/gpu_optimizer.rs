@@ -5,7 +5,7 @@ mod common;
 
 use fsot::backend::Backend;
 use fsot::gpu::shape::{TransportShape, LANE_BUDGET, LANE_MAX};
-use fsot::gpu::{TransportKind, VulkanOptions, VulkanRun};
+use fsot::gpu::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 use fsot::kernel::{Kernel, KernelSpec};
 use fsot::mask::Mask;
 use fsot::problem::Tile;
@@ -24,8 +24,9 @@ fn refused_here(ctx: &fsot::vk::Context, transport: TransportKind) -> bool {
         return false;
     }
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
-    let options =
-        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    let options = VulkanOptions::default()
+        .deterministic(true)
+        .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
     let err =
         VulkanRun::new(ctx, tile, settings("taa", 5, 1), None, options).err().expect("per-lane on a GPU");
     assert!(err.to_string().contains("CPU implementations"), "{err}");
@@ -55,13 +56,15 @@ fn compare_one_iteration_with(tile: Tile, kernel: &str, deterministic: bool, tra
 }
 
 fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: TransportKind) {
-    let options = VulkanOptions { deterministic, transport: Some(transport), ..VulkanOptions::default() };
+    let options = VulkanOptions::default()
+        .deterministic(deterministic)
+        .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
     compare_with_options(mask, kernel, options);
 }
 
 fn compare_with_options(mask: &Mask, kernel: &str, options: VulkanOptions) {
     let ctx = common::gpu_context();
-    let transport = options.transport.unwrap_or(TransportKind::Workgroup);
+    let transport = options.hooks.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
@@ -77,7 +80,7 @@ fn compare_with_options(mask: &Mask, kernel: &str, options: VulkanOptions) {
         assert!(moved > tile.values() / 4, "too few coordinates moved: {moved}");
         eprintln!(
             "{kernel} d = {} {:?} float pairs {}: largest difference {worst:.2e}",
-            tile.dims, options.transport, options.float_pair_targets
+            tile.dims, options.hooks.transport, options.hooks.float_pair_targets
         );
         assert!(worst < 1e-5, "{kernel} {tile:?} {options:?}: largest difference {worst}");
     }
@@ -126,7 +129,7 @@ fn per_lane_classes_past_2048_that_fit_the_loop_budget_need_no_large_class_stage
     let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
     let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
     assert_eq!(kernel.taps.len() * 3, 2232);
-    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let options = VulkanOptions::default().deterministic(true);
     let run = VulkanRun::new(&ctx, tile, settings("taa", 10, 21), None, options).unwrap();
     let launch = run.report().transport.unwrap_or_default();
     assert!(launch.contains("per lane") && launch.contains("classes up to 2304"), "{launch}");
@@ -135,7 +138,11 @@ fn per_lane_classes_past_2048_that_fit_the_loop_budget_need_no_large_class_stage
     classes_past(options, 2048, 2, 3, false);
     let mut tied = Mask::white(tile, 3);
     tied.samples.iter_mut().for_each(|v| *v = 0.375);
-    compare_with_options(&tied, "taa", VulkanOptions { transport: Some(TransportKind::PerLane), ..options });
+    compare_with_options(
+        &tied,
+        "taa",
+        options.hooks(VulkanHooks { transport: Some(TransportKind::PerLane), ..options.hooks }),
+    );
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
@@ -157,19 +164,15 @@ fn per_lane_sort_stays_exact_when_every_key_ties() {
 #[test]
 fn per_lane_invocations_that_take_many_slices_give_the_cpu_displacements() {
     // Each workgroup takes a chunk of slices, as many a lane as its loop
-    // budget allows at the chunk's classes (aiming at one chunk: a few hold
-    // all 300 slices, one for each tier, and a lane takes up to dozens): every
+    // budget allows at the chunk's classes and the iteration's share (four
+    // chunks for each of the driver's threads): every
     // slice is still transported once, for spread keys, and for keys that all
     // tie in classes of several hundred to about two thousand samples, whose
     // heap sorts take each slice near its worst case. (That a chunk's rounds
     // fit the loop budget at its classes is tests/gpu_slice_order.rs's.)
-    let options = VulkanOptions {
-        deterministic: true,
-        transport: Some(TransportKind::PerLane),
-        lane_rounds: Some(u32::MAX),
-        lane_chunks: Some(1),
-        ..VulkanOptions::default()
-    };
+    let options = VulkanOptions::default()
+        .deterministic(true)
+        .hooks(VulkanHooks { transport: Some(TransportKind::PerLane), ..VulkanHooks::default() });
     compare_with_options(&Mask::white(Tile::new(16, 16, 8, 1, 2).unwrap(), 21), "taa", options);
     let mut tied = Mask::white(Tile::new(16, 16, 8, 3, 2).unwrap(), 3);
     tied.samples.iter_mut().for_each(|v| *v = 0.375);
@@ -192,12 +195,11 @@ fn the_workgroup_transport_sorts_exactly_in_a_gpus_shape() {
     let masks = [Mask::white(tile, 21), tied, Mask::white(Tile::new(16, 16, 8, 1, 3).unwrap(), 21)];
     for shape in [(128, 1), (100, 2)] {
         for mask in &masks {
-            let options = VulkanOptions {
-                deterministic: true,
+            let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
                 transport: Some(TransportKind::Workgroup),
-                transport_shape: Some(shape),
-                ..VulkanOptions::default()
-            };
+                workgroup_shape: Some(shape),
+                ..VulkanHooks::default()
+            });
             compare_with_options(mask, "taa", options);
         }
     }
@@ -227,12 +229,11 @@ fn each_iterations_objective_estimate_is_the_cpu_paths() {
             if refused_here(&ctx, transport) {
                 continue;
             }
-            let options = VulkanOptions {
-                deterministic: true,
+            let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
                 transport: Some(transport),
-                transport_shape: shape,
-                ..VulkanOptions::default()
-            };
+                workgroup_shape: shape,
+                ..VulkanHooks::default()
+            });
             let mut gpu = VulkanRun::new(&ctx, mask.tile, s, Some(&mask), options).unwrap();
             let mut got = Vec::new();
             while got.len() < expected.len() {
@@ -267,13 +268,12 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
         let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
         let largest = Kernel::new(spec, &tile).taps.len() * tile.spp;
         assert!(largest > 1024, "{kernel} {tile:?}: no class for the second pass ({largest})");
-        let options = VulkanOptions {
-            deterministic: true,
+        let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
             transport: Some(TransportKind::Workgroup),
             local_max: Some(1024),
             defer: Some(2048),
-            ..VulkanOptions::default()
-        };
+            ..VulkanHooks::default()
+        });
         let run = VulkanRun::new(&ctx, tile, settings(kernel, 5, 1), None, options).unwrap();
         let said = run.report().transport.unwrap_or_default();
         assert!(said.contains("up to 1024") && said.contains("up to 2048 in a second pass"), "{said}");
@@ -285,53 +285,51 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
         compare_with_options(
             &Mask::white(tile, 21),
             kernel,
-            VulkanOptions { defer_groups: Some(2), ..options },
+            options.hooks(VulkanHooks { defer_groups: Some(2), ..options.hooks }),
         );
     }
     // A first pass of one small subgroup with a small limit, as the lent-GPU
     // script's shape sweep runs it (FSOT_TRANSPORT=32,1 FSOT_LOCAL_MAX=512 on a
     // GPU): most classes then take the second pass.
     for dims in [2, 3] {
-        let options = VulkanOptions {
-            deterministic: true,
+        let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
             transport: Some(TransportKind::Workgroup),
-            transport_shape: Some((8, 1)),
+            workgroup_shape: Some((8, 1)),
             local_max: Some(64),
             defer: Some(1024),
-            ..VulkanOptions::default()
-        };
+            ..VulkanHooks::default()
+        });
         compare_with_options(&Mask::white(Tile::new(16, 16, 8, 1, dims).unwrap(), 21), "taa", options);
     }
     // Class by class, near-ties allowed their neighbour's target, in two and
     // three dimensions.
-    let options = VulkanOptions {
-        deterministic: true,
+    let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
         transport: Some(TransportKind::Workgroup),
         local_max: Some(1024),
         defer: Some(2048),
-        ..VulkanOptions::default()
-    };
+        ..VulkanHooks::default()
+    });
     for dims in [2, 3] {
         classes_past(options, 1024, dims, 4, true);
     }
     // Asked for what the device or the shape cannot give: a clear error.
     let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
     for (local_max, defer) in [(Some(1000), Some(2048)), (Some(1024), Some(1024)), (None, Some(3000))] {
-        let options = VulkanOptions {
+        let options = VulkanOptions::default().hooks(VulkanHooks {
             transport: Some(TransportKind::Workgroup),
             local_max,
             defer,
-            ..VulkanOptions::default()
-        };
+            ..VulkanHooks::default()
+        });
         let err =
             VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, options).err().expect("refused");
         assert!(err.to_string().contains("power of two"), "{err}");
     }
-    let too_large = VulkanOptions {
+    let too_large = VulkanOptions::default().hooks(VulkanHooks {
         transport: Some(TransportKind::Workgroup),
         defer: Some(4096),
-        ..VulkanOptions::default()
-    };
+        ..VulkanHooks::default()
+    });
     if ctx.info().max_shared_memory < TransportShape::shared_bytes(256, 4096) {
         let err =
             VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, too_large).err().expect("refused");
@@ -360,12 +358,11 @@ fn large_classes_in_three_dimensions_give_the_cpu_displacements() {
 fn large_classes_with(transport: TransportKind, dims: usize) {
     // On a GPU the workgroup transport's second pass would take these classes:
     // off, so that they reach the large-class stage everywhere.
-    let options = VulkanOptions {
-        deterministic: true,
+    let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
         transport: Some(transport),
         defer: Some(0),
-        ..VulkanOptions::default()
-    };
+        ..VulkanHooks::default()
+    });
     let limit = if transport == TransportKind::PerLane { TransportShape::lane_limit(dims) } else { 2048 };
     classes_past(options, limit, dims, 4, true);
 }
@@ -379,7 +376,7 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
 /// get exactly its neighbour's target.
 fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, large_stage: bool) {
     let ctx = common::gpu_context();
-    let transport = options.transport.unwrap_or(TransportKind::Workgroup);
+    let transport = options.hooks.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
@@ -451,7 +448,8 @@ fn float_atomics_agree_with_the_cpu_too() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
         // Not deterministic: float atomics wherever the device has them, a CPU
         // implementation included.
-        let options = VulkanOptions { transport: Some(transport), ..VulkanOptions::default() };
+        let options = VulkanOptions::default()
+            .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
         if refused_here(&ctx, transport) {
             continue;
         }
@@ -469,8 +467,9 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
     let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
     let run = |transport| {
-        let options =
-            VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+        let options = VulkanOptions::default()
+            .deterministic(true)
+            .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
         let mut g = VulkanRun::new(&ctx, tile, settings("taa", 40, 3), None, options).unwrap();
         while !g.finished() {
             g.step_batch(u32::MAX).unwrap();
@@ -495,7 +494,9 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 8, 1, 2).unwrap();
     let s = settings("taa", 70, 4);
-    let options = VulkanOptions { deterministic: true, transport: None, ..VulkanOptions::default() };
+    let options = VulkanOptions::default()
+        .deterministic(true)
+        .hooks(VulkanHooks { transport: None, ..VulkanHooks::default() });
     let mut straight = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
     while !straight.finished() {
         straight.step_batch(u32::MAX).unwrap();
@@ -566,8 +567,9 @@ fn a_few_steps_of_momentum_and_of_adam_move_the_samples_as_the_cpu_path_does() {
             if refused_here(&ctx, transport) {
                 continue;
             }
-            let options =
-                VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+            let options = VulkanOptions::default()
+                .deterministic(true)
+                .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
             let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&white), options).unwrap();
             while !gpu.finished() {
                 gpu.step_batch(u32::MAX).unwrap();
@@ -588,8 +590,9 @@ fn forced(
     kernel: &str,
     transport: TransportKind,
 ) -> Result<VulkanRun, String> {
-    let options =
-        VulkanOptions { deterministic: true, transport: Some(transport), ..VulkanOptions::default() };
+    let options = VulkanOptions::default()
+        .deterministic(true)
+        .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
     VulkanRun::new(ctx, tile, settings(kernel, 5, 1), None, options).map_err(|e| e.to_string())
 }
 
@@ -618,12 +621,11 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
                 assert!(run.large_capacity() > 0 || taps <= limit, "d = {dims}: no large-class stage");
             }
             for float_pair_targets in [false, true] {
-                let options = VulkanOptions {
-                    deterministic: true,
+                let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
                     transport: Some(transport),
                     float_pair_targets,
-                    ..VulkanOptions::default()
-                };
+                    ..VulkanHooks::default()
+                });
                 compare_with_options(&Mask::white(tile, 21), "taa", options);
             }
         }
@@ -717,11 +719,10 @@ fn large_classes_with_tied_keys_give_the_cpu_displacements() {
     let mut mask = Mask::white(tile, 3);
     mask.samples.iter_mut().for_each(|v| *v = 0.625);
     // The large-class stage itself, not a GPU's second pass.
-    let options = VulkanOptions {
-        deterministic: true,
+    let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
         transport: Some(TransportKind::Workgroup),
         defer: Some(0),
-        ..VulkanOptions::default()
-    };
+        ..VulkanHooks::default()
+    });
     compare_with_options(&mask, "taa", options);
 }

@@ -14,7 +14,7 @@ use fsot::settings::Settings;
 fn run(ctx: &fsot::vk::Context, tile: Tile, kernel: &str, seed: u64) -> VulkanRun {
     let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
     s.iterations = 60;
-    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let options = VulkanOptions::default().deterministic(true);
     VulkanRun::new(ctx, tile, s, None, options).unwrap()
 }
 
@@ -79,7 +79,7 @@ fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
     let options = RunOptions {
         backend: BackendChoice::Vulkan,
         context: Some(ctx.clone()),
-        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        vulkan: VulkanOptions::default().deterministic(true),
         ..RunOptions::default()
     };
     let straight = tempfile::tempdir().unwrap();

@@ -11,7 +11,7 @@
 mod common;
 
 use fsot::backend::Backend;
-use fsot::gpu::{VulkanOptions, VulkanRun};
+use fsot::gpu::{VulkanHooks, VulkanOptions, VulkanRun};
 use fsot::kernel::KernelSpec;
 use fsot::mask::Mask;
 use fsot::problem::Tile;
@@ -51,12 +51,11 @@ fn the_sort_path_is_timed_on_gpus_only_and_either_path_makes_the_same_mask() {
     settings.iterations = 24;
     let mask = Mask::white(tile, 3);
     let run = |path: SortPath| {
-        let options = VulkanOptions {
-            deterministic: true,
+        let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
             large_sort: Some(path),
             defer: Some(0),
-            ..VulkanOptions::default()
-        };
+            ..VulkanHooks::default()
+        });
         let mut run = VulkanRun::new(&ctx, tile, settings, Some(&mask), options).unwrap();
         assert!(run.large_capacity() > 0, "the tile must reach the large-class stage");
         while !run.finished() {

@@ -9,7 +9,7 @@ mod common;
 
 use fsot::backend::BackendChoice;
 use fsot::gpu::layout::{CostSlot, RuleState, COST_SCALE};
-use fsot::gpu::{rule, VulkanOptions};
+use fsot::gpu::{rule, VulkanHooks, VulkanOptions};
 use fsot::kernel::KernelSpec;
 use fsot::problem::Tile;
 use fsot::run::{CancelFlag, Checkpointing, Outcome, Run, RunOptions};
@@ -33,11 +33,9 @@ fn options(ctx: &Context, host_rule: bool) -> RunOptions {
     RunOptions {
         backend: BackendChoice::Vulkan,
         context: Some(ctx.clone()),
-        vulkan: VulkanOptions {
-            deterministic: true,
-            host_stopping_rule: host_rule,
-            ..VulkanOptions::default()
-        },
+        vulkan: VulkanOptions::default()
+            .deterministic(true)
+            .hooks(VulkanHooks { host_stopping_rule: host_rule, ..VulkanHooks::default() }),
         ..RunOptions::default()
     }
 }

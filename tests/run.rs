@@ -110,7 +110,7 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
     let vulkan = RunOptions {
         backend: BackendChoice::Vulkan,
         context: Some(ctx.clone()),
-        vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
+        vulkan: VulkanOptions::default().deterministic(true),
         ..RunOptions::default()
     };
     let reference = straight(tile, s, vulkan.clone());

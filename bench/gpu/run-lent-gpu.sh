@@ -100,41 +100,16 @@ optimize() {
       [ -x "$v" ] && step "$v" optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile \
         --out "$WORK/gpu-128x128x30-ptaa-${v##*/}.exr"
     done
-    # The classes' sort in the transport: buckets above; here the bitonic network
-    # (what ran before 2026-12-01's bucket sort), to compare; the same masks.
-    FSOT_CLASS_SORT=bitonic optimize gpu-128x128x30-ptaa-bitonic --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
-    # Every class by buckets: without the subgroup path for the classes that fit
-    # one subgroup (41% of this tile's slices have at most 32 members).
-    FSOT_CLASS_SORT=buckets optimize gpu-128x128x30-ptaa-buckets --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
-    # The classes past 2048 (2049 to 2326 here): a second workgroup pass above;
-    # here the large-class stage's global sorts instead (before 2026-12-01), to
-    # compare, with the sort's path chosen at run time (the log says which, and
-    # both paths' times), and then with the block passes kept.
-    FSOT_DEFER=0 optimize gpu-128x128x30-ptaa-nodefer --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
-    FSOT_DEFER=0 FSOT_SORT=blocks optimize gpu-128x128x30-ptaa-blocks --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
     # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile
     optimize gpu-64x64x16-ptaa-d8 --backend vulkan --size 64x64x16 --dims 8 --kernel perceptual-taa --iterations 300 --profile
     # Item 2: a scene plan in one GPU run (1-D + 2-D + invisible, 64x64x32), and the
-    # stopping rule on the GPU against the host's.
+    # stopping rule on the GPU.
     step $B/fsot optimize --scene bench/results/issue13-new-scene.toml --backend vulkan --out "$WORK/scene"
     optimize gpu-128x128x30-ptaa-plateau --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
-    FSOT_HOST_RULE=1 optimize gpu-128x128x30-ptaa-plateau-host --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
     optimize gpu-128x128x30-ptaa-det --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-32x32x16-taa --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile
-    # The transport's launch shape at the paper's tile, 200 iterations each, for
-    # tuning: invocations and slices per workgroup (FSOT_TRANSPORT), and the first
-    # pass's class limit (FSOT_LOCAL_MAX; the classes past it go to the second
-    # pass, 256 invocations): a smaller limit takes less shared memory and fewer
-    # registers, so more workgroups stay resident. Past 512: 7.7% of the slices,
-    # 47% of the members; past 1024: 2.1% and 20% (examples/class_sizes.rs).
-    for shape in default 32,1 32,4 64,2 128,1 256,1 128,1:1024 128,1:512 64,1:1024 64,1:512 32,1:512 32,1:256; do
-      env=()
-      case $shape in default) ;; *:*) env=(FSOT_TRANSPORT=${shape%:*} FSOT_LOCAL_MAX=${shape#*:});; *) env=(FSOT_TRANSPORT=$shape);; esac
-      step env "${env[@]}" $B/fsot optimize --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa \
-        --iterations 200 --profile --out "$WORK/shape-${shape/:/-}.exr"
-    done
   fi
 
   if want swap; then

@@ -27,24 +27,21 @@ layout(constant_id = 1) const uint SLICES_PER_GROUP = 1u;
 layout(constant_id = 2) const bool ONE_SUBGROUP = false;
 // Largest class sorted in shared memory (src/gpu/shape.rs: LOCAL_MAX).
 layout(constant_id = 3) const uint FSOT_LOCAL_MAX = 2048u;
-// Classes sorted by buckets (false: every class by the bitonic network, the
-// fallback, to compare the two; src/gpu/shape.rs: ClassSort).
-layout(constant_id = 4) const bool FSOT_BUCKET_SORT = true;
 // Classes larger than FSOT_LOCAL_MAX and at most FSOT_DEFER_MAX are listed for a
 // second pass (0: none) instead of the large-class stage's global sorts: the
 // same shader made with FSOT_FROM_LIST, a larger FSOT_LOCAL_MAX and more
 // invocations, one workgroup per listed slice (src/gpu/shape.rs: defer_max).
 // The few classes past the first pass's limit then cost neither the global
 // sorts nor the first pass's occupancy (its shared memory).
-layout(constant_id = 5) const uint FSOT_DEFER_MAX = 0u;
-layout(constant_id = 6) const bool FSOT_FROM_LIST = false;
+layout(constant_id = 4) const uint FSOT_DEFER_MAX = 0u;
+layout(constant_id = 5) const bool FSOT_FROM_LIST = false;
 // Workgroups of the second pass at most (65535, the least maxComputeWorkGroupCount
 // a device gives; less in tests): past it, each workgroup takes several listed
 // slices (src/gpu/shape.rs: DEFER_GROUPS).
-layout(constant_id = 7) const uint FSOT_DEFER_GROUPS = 65535u;
-// Classes that fit one subgroup (d <= 2) taken by the first subgroup alone
-// (subgroup_class; false: by buckets as the others, to compare; ClassSort).
-layout(constant_id = 8) const bool FSOT_SUBGROUP_CLASSES = true;
+layout(constant_id = 6) const uint FSOT_DEFER_GROUPS = 65535u;
+// Classes that fit one subgroup taken by the first subgroup alone (true where
+// the targets are in closed form, d <= 2; src/gpu/shape.rs: subgroup_classes).
+layout(constant_id = 7) const bool FSOT_SUBGROUP_CLASSES = true;
 
 void sync() {
     if (ONE_SUBGROUP) {
@@ -135,15 +132,6 @@ void bitonic_sort(uint n, uint tid, uint wg) {
 // barriers where a bitonic network takes log2(n) (log2(n) + 1) / 2. Where keys
 // pile into few buckets (degenerate samples), the bitonic network instead.
 void sort_class(FsotSlice s, FsotTargets z, uint n, uint tid, uint wg) {
-    if (!FSOT_BUCKET_SORT) {
-        for (uint i = tid; i < n; i += wg) {
-            uint p = fsot_class_point(s, i);
-            s_key[i] = fsot_project(s, p);
-            s_val[i] = p;
-        }
-        bitonic_sort(n, tid, wg);
-        return;
-    }
     float low = fsot_targets_low(z);
     float scale = float(n) / max(fsot_targets_width(z), 1e-30);
     uint words = (n + 1u) / 2u;

@@ -4,7 +4,7 @@
 use super::buffers::RunBuffers;
 use super::layout::{binding, TransportPush, UpdatePush};
 use super::shaders;
-use super::shape::{ClassSort, TransportShape, LARGE_WORKGROUP};
+use super::shape::{TransportShape, LARGE_WORKGROUP};
 use crate::error::Result;
 use crate::vk::{Buffer, ComputeDesc, ComputePipeline, Context, RadixSort, TexelView};
 
@@ -139,19 +139,17 @@ impl RunPipelines {
             shape.slices_per_group,
             shape.one_subgroup as u32,
             shape.local_max,
-            (shape.class_sort != ClassSort::Bitonic) as u32,
             shape.defer_max,
             0,
             shape.defer_groups,
-            (shape.class_sort == ClassSort::Subgroup) as u32,
+            shape.subgroup_classes as u32,
         ];
         let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
         let deferred = match shape.defer_max {
             0 => None,
             max => {
                 // (No class of the second pass fits a subgroup.)
-                let buckets = (shape.class_sort != ClassSort::Bitonic) as u32;
-                let spec = [shape.defer_workgroup, 1, 0, max, buckets, 0, 1, shape.defer_groups, 0];
+                let spec = [shape.defer_workgroup, 1, 0, max, 0, 1, shape.defer_groups, 0];
                 Some(bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?)
             }
         };

@@ -21,8 +21,8 @@ use super::layout::{
 };
 use super::pipelines::{RunPipelines, Targets, GATHER_BY_PROJECTION, GATHER_BY_SEGMENT};
 use super::shape::{
-    two_d, ClassSort, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP,
-    LANE_CHUNKS_PER_THREAD, LANE_MAX, LOCAL_MAX, LOOP_BUDGET,
+    two_d, TransportKind, TransportShape, DEFER_GROUPS, DEFER_LIMIT, DEFER_WORKGROUP, LANE_CHUNKS_PER_THREAD,
+    LANE_MAX, LOCAL_MAX, LOOP_BUDGET,
 };
 use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::backend::{Backend, BackendKind, Profile, Report};
@@ -106,7 +106,8 @@ impl VulkanRun {
         options: VulkanOptions,
     ) -> Result<Self> {
         let info = ctx.info().clone();
-        let targets = match (tile.dims > CLOSED_FORM_DIMS, info.float64 && !options.float_pair_targets) {
+        let targets = match (tile.dims > CLOSED_FORM_DIMS, info.float64 && !options.hooks.float_pair_targets)
+        {
             (false, _) => Targets::ClosedForm,
             (true, true) => Targets::F64,
             (true, false) => Targets::FloatPairs,
@@ -127,8 +128,7 @@ impl VulkanRun {
         let mut shape = transport_shape(ctx, max_class, tile.dims, texels, &options)?;
         // The driver's threads, for a CPU implementation: as many as the host's.
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
-        let chunks = options.lane_chunks.unwrap_or(LANE_CHUNKS_PER_THREAD * threads);
-        shape.set_lane_plan(options.lane_rounds.unwrap_or(u32::MAX), chunks);
+        shape.set_lane_chunks(LANE_CHUNKS_PER_THREAD * threads);
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
@@ -138,6 +138,7 @@ impl VulkanRun {
         // one binding holds them, fewer otherwise (at least one).
         let order_slots = match shape.per_lane {
             true => options
+                .hooks
                 .slice_order_slots
                 .map(|s| s.clamp(1, ORDER_BATCH))
                 .unwrap_or_else(|| slice_order_slots(slices, info.max_storage_buffer_range)),
@@ -165,7 +166,7 @@ impl VulkanRun {
         let mut sort = buffers.large_sort(ctx, &large)?;
         let sort_choice = match sort.as_mut() {
             Some(sort) => {
-                let choice = large_sort_path(ctx, &large, options.large_sort)?;
+                let choice = large_sort_path(ctx, &large, options.hooks.large_sort)?;
                 sort.path = choice.path;
                 Some(choice)
             }
@@ -619,7 +620,7 @@ fn transport_shape(
     options: &VulkanOptions,
 ) -> Result<TransportShape> {
     let info = ctx.info();
-    match options.transport {
+    match options.hooks.transport {
         Some(TransportKind::PerLane) if max_class > LOOP_BUDGET / 2 => {
             return Err(Error::invalid("the per-lane transport cannot take classes this large"))
         }
@@ -646,18 +647,19 @@ fn transport_shape(
         }
         _ => {}
     }
-    let mut shape =
-        TransportShape::choose(info, max_class, dims, texels, options.transport, options.transport_shape);
-    // The subgroup path takes closed-form targets (d <= 2).
-    shape.class_sort = match options.class_sort {
-        ClassSort::Subgroup if dims > CLOSED_FORM_DIMS => ClassSort::Buckets,
-        sort => sort,
-    };
-    if let (Some(limit), true) = (options.unchecked_lane_limit, shape.per_lane) {
+    let mut shape = TransportShape::choose(
+        info,
+        max_class,
+        dims,
+        texels,
+        options.hooks.transport,
+        options.hooks.workgroup_shape,
+    );
+    if let (Some(limit), true) = (options.hooks.unchecked_lane_limit, shape.per_lane) {
         shape.local_max = limit.clamp(2, LANE_MAX);
         return Ok(shape);
     }
-    if let (Some(limit), false) = (options.local_max, shape.per_lane) {
+    if let (Some(limit), false) = (options.hooks.local_max, shape.per_lane) {
         if !TransportShape::local_max_allowed(limit) {
             return Err(Error::invalid(format!(
                 "the workgroup transport's class limit must be a power of two from 64 to {LOCAL_MAX}, not {limit}"
@@ -665,7 +667,7 @@ fn transport_shape(
         }
         shape.local_max = limit;
     }
-    match options.defer {
+    match options.hooks.defer {
         None => shape.defer_auto(info, max_class),
         Some(0) => {}
         Some(max) if shape.per_lane || !max.is_power_of_two() || max <= shape.local_max || max > DEFER_LIMIT => {
@@ -681,7 +683,7 @@ fn transport_shape(
             shape.defer_workgroup = DEFER_WORKGROUP.min(info.max_workgroup_invocations);
         }
     }
-    if let Some(groups) = options.defer_groups {
+    if let Some(groups) = options.hooks.defer_groups {
         if !(1..=DEFER_GROUPS).contains(&groups) {
             return Err(Error::invalid(format!(
                 "the second pass's workgroups must be from 1 to {DEFER_GROUPS}, not {groups}"
@@ -801,7 +803,7 @@ impl Backend for VulkanRun {
     /// window's end. False (nothing changed) on a device without shaderFloat64,
     /// or with `VulkanOptions::host_stopping_rule`.
     fn adopt_plateau(&mut self, rule: &Plateau, state: &PlateauState, target: Option<f64>) -> Result<bool> {
-        if self.pipelines.plateau.is_none() || self.options.host_stopping_rule {
+        if self.pipelines.plateau.is_none() || self.options.hooks.host_stopping_rule {
             return Ok(false);
         }
         let device = RuleState::new(rule, state, target);
@@ -835,7 +837,9 @@ impl Backend for VulkanRun {
             validation_messages: self.ctx.validation_messages(),
             // Said where it was timed or set (on CPU implementations, untimed
             // block passes, as always).
-            large_sort: self.sort_choice.filter(|c| c.times.is_some() || self.options.large_sort.is_some()),
+            large_sort: self
+                .sort_choice
+                .filter(|c| c.times.is_some() || self.options.hooks.large_sort.is_some()),
             transport: Some(self.shape.describe()),
         }
     }

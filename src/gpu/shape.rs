@@ -69,22 +69,6 @@ const COLD_EVALS: u32 = 24;
 /// targets came out as garbage).
 const NEWTON_MAX: u32 = 60;
 
-/// How the workgroup transport sorts a class (`VulkanOptions::class_sort`; the
-/// command line reads `FSOT_CLASS_SORT`). The same total order, so the same
-/// masks, whichever.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ClassSort {
-    /// By buckets, and a class that fits one subgroup (d <= 2) by the first
-    /// subgroup alone, each member ranked by counting (no workgroup barrier).
-    #[default]
-    Subgroup,
-    /// By buckets, every class (to compare).
-    Buckets,
-    /// By the bitonic network, every class: the bucket sort's fallback (to
-    /// compare).
-    Bitonic,
-}
-
 /// The two transport passes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TransportKind {
@@ -112,10 +96,11 @@ pub struct TransportShape {
     /// sort. Per lane: LANE_MAX, less for d >= 3, more where every class fits
     /// the budget (`lane_limit_for`).
     pub local_max: u32,
-    /// How the workgroup transport sorts a class (`VulkanOptions::class_sort`,
-    /// Buckets where the subgroup path does not apply: d >= 3); the per-lane
-    /// transport ignores it.
-    pub class_sort: ClassSort,
+    /// The workgroup transport sorts a class that fits one subgroup by the
+    /// first subgroup alone, each member ranked by counting (no workgroup
+    /// barrier); the others by buckets. Only where the targets are in closed
+    /// form (d <= 2); the per-lane transport ignores it.
+    pub subgroup_classes: bool,
     /// Classes past `local_max` and at most this are sorted by a second pass of
     /// the workgroup transport (`FSOT_DEFER_MAX`: one workgroup of
     /// `defer_workgroup` invocations per listed slice) instead of the
@@ -126,9 +111,6 @@ pub struct TransportShape {
     pub defer_workgroup: u32,
     /// Workgroups of that second pass at most (DEFER_GROUPS; less in tests).
     pub defer_groups: u32,
-    /// Per lane: the rounds of a chunk at most, each a slice a lane
-    /// (`set_lane_plan`; `lane_table`: u32::MAX unless capped to compare).
-    pub lane_rounds: u32,
     /// Per lane: the chunks of slices aimed at an iteration (`lane_table`).
     pub lane_chunks: u32,
 }
@@ -194,11 +176,10 @@ impl TransportShape {
             one_subgroup,
             per_lane,
             local_max,
-            class_sort: ClassSort::Subgroup,
+            subgroup_classes: dims <= crate::gpu::CLOSED_FORM_DIMS,
             defer_max: 0,
             defer_workgroup: 0,
             defer_groups: DEFER_GROUPS,
-            lane_rounds: u32::MAX,
             lane_chunks: 1,
         };
         let local = max_class.min(LOCAL_MAX);
@@ -297,21 +278,15 @@ impl TransportShape {
     /// The pass, its shape and how it sorts a class, in words.
     pub fn describe(&self) -> String {
         if self.per_lane {
-            let cap = match self.lane_rounds {
-                u32::MAX => String::new(),
-                1 => ", one slice an invocation".into(),
-                r => format!(", up to {r} slices an invocation"),
-            };
             return format!(
                 "per lane ({} invocations a workgroup, taking chunks of slices as the loop budget allows, \
-                 largest classes first{cap}), classes up to {} by a bucket sort",
+                 largest classes first), classes up to {} by a bucket sort",
                 self.workgroup, self.local_max
             );
         }
-        let sort = match self.class_sort {
-            ClassSort::Subgroup => "buckets, those that fit a subgroup by the subgroup alone",
-            ClassSort::Buckets => "buckets",
-            ClassSort::Bitonic => "the bitonic network (set)",
+        let sort = match self.subgroup_classes {
+            true => "buckets, those that fit a subgroup by the subgroup alone",
+            false => "buckets",
         };
         let deferred = match self.defer_max {
             0 => String::new(),
@@ -453,13 +428,9 @@ impl TransportShape {
         lo
     }
 
-    /// Per lane, what the chunk plan is asked for (`lane_table`): the cap on
-    /// the rounds of a chunk (`most`, from `VulkanOptions::lane_rounds`) and
-    /// the chunks aimed at (`VulkanOptions::lane_chunks`, or
-    /// LANE_CHUNKS_PER_THREAD for each of the driver's threads); each at least
-    /// one.
-    pub fn set_lane_plan(&mut self, most: u32, chunks: u32) {
-        self.lane_rounds = most.max(1);
+    /// Per lane, the chunks the plan aims at (`lane_table`):
+    /// LANE_CHUNKS_PER_THREAD for each of the driver's threads, at least one.
+    pub fn set_lane_chunks(&mut self, chunks: u32) {
         self.lane_chunks = chunks.max(1);
     }
 
@@ -479,7 +450,7 @@ impl TransportShape {
     /// (the workgroup, one subgroup), the chunks aimed at (`lane_chunks`),
     /// each bin's tier, and each tier's cost
     /// (`lane_cost` of its largest class) and most rounds (as many as
-    /// LANE_BUDGET holds at that cost, at most `lane_rounds`, at least one).
+    /// LANE_BUDGET holds at that cost, at least one).
     /// A tier is a run of bins, in rank order, whose largest classes cost
     /// more than half its first's: a chunk of a tier, whatever its classes,
     /// stays within the loop cap, and spends at least half of what it budgets.
@@ -501,7 +472,7 @@ impl TransportShape {
                 let c = self.lane_cost(t.saturating_mul(spp), dims);
                 if used == 0 || (c <= cost[used - 1] / 2 && used < tiers) {
                     cost[used] = c;
-                    most[used] = (LANE_BUDGET / c).clamp(1, self.lane_rounds);
+                    most[used] = (LANE_BUDGET / c).max(1);
                     used += 1;
                 }
             }
@@ -568,7 +539,7 @@ mod tests {
         // twice), and a tier of classes of at most a few taps takes hundreds.
         let mut shape = TransportShape::choose(&lavapipe, 1360, 2, 1 << 15, None, None);
         assert!(shape.per_lane);
-        shape.set_lane_plan(u32::MAX, LANE_CHUNKS_PER_THREAD * 2);
+        shape.set_lane_chunks(LANE_CHUNKS_PER_THREAD * 2);
         let table = shape.lane_table(1360, 1, 2);
         assert_eq!(table.len(), LANE_TABLE_WORDS as usize);
         let (lanes, aim, tier_of, tiers) = table_parts(&table);
@@ -578,11 +549,7 @@ mod tests {
         assert_eq!(table[crate::gpu::layout::lane_table_cost_word(1) as usize], tiers[1].0);
         let last = tier_of[ORDER_BINS as usize - 1] as usize;
         assert!(tiers[last].1 > 300, "{:?}", tiers[last]);
-        // Capped, to compare: one slice a lane, whatever the tier.
-        shape.set_lane_plan(1, LANE_CHUNKS_PER_THREAD * 2);
-        let (_, _, _, capped) = table_parts(&shape.lane_table(1360, 1, 2));
-        assert!(capped.iter().all(|&(_, most)| most == 1));
-        // Whatever the kernel, dimension, spp, cap and threads: tiers follow
+        // Whatever the kernel, dimension, spp and threads: tiers follow
         // the bins in rank order; a tier's cost is that of its first bin's
         // largest class, at least every class's of its bins, more than twice
         // the next tier's; and its rounds fit the loop budget at that cost (or
@@ -592,11 +559,11 @@ mod tests {
                 for spp in [1u32, 3] {
                     let max_class = taps * spp;
                     let mut shape = TransportShape::choose(&lavapipe, max_class, dims, 1 << 15, None, None);
-                    for (most, threads) in [(1, 2), (3, 1), (u32::MAX, 2), (u32::MAX, 64)] {
-                        shape.set_lane_plan(most, LANE_CHUNKS_PER_THREAD * threads);
+                    for threads in [1, 2, 64] {
+                        shape.set_lane_chunks(LANE_CHUNKS_PER_THREAD * threads);
                         let table = shape.lane_table(taps, spp, dims);
                         let (lanes, aim, tier_of, tiers) = table_parts(&table);
-                        let what = format!("d = {dims}, {taps} taps x {spp}, cap {most}, {threads} threads");
+                        let what = format!("d = {dims}, {taps} taps x {spp}, {threads} threads");
                         assert_eq!(
                             (lanes, aim),
                             (shape.workgroup, LANE_CHUNKS_PER_THREAD * threads),
@@ -615,7 +582,7 @@ mod tests {
                         let used = *tier_of.last().unwrap() as usize + 1;
                         assert_eq!(tiers[0].0, shape.lane_cost(max_class, dims), "{what}");
                         for (t, &(cost, rounds)) in tiers[..used].iter().enumerate() {
-                            assert!(rounds >= 1 && rounds <= most, "{what}: tier {t}");
+                            assert!(rounds >= 1, "{what}: tier {t}");
                             assert!(
                                 rounds == 1 || rounds * cost <= LANE_BUDGET,
                                 "{what}: tier {t}: {rounds} x {cost}"

@@ -381,7 +381,7 @@ fn larger_than_a_binding(ctx: &Context, taa: KernelSpec) -> Result<Option<Check>
     let values = range / 8 + 1;
     let width = 4096u64;
     let tile = Tile::new(width as usize, values.div_ceil(width) as usize, 1, 1, 1)?;
-    let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+    let options = VulkanOptions::default().deterministic(true);
     let result = start(tile, settings(taa, 1, 1), None, Some(ctx), options);
     let message = result.err().map(|e| e.to_string()).unwrap_or_default();
     Ok(Some(Check {
@@ -418,7 +418,7 @@ fn determinism(ctx: Option<&Context>, taa: KernelSpec) -> Result<Vec<Check>> {
     )];
     if let Some(ctx) = ctx {
         let start_time = Instant::now();
-        let options = VulkanOptions { deterministic: true, ..VulkanOptions::default() };
+        let options = VulkanOptions::default().deterministic(true);
         let mut runs = Vec::new();
         for _ in 0..3 {
             let samples = samples_at(&mut start(tile, s, None, Some(ctx), options)?, s.iterations)?;

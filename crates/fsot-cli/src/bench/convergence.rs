@@ -160,7 +160,7 @@ pub fn convergence(
     let mut settings = Settings::new(spec, seed);
     settings.iterations = last;
     // Profiled: timestamps around every pass give the GPU's own time.
-    let vulkan = VulkanOptions { profile: true, ..VulkanOptions::default() };
+    let vulkan = VulkanOptions::default().profile(true);
     let options = RunOptions { backend: choice, vulkan, ..base.clone() };
     // An untimed warm-up of the same problem first, so that one-time costs are
     // not counted as the optimisation's: llvmpipe compiles each shader at its

@@ -154,23 +154,7 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         }
     };
     let backend = args.backend.choice();
-    let vulkan = VulkanOptions {
-        deterministic: args.deterministic,
-        profile: args.profile,
-        transport: None,
-        transport_shape: env::transport_shape(),
-        float_pair_targets: env::float_pair_targets(),
-        host_stopping_rule: env::host_stopping_rule(),
-        unchecked_lane_limit: None,
-        slice_order_slots: None,
-        large_sort: env::large_sort()?,
-        class_sort: env::class_sort()?,
-        defer: env::defer()?,
-        local_max: env::local_max()?,
-        defer_groups: None,
-        lane_rounds: env::lane_rounds()?,
-        lane_chunks: env::lane_chunks()?,
-    };
+    let vulkan = VulkanOptions::default().deterministic(args.deterministic).profile(args.profile);
     Ok(RunOptions {
         backend,
         device: env::device(args.device.clone()),

@@ -100,7 +100,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         backend: args.backend.choice(),
         device: env::device(args.device.clone()),
         validation: env::validation(),
-        vulkan: VulkanOptions { deterministic: args.deterministic, ..VulkanOptions::default() },
+        vulkan: VulkanOptions::default().deterministic(args.deterministic),
         ..RunOptions::default()
     };
     let cost = CostModel::calibrate(&options)?;
