@@ -136,7 +136,7 @@ fn mask_image(ctx: &Context, tile: &Tile, masks: usize, name: &str) -> Result<Im
         layers: layers_for(tile, masks),
         usage,
     };
-    Image::new(ctx, desc, name)
+    Ok(Image::new(ctx, desc, name)?)
 }
 
 /// A plan written into a new image of the renderer's, with its block.
@@ -307,7 +307,7 @@ fn run(args: &Args) -> Result<()> {
     let after_taa: Vec<Vec<Vec<f64>>> = resolved
         .iter()
         .map(|b| b.download::<f32>(pixels * frames).map(|v| frames_of(&v, pixels)))
-        .collect::<Result<_>>()?;
+        .collect::<fsot::vk::Result<_>>()?;
     let render_seconds = render_start.elapsed().as_secs_f64();
     if let Some(first) = ctx.validation_messages().first() {
         return Err(Error::invalid(format!("the Vulkan validation layer reported: {first}")));

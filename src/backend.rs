@@ -6,8 +6,6 @@ use crate::error::Result;
 use crate::mask::Mask;
 use crate::settings::RunState;
 use crate::step_rule::{Plateau, PlateauState};
-#[cfg(feature = "vulkan")]
-use crate::vk::PathChoice;
 
 /// Where a run may go.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -69,10 +67,9 @@ pub struct Report {
     pub skipped_large_classes: u64,
     /// What the Vulkan validation layer reported (empty with the layer off).
     pub validation_messages: Vec<String>,
-    /// The large-class stage's sort path and how it was chosen (Vulkan, where
-    /// the run has that stage and the path was timed or set).
-    #[cfg(feature = "vulkan")]
-    pub large_sort: Option<PathChoice>,
+    /// The large-class stage's sort path and how it was chosen, in words
+    /// (Vulkan, where the run has that stage and the path was timed or set).
+    pub large_sort: Option<String>,
     /// The transport pass, its shape and its class sort, in words (Vulkan).
     pub transport: Option<String>,
 }

@@ -19,16 +19,13 @@ pub enum Error {
         #[source]
         source: std::io::Error,
     },
-    /// A Vulkan call failed; `call` names it.
-    #[error("Vulkan: {call} failed: {result}{}", vulkan_hint(*.result))]
+    /// A Vulkan call or a GPU allocation failed.
+    #[error(transparent)]
     #[cfg(feature = "vulkan")]
-    Vulkan { call: &'static str, result: ash::vk::Result },
+    Vulkan(crate::vk::Error),
     /// No usable Vulkan (no loader, no device, missing feature).
     #[error("Vulkan unavailable: {0}")]
     VulkanUnavailable(String),
-    #[error("GPU memory: {0} (a smaller tile may fit)")]
-    #[cfg(feature = "vulkan")]
-    Allocation(#[from] gpu_allocator::AllocationError),
     /// A checkpoint is in the way of a run that does not resume it.
     #[error("checkpoint {} exists: continue it, or remove it to start over", .0.display())]
     CheckpointExists(PathBuf),
@@ -36,17 +33,14 @@ pub enum Error {
     Interrupted,
 }
 
-/// What a Vulkan result means for the user.
 #[cfg(feature = "vulkan")]
-fn vulkan_hint(result: ash::vk::Result) -> &'static str {
-    use ash::vk::Result as R;
-    match result {
-        R::ERROR_DEVICE_LOST => {
-            " (the GPU was lost: a driver reset, a hang or a removed device; nothing was written)"
+impl From<crate::vk::Error> for Error {
+    fn from(e: crate::vk::Error) -> Self {
+        match e {
+            crate::vk::Error::Invalid(msg) => Error::Invalid(msg),
+            crate::vk::Error::VulkanUnavailable(msg) => Error::VulkanUnavailable(msg),
+            e => Error::Vulkan(e),
         }
-        R::ERROR_OUT_OF_DEVICE_MEMORY => " (out of GPU memory: a smaller tile may fit)",
-        R::ERROR_OUT_OF_HOST_MEMORY => " (out of host memory)",
-        _ => "",
     }
 }
 
@@ -54,7 +48,7 @@ impl Error {
     /// The GPU failed in a way the CPU path does not share: worth a fall-back.
     pub fn is_device_failure(&self) -> bool {
         #[cfg(feature = "vulkan")]
-        if matches!(self, Error::Vulkan { .. } | Error::Allocation(_)) {
+        if matches!(self, Error::Vulkan(_)) {
             return true;
         }
         matches!(self, Error::VulkanUnavailable(_))
@@ -75,8 +69,7 @@ impl Error {
     /// Out of GPU memory (an allocation, or a Vulkan call that said so).
     pub fn is_out_of_device_memory(&self) -> bool {
         #[cfg(feature = "vulkan")]
-        return matches!(self, Error::Allocation(_))
-            || matches!(self, Error::Vulkan { result, .. } if *result == ash::vk::Result::ERROR_OUT_OF_DEVICE_MEMORY);
+        return matches!(self, Error::Vulkan(e) if e.is_out_of_device_memory());
         #[cfg(not(feature = "vulkan"))]
         false
     }

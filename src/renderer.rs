@@ -96,7 +96,7 @@ fn check_image(ctx: &Context, image: &ImageTarget, tile: &Tile, masks: usize, di
 pub fn write_plan(ctx: &Context, plan: &SamplerPlan, image: &ImageTarget) -> Result<()> {
     let tile = plan.masks.first().ok_or_else(|| Error::invalid("the plan has no masks"))?.tile;
     let format = check_image(ctx, image, &tile, plan.masks.len(), plan.max_dims())?;
-    fill(ctx, image, &plan.texels(format)?, format.texel_bytes() as u32)
+    Ok(fill(ctx, image, &plan.texels(format)?, format.texel_bytes() as u32)?)
 }
 
 /// Writes one mask into the renderer's image (a one-part plan: its block is
@@ -108,13 +108,13 @@ pub fn write_mask(ctx: &Context, mask: &Mask, image: &ImageTarget) -> Result<()>
 /// Writes the include's plan block (`FsotPlan`, std140, `FSOT_MAX_PARTS` = 16)
 /// into the renderer's buffer at `target.offset`.
 pub fn write_plan_block(ctx: &Context, plan: &SamplerPlan, target: &BufferTarget) -> Result<()> {
-    fill_buffer(ctx, target, &plan.plan_block()?)
+    Ok(fill_buffer(ctx, target, &plan.plan_block()?)?)
 }
 
 /// Writes a mask's texels in `format` (laid out as in the image: layer by
 /// layer, row by row) into the renderer's buffer at `target.offset`.
 pub fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: &BufferTarget) -> Result<()> {
-    fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?)
+    Ok(fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?)?)
 }
 
 /// Makes a mask on the context's device (the Vulkan optimizer in its

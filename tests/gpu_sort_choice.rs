@@ -62,7 +62,7 @@ fn the_sort_path_is_timed_on_gpus_only_and_either_path_makes_the_same_mask() {
             run.step_up_to(8).unwrap();
         }
         assert_eq!(run.overflowed(), 0);
-        assert_eq!(run.report().large_sort, Some(PathChoice::forced(path)));
+        assert_eq!(run.sort_choice(), Some(PathChoice::forced(path)));
         run.state().unwrap().samples
     };
     let blocks = run(SortPath::Auto);

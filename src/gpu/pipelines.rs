@@ -65,7 +65,7 @@ fn pipeline(
         uniforms: &[],
         texels: &binding::TEXELS,
     };
-    ComputePipeline::new(ctx, &desc)
+    Ok(ComputePipeline::new(ctx, &desc)?)
 }
 
 impl RunPipelines {

@@ -61,7 +61,7 @@ pub fn pipeline(ctx: &Context) -> Result<Option<ComputePipeline>> {
         uniforms: &[],
         texels: &binding::TEXELS,
     };
-    ComputePipeline::new(ctx, &desc).map(Some)
+    Ok(Some(ComputePipeline::new(ctx, &desc)?))
 }
 
 /// Diagnostics: the rule's pass run alone from `start`, once per cost slot of

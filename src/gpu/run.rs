@@ -204,6 +204,12 @@ impl VulkanRun {
         &self.shape
     }
 
+    /// The large-class stage's sort path and how it was chosen; None without
+    /// that stage.
+    pub fn sort_choice(&self) -> Option<PathChoice> {
+        self.sort_choice
+    }
+
     pub fn finished(&self) -> bool {
         self.iteration >= self.settings.iterations
     }
@@ -607,7 +613,9 @@ impl VulkanRun {
 fn large_sort_path(ctx: &Context, large: &LargePlan, set: Option<SortPath>) -> Result<PathChoice> {
     match set {
         Some(path) => Ok(PathChoice::forced(path)),
-        None => choose_sort_path(ctx, (large.expected.round() as u32).clamp(1, large.capacity.max(1)), 32),
+        None => {
+            Ok(choose_sort_path(ctx, (large.expected.round() as u32).clamp(1, large.capacity.max(1)), 32)?)
+        }
     }
 }
 
@@ -839,7 +847,8 @@ impl Backend for VulkanRun {
             // block passes, as always).
             large_sort: self
                 .sort_choice
-                .filter(|c| c.times.is_some() || self.options.hooks.large_sort.is_some()),
+                .filter(|c| c.times.is_some() || self.options.hooks.large_sort.is_some())
+                .map(|c| c.describe()),
             transport: Some(self.shape.describe()),
         }
     }

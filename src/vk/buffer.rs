@@ -9,8 +9,8 @@ use gpu_allocator::MemoryLocation;
 
 use super::commands::{barrier, copy};
 use super::context::Context;
+use super::error::{Error, Result};
 use super::{check, fault};
-use crate::error::{Error, Result};
 
 /// Where a buffer's memory lives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -7,7 +7,7 @@ use ash::vk;
 use super::buffer::Buffer;
 use super::check;
 use super::context::Context;
-use crate::error::{Error, Result};
+use super::error::{Error, Result};
 
 /// The context's pool, its one primary command buffer and the fence it waits on.
 pub(crate) struct Commands {

@@ -17,8 +17,8 @@ use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::commands::Commands;
 use super::device::{self, DeviceInfo};
+use super::error::{Error, Result};
 use super::instance::{Instance, MessageSink};
-use crate::error::{Error, Result};
 
 /// How to make a context.
 #[derive(Clone, Debug, Default)]

@@ -3,7 +3,7 @@
 use ash::vk;
 
 use super::check;
-use crate::error::{Error, Result};
+use super::error::{Error, Result};
 
 /// What a compute user needs to know about the chosen device.
 #[derive(Clone, Debug)]

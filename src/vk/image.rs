@@ -27,7 +27,7 @@ use super::buffer::{Buffer, Location};
 use super::check;
 use super::commands::barrier;
 use super::context::Context;
-use crate::error::{Error, Result};
+use super::error::{Error, Result};
 
 /// A 2-D array image as its creator made it: what a fill or read-back needs
 /// to know and checks. Vulkan cannot be asked how an image was created, so the

@@ -6,7 +6,7 @@ use std::sync::Mutex;
 use ash::vk;
 
 use super::check;
-use crate::error::{Error, Result};
+use super::error::{Error, Result};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 

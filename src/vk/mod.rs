@@ -20,7 +20,8 @@
 //! - `sort_choice`: its path chosen at run time, timed on the device.
 //!
 //! Every handle is destroyed in `Drop` and holds the context alive. Errors are
-//! the crate's one `Error`; `FSOT_FAULT` injects failures for tests (`fault`).
+//! this layer's own `vk::Error` (fsot's `Error` converts from it); `FSOT_FAULT`
+//! injects failures for tests (`fault`). Nothing here imports the rest of fsot.
 
 #[doc(hidden)]
 pub mod buffer;
@@ -30,6 +31,7 @@ pub mod commands;
 pub mod context;
 #[doc(hidden)]
 pub mod device;
+mod error;
 pub(crate) mod fault;
 #[doc(hidden)]
 pub mod image;
@@ -49,6 +51,7 @@ pub mod timer;
 pub use buffer::{Buffer, BufferTarget, Location};
 pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
+pub use error::{Error, Result};
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 #[doc(hidden)]
 pub use pipeline::{ComputeDesc, ComputePipeline};
@@ -69,9 +72,7 @@ pub mod shaders {
 
 use ash::vk;
 
-use crate::error::Error;
-
 /// Maps a failed Vulkan call to the crate's error, naming the call.
-pub(crate) fn check<T>(call: &'static str, result: Result<T, vk::Result>) -> Result<T, Error> {
+pub(crate) fn check<T>(call: &'static str, result: std::result::Result<T, vk::Result>) -> Result<T> {
     result.map_err(|result| Error::Vulkan { call, result })
 }

@@ -9,8 +9,8 @@ use ash::vk;
 use super::buffer::Buffer;
 use super::check;
 use super::context::Context;
+use super::error::{Error, Result};
 use super::texel_view::TexelView;
-use crate::error::{Error, Result};
 
 /// What a compute pipeline is made from.
 #[derive(Clone, Copy, Debug)]

@@ -27,11 +27,11 @@ use bytemuck::{Pod, Zeroable};
 use super::buffer::{Buffer, Location};
 use super::commands::{barrier, copy, zero};
 use super::context::Context;
+use super::error::{Error, Result};
 use super::pipeline::{ComputeDesc, ComputePipeline};
 use super::shaders;
 use super::texel_view::TexelView;
 use super::timer::Timer;
-use crate::error::{Error, Result};
 
 /// Binding indices of `glsl/sort/bindings.glsl`.
 pub mod binding {

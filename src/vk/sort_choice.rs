@@ -10,10 +10,9 @@
 use super::buffer::{Buffer, Location};
 use super::commands::{barrier, copy};
 use super::context::Context;
+use super::error::Result;
 use super::sort::{RadixSort, SortCount, SortPath};
 use super::timer::Timer;
-use crate::error::Result;
-use crate::rng::mix32;
 
 /// Timed sorts per path, alternating, after one untimed sort of each; the
 /// fastest of each path counts.
@@ -98,7 +97,7 @@ pub fn time_sort_paths(ctx: &Context, n: u32, bits: u32) -> Result<PathTimes> {
     let mut sort = RadixSort::new(ctx, n, SortCount::Host)?;
     sort.set_count(n)?;
     // Hashed indices: keys spread over every digit, the same on every run.
-    let keys: Vec<u32> = (0..n).map(mix32).collect();
+    let keys: Vec<u32> = (0..n).map(spread).collect();
     let vals: Vec<u32> = (0..n).collect();
     let pristine_keys = Buffer::with_data(ctx, &keys, Location::Device, "sort-choice-keys")?;
     let pristine_vals = Buffer::with_data(ctx, &vals, Location::Device, "sort-choice-vals")?;
@@ -124,4 +123,11 @@ pub fn time_sort_paths(ctx: &Context, n: u32, bits: u32) -> Result<PathTimes> {
         }
     }
     Ok(PathTimes { n, bits, blocks_ms: best[0], look_back_ms: best[1] })
+}
+
+/// Keys spread over all 32 bits, as a hash of the index spreads them (an odd
+/// multiply, a xor-shift, another odd multiply).
+fn spread(i: u32) -> u32 {
+    let x = i.wrapping_mul(0x9e37_79b9);
+    (x ^ (x >> 15)).wrapping_mul(0x2c1b_3c6d)
 }

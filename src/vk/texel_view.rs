@@ -9,7 +9,7 @@ use ash::vk;
 use super::buffer::Buffer;
 use super::check;
 use super::context::Context;
-use crate::error::{Error, Result};
+use super::error::{Error, Result};
 
 pub struct TexelView {
     ctx: Context,

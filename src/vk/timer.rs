@@ -4,7 +4,7 @@ use ash::vk;
 
 use super::check;
 use super::context::Context;
-use crate::error::Result;
+use super::error::Result;
 
 pub struct Timer {
     ctx: Context,

@@ -18,7 +18,7 @@ pub(crate) fn validation() -> bool {
 
 /// A Vulkan context on the device the flag or the environment names.
 pub(crate) fn context(flag: Option<String>) -> Result<Context> {
-    Context::new(&ContextOptions { validation: validation(), device: device(flag) })
+    Ok(Context::new(&ContextOptions { validation: validation(), device: device(flag) })?)
 }
 
 /// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set. Once per process.

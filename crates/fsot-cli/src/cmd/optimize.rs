@@ -215,7 +215,7 @@ fn backend_report(report: &Report) -> Result<()> {
         println!("  transport: {transport}");
     }
     if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
-        println!("  large-class sort: {}", choice.describe());
+        println!("  large-class sort: {choice}");
     }
     let messages = &report.validation_messages;
     if !messages.is_empty() {
