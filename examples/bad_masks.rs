@@ -2,9 +2,9 @@
 //! `cargo run --release --example bad_masks -- DIR` makes DIR/nan.exr (a NaN
 //! sample) and DIR/outside.exr (a sample of 1.5).
 
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::exr;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::path::PathBuf::from(std::env::args().nth(1).ok_or("usage: bad_masks DIR")?);

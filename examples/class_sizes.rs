@@ -8,10 +8,10 @@
 //! (defaults: 128x128x30 perceptual-taa 256 512 1024 2048)
 use std::process::ExitCode;
 
-use fsot::kernel::{Kernel, KernelSpec};
-use fsot::problem::Tile;
-use fsot::settings::{slices_and_hits, Settings};
-use fsot::slice::level_thresholds;
+use fsot::core::kernel::{Kernel, KernelSpec};
+use fsot::core::slice::level_thresholds;
+use fsot::core::tile::Tile;
+use fsot::optimize::settings::{slices_and_hits, Settings};
 
 fn main() -> ExitCode {
     match run() {

@@ -5,13 +5,13 @@
 //! cargo run --release --example convergence -- [kernel] [WxHxT] [rule: momentum|adam] [N...]
 use std::time::Instant;
 
-use fsot::cpu_backend::CpuRun;
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::objective::{score, SCORE_SLICES};
+use fsot::core::step_rule::StepRule;
+use fsot::core::tile::Tile;
+use fsot::optimize::cpu::CpuRun;
+use fsot::optimize::settings::Settings;
 use fsot::quality::perceived::{ratio_to_white, TestSetup};
-use fsot::score::{score, SCORE_SLICES};
-use fsot::settings::Settings;
-use fsot::step_rule::StepRule;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
@@ -66,7 +66,7 @@ fn main() {
             run.step();
         }
         let seconds = start.elapsed().as_secs_f64();
-        let mask = fsot::backend::Backend::mask(&run).unwrap();
+        let mask = fsot::optimize::backend::Backend::mask(&run).unwrap();
         let objective = score(&mask, spec, SCORE_SLICES).objective;
         let ratio = ratio_to_white(&mask, &setup, 4);
         println!("{n},{seconds:.3},{objective:.5e},{ratio:.4}");

@@ -1,14 +1,14 @@
 //! Diagnostic: GPU against CPU displacements slice by slice (one slice per
 //! iteration), printing the worst differences with their context.
-use fsot::backend::Backend;
-use fsot::gpu::{VulkanOptions, VulkanRun};
-use fsot::kernel::{Kernel, KernelSpec};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::rng::seed_key;
-use fsot::settings::Settings;
-use fsot::slice::SliceSampler;
-use fsot::transport::{project, transport_slice, Scratch};
+use fsot::core::kernel::{Kernel, KernelSpec};
+use fsot::core::mask::Mask;
+use fsot::core::rng::seed_key;
+use fsot::core::slice::SliceSampler;
+use fsot::core::tile::Tile;
+use fsot::core::transport::{project, transport_slice, Scratch};
+use fsot::optimize::backend::Backend;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::{VulkanOptions, VulkanRun};
 use fsot::vk::{Context, ContextOptions};
 
 fn main() {

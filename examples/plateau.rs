@@ -5,14 +5,14 @@
 //! cargo run --release --example plateau -- [kernel] [WxHxT] [decay_below] [stop_below] [factor]
 use std::time::Instant;
 
-use fsot::backend::Backend;
-use fsot::cpu_backend::CpuRun;
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::objective::{score, SCORE_SLICES};
+use fsot::core::step_rule::{Plateau, PlateauState};
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::Backend;
+use fsot::optimize::cpu::CpuRun;
+use fsot::optimize::settings::Settings;
 use fsot::quality::perceived::{ratio_to_white, TestSetup};
-use fsot::score::{score, SCORE_SLICES};
-use fsot::settings::Settings;
-use fsot::step_rule::{Plateau, PlateauState};
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

@@ -8,10 +8,10 @@
 //! (defaults: 32x32x16 taa; d = 2, 1 spp, seed 7)
 use std::process::ExitCode;
 
-use fsot::gpu::{VulkanOptions, VulkanRun};
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::settings::Settings;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::tile::Tile;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::{VulkanOptions, VulkanRun};
 
 fn main() -> ExitCode {
     match run() {
@@ -37,7 +37,7 @@ fn run() -> Result<(), String> {
     let ctx = fsot::vk::Context::new(&Default::default()).map_err(|e| e.to_string())?;
     let run = VulkanRun::new(&ctx, tile, Settings::new(spec, 7), None, VulkanOptions::default())
         .map_err(|e| e.to_string())?;
-    let order = |i| -> Result<fsot::gpu::LaneOrder, String> {
+    let order = |i| -> Result<fsot::optimize::vulkan::LaneOrder, String> {
         run.slice_order(i)
             .map_err(|e| e.to_string())?
             .ok_or_else(|| "this device takes the workgroup transport, which orders no slices".to_string())

@@ -3,7 +3,7 @@
 //! soft-shadow scene of `fsot eval` at 1 sample per pixel per frame, its light
 //! sample read through `glsl/include/fsot.glsl`, then TAA with alpha 0.1. The
 //! mask is made on the same device and written into the renderer's image
-//! (`fsot::renderer::make_into_image`), or loaded with `--mask` (a mask file or
+//! (`fsot::render::device::make_into_image`), or loaded with `--mask` (a mask file or
 //! a plan folder). The same frames are rendered with a white-noise mask through
 //! the same include, and a reference with 256 jittered samples per pixel; the
 //! pRelMSE after TAA of both against the reference's is `fsot eval`'s (eye
@@ -17,18 +17,18 @@ use std::time::Instant;
 
 use ash::vk;
 use clap::Parser;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
 use fsot::io::atomic::{make_folder, AtomicFile};
 use fsot::io::ktx2::Format;
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
+use fsot::optimize::run::{CancelFlag, Event};
+use fsot::optimize::settings::Settings;
 use fsot::quality::eye::Eye;
 use fsot::quality::metric::relative_errors_rect;
-use fsot::renderer::{layers_for, make_into_image, vk_format, write_plan};
-use fsot::run::{CancelFlag, Event};
-use fsot::sampler::SamplerPlan;
-use fsot::settings::Settings;
+use fsot::render::device::{layers_for, make_into_image, vk_format, write_plan};
+use fsot::render::sampler::SamplerPlan;
 use fsot::vk::commands::barrier;
 use fsot::vk::{
     Buffer, ComputeDesc, ComputePipeline, Context, ContextOptions, Image, ImageDesc, Location, Sampler,

@@ -123,79 +123,41 @@ macro_rules! spirv_module {
 }
 
 #[doc(hidden)]
-pub mod backend;
-#[doc(hidden)]
-pub mod baselines;
-#[doc(hidden)]
-pub mod checkpoint;
-#[doc(hidden)]
-pub mod cpu_backend;
-#[doc(hidden)]
-pub mod csf;
-#[doc(hidden)]
-pub mod display;
+pub mod core;
 #[doc(hidden)]
 pub mod error;
-#[cfg(feature = "vulkan")]
-#[doc(hidden)]
-pub mod gpu;
 #[doc(hidden)]
 pub mod io;
 #[doc(hidden)]
-pub mod kernel;
+pub mod optimize;
 #[doc(hidden)]
-pub mod mask;
-#[doc(hidden)]
-pub mod method;
-#[doc(hidden)]
-pub mod plan;
-#[doc(hidden)]
-pub mod problem;
+pub mod peers;
 #[doc(hidden)]
 pub mod quality;
-#[cfg(feature = "vulkan")]
 #[doc(hidden)]
-pub mod renderer;
-#[doc(hidden)]
-pub mod rng;
-#[doc(hidden)]
-pub mod run;
-#[doc(hidden)]
-pub mod sampler;
+pub mod render;
 #[doc(hidden)]
 pub mod scene;
-#[doc(hidden)]
-pub mod score;
-#[doc(hidden)]
-pub mod settings;
-#[doc(hidden)]
-pub mod slice;
-#[doc(hidden)]
-pub mod step_rule;
-#[doc(hidden)]
-pub mod targets;
-#[doc(hidden)]
-pub mod transport;
 #[cfg(feature = "vulkan")]
 pub mod vk;
 
-pub use backend::BackendChoice;
+pub use crate::core::kernel::KernelSpec;
+pub use crate::core::mask::Mask;
+pub use crate::core::tile::Tile;
 pub use error::{Error, Result};
-pub use kernel::KernelSpec;
-pub use mask::Mask;
-pub use plan::{CostModel, Plan, PlanEvent, PlannedMask};
-pub use problem::Tile;
-pub use run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-pub use sampler::SamplerPlan;
-pub use scene::Scene;
-pub use settings::{Settings, Until};
+pub use optimize::backend::BackendChoice;
+pub use optimize::run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+pub use optimize::settings::{Settings, Until};
+pub use render::sampler::SamplerPlan;
+pub use scene::file::Scene;
+pub use scene::plan::{CostModel, Plan, PlanEvent, PlannedMask};
 
 #[cfg(feature = "vulkan")]
 pub use ash;
 #[cfg(feature = "vulkan")]
-pub use gpu::VulkanOptions;
+pub use optimize::vulkan::VulkanOptions;
 #[cfg(feature = "vulkan")]
-pub use renderer::{
+pub use render::device::{
     layers_for, make_into_image, make_plan_into_image, upload, write_mask, write_mask_to_buffer, write_plan,
     write_plan_block,
 };

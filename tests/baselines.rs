@@ -1,11 +1,11 @@
 //! The peers' methods made by fsot: STBN (void-and-cluster, annealing), FAST and
 //! white noise.
 
-use fsot::baselines::fast::{fast_mask, FastSpec};
-use fsot::baselines::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
-use fsot::baselines::swap::{PairEnergy, SwapDevice, ValueTerm};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
+use fsot::peers::fast::{fast_mask, FastSpec};
+use fsot::peers::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
+use fsot::peers::swap::{PairEnergy, SwapDevice, ValueTerm};
 use fsot::quality::perceived::{perceived_error, TestSetup};
 
 #[test]

@@ -3,9 +3,9 @@
 //! [0, 1), as many as its tile holds) or an error with a reason, never a panic.
 //! `FSOT_FUZZ_CASES=N` runs N cases per property instead of 300.
 
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::exr;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
 use proptest::prelude::*;
 
 /// The seed corpus: valid files of three layouts.

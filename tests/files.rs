@@ -1,9 +1,9 @@
 //! Mask files: EXR round trips, PNG slices, and validation of what is read.
 
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::atomic::AtomicFile;
 use fsot::io::{exr, png as png_io};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
 
 #[test]
 fn exr_round_trips_every_layout_bit_for_bit() {

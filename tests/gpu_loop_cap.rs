@@ -7,10 +7,10 @@
 
 mod common;
 
-use fsot::gpu::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::settings::Settings;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::tile::Tile;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 
 fn settings(iterations: u32) -> Settings {
     let mut s = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
@@ -70,7 +70,7 @@ fn lanes_whose_classes_need_different_sorts_stay_under_the_cap() {
         return;
     }
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
-    let mut mask = fsot::mask::Mask::white(tile, 4);
+    let mut mask = fsot::core::mask::Mask::white(tile, 4);
     let half = mask.samples.len() / 2;
     mask.samples[..half].iter_mut().for_each(|v| *v = 0.25);
     let mut s = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 3);

@@ -3,19 +3,19 @@
 
 mod common;
 
-use fsot::backend::Backend;
-use fsot::gpu::shape::{TransportShape, LANE_BUDGET, LANE_MAX};
-use fsot::gpu::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
-use fsot::kernel::{Kernel, KernelSpec};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::rng::seed_key;
-use fsot::run::optimize;
-use fsot::score::score;
-use fsot::settings::Settings;
-use fsot::slice::SliceSampler;
-use fsot::step_rule::StepRule;
-use fsot::transport::{transport_slice, Scratch};
+use fsot::core::kernel::{Kernel, KernelSpec};
+use fsot::core::mask::Mask;
+use fsot::core::objective::score;
+use fsot::core::rng::seed_key;
+use fsot::core::slice::SliceSampler;
+use fsot::core::step_rule::StepRule;
+use fsot::core::tile::Tile;
+use fsot::core::transport::{transport_slice, Scratch};
+use fsot::optimize::backend::Backend;
+use fsot::optimize::run::optimize;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::shape::{TransportShape, LANE_BUDGET, LANE_MAX};
+use fsot::optimize::vulkan::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 
 /// The per-lane transport is for CPU implementations (lavapipe); a GPU must refuse
 /// it with a clear error. True when `transport` is refused here (checked).
@@ -42,7 +42,7 @@ fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
 /// The CPU path's summed displacement per coordinate for one iteration's slices
 /// (f64).
 fn cpu_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
-    fsot::cpu_backend::reference_displacements(mask, s, slices, iteration)
+    fsot::optimize::cpu::reference_displacements(mask, s, slices, iteration)
 }
 
 fn compare_one_iteration(tile: Tile, kernel: &str, deterministic: bool) {
@@ -223,7 +223,7 @@ fn each_iterations_objective_estimate_is_the_cpu_paths() {
     for dims in [2, 3] {
         let mask = Mask::white(Tile::new(16, 16, 8, 1, dims).unwrap(), 21);
         let s = settings("taa", 4, 21);
-        let mut cpu = fsot::cpu_backend::CpuRun::new(mask.tile, s, Some(&mask)).unwrap();
+        let mut cpu = fsot::optimize::cpu::CpuRun::new(mask.tile, s, Some(&mask)).unwrap();
         let expected: Vec<f64> = (0..3).map(|_| cpu.step()).collect();
         for (transport, shape) in shapes {
             if refused_here(&ctx, transport) {
@@ -405,7 +405,7 @@ fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, lar
             .iter()
             .map(|&(p, delta)| {
                 let i = p as usize * dims;
-                (fsot::transport::project(&mask.samples[i..i + dims], &slice), p, delta)
+                (fsot::core::transport::project(&mask.samples[i..i + dims], &slice), p, delta)
             })
             .collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -507,10 +507,10 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     while first.iteration() < 45 {
         first.step_batch(45 - first.iteration()).unwrap();
     }
-    let fp = fsot::checkpoint::fingerprint(&tile, &s);
-    let bytes = fsot::checkpoint::encode(&fp, &first.state().unwrap());
+    let fp = fsot::optimize::checkpoint::fingerprint(&tile, &s);
+    let bytes = fsot::optimize::checkpoint::encode(&fp, &first.state().unwrap());
     drop(first);
-    let saved = fsot::checkpoint::decode(&bytes, &fp, &tile).unwrap();
+    let saved = fsot::optimize::checkpoint::decode(&bytes, &fp, &tile).unwrap();
     assert_eq!(saved.iteration, 45);
     let mut resumed = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
     resumed.restore(&saved).unwrap();

@@ -5,11 +5,11 @@
 
 mod common;
 
-use fsot::backend::Backend;
-use fsot::gpu::{VulkanOptions, VulkanRun};
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::settings::Settings;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::Backend;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::{VulkanOptions, VulkanRun};
 
 fn run(ctx: &fsot::vk::Context, tile: Tile, kernel: &str, seed: u64) -> VulkanRun {
     let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
@@ -67,10 +67,10 @@ fn runs_on_different_devices_are_not_stepped_together() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
-    use fsot::backend::BackendChoice;
-    use fsot::plan::{CostModel, Plan, PlanEvent};
-    use fsot::run::{CancelFlag, Outcome, RunOptions};
-    use fsot::scene::Scene;
+    use fsot::optimize::backend::BackendChoice;
+    use fsot::optimize::run::{CancelFlag, Outcome, RunOptions};
+    use fsot::scene::file::Scene;
+    use fsot::scene::plan::{CostModel, Plan, PlanEvent};
     let ctx = common::gpu_context();
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
@@ -91,7 +91,8 @@ fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
     let mut seen = [0u32; 2];
     let outcome = plan
         .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
-            if let PlanEvent::Run { index, event: fsot::run::Event::Progress { iteration, .. } } = e {
+            if let PlanEvent::Run { index, event: fsot::optimize::run::Event::Progress { iteration, .. } } = e
+            {
                 seen[index] = iteration;
                 if index == 1 && iteration >= 40 {
                     cancel.cancel();

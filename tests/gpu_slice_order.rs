@@ -6,14 +6,14 @@
 
 mod common;
 
-use fsot::backend::Backend;
-use fsot::gpu::shape::LANE_BUDGET;
-use fsot::gpu::{LaneTier, TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
-use fsot::kernel::{Kernel, KernelSpec};
-use fsot::problem::Tile;
-use fsot::rng::seed_key;
-use fsot::settings::Settings;
-use fsot::slice::SliceSampler;
+use fsot::core::kernel::{Kernel, KernelSpec};
+use fsot::core::rng::seed_key;
+use fsot::core::slice::SliceSampler;
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::Backend;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::shape::LANE_BUDGET;
+use fsot::optimize::vulkan::{LaneTier, TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 use fsot::vk::Context;
 
 fn settings(seed: u64) -> Settings {

@@ -4,7 +4,7 @@
 
 mod common;
 
-use fsot::rng::{derive, Stream};
+use fsot::core::rng::{derive, Stream};
 use fsot::vk::sort::{float_key, SortShape};
 use fsot::vk::{Buffer, Location, RadixSort, SortCount, SortPath};
 

@@ -10,12 +10,12 @@
 
 mod common;
 
-use fsot::backend::Backend;
-use fsot::gpu::{VulkanHooks, VulkanOptions, VulkanRun};
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::settings::Settings;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::Backend;
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::{VulkanHooks, VulkanOptions, VulkanRun};
 use fsot::vk::{choose_sort_path, time_sort_paths, PathChoice, SortPath};
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]

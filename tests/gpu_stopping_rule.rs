@@ -7,14 +7,14 @@
 
 mod common;
 
-use fsot::backend::BackendChoice;
-use fsot::gpu::layout::{CostSlot, RuleState, COST_SCALE};
-use fsot::gpu::{rule, VulkanHooks, VulkanOptions};
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::run::{CancelFlag, Checkpointing, Outcome, Run, RunOptions};
-use fsot::settings::{Settings, Until};
-use fsot::step_rule::{Plateau, PlateauState, FINAL_FRACTION};
+use fsot::core::kernel::KernelSpec;
+use fsot::core::step_rule::{Plateau, PlateauState, FINAL_FRACTION};
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::BackendChoice;
+use fsot::optimize::run::{CancelFlag, Checkpointing, Outcome, Run, RunOptions};
+use fsot::optimize::settings::{Settings, Until};
+use fsot::optimize::vulkan::layout::{CostSlot, RuleState, COST_SCALE};
+use fsot::optimize::vulkan::{rule, VulkanHooks, VulkanOptions};
 use fsot::vk::Context;
 
 /// A rule that halves the step often and stops early, with windows (7) that do

@@ -5,11 +5,11 @@
 
 mod common;
 
-use fsot::baselines::fast::{fast_mask, FastSpec, Filter};
-use fsot::baselines::stbn::{stbn_mask_with, stbn_offsets};
-use fsot::baselines::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
+use fsot::peers::fast::{fast_mask, FastSpec, Filter};
+use fsot::peers::stbn::{stbn_mask_with, stbn_offsets};
+use fsot::peers::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
 use fsot::quality::perceived::{perceived_error, TestSetup};
 
 fn fast_energy(tile: Tile) -> PairEnergy {
@@ -31,7 +31,7 @@ fn wide_energy(tile: Tile) -> PairEnergy {
 }
 
 fn start(tile: Tile) -> Vec<f32> {
-    fsot::baselines::fast::stratified_values(&tile, 5, 1)
+    fsot::peers::fast::stratified_values(&tile, 5, 1)
 }
 
 fn sorted_bits(v: &[f32]) -> Vec<u32> {
@@ -158,7 +158,7 @@ fn an_energy_past_the_loop_budget_is_refused_naming_the_cpu_backend() {
     let spec =
         FastSpec { spatial: Filter::Box { n: 64 }, temporal: Filter::Box { n: 16 }, ..FastSpec::default() };
     let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance).unwrap();
-    assert!(energy.offsets().len() > fsot::gpu::swap::MAX_OFFSETS);
+    assert!(energy.offsets().len() > fsot::peers::swap::vulkan::MAX_OFFSETS);
     let mut values = start(tile);
     let before = values.clone();
     let err = SwapDevice::Vulkan(ctx.clone())

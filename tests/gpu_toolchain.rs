@@ -4,9 +4,9 @@
 
 mod common;
 
-use fsot::gpu::layout::{binding, HashPush};
-use fsot::gpu::shaders;
-use fsot::rng::hash2;
+use fsot::core::rng::hash2;
+use fsot::optimize::vulkan::layout::{binding, HashPush};
+use fsot::optimize::vulkan::shaders;
 use fsot::vk::commands::barrier;
 use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location};
 

@@ -1,4 +1,4 @@
-//! Masks straight into a renderer's memory (`fsot::renderer`): the test plays
+//! Masks straight into a renderer's memory (`fsot::render::device`): the test plays
 //! the renderer. It makes its own Vulkan instance (validation layer on, its own
 //! messenger), device, queue, image and buffers with `ash`, hands them to fsot
 //! through `Context::wrap` with its queue lock, and reads the image back with
@@ -13,15 +13,15 @@ mod common;
 
 use ash::vk;
 use common::host::Host;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::ktx2::{quantize, texels, Format};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::renderer::{
+use fsot::optimize::run::{optimize, CancelFlag};
+use fsot::optimize::settings::Settings;
+use fsot::render::device::{
     layers_for, make_into_image, vk_format, write_mask_to_buffer, write_plan, write_plan_block,
 };
-use fsot::run::{optimize, CancelFlag};
-use fsot::sampler::{SamplerPart, SamplerPlan};
-use fsot::settings::Settings;
+use fsot::render::sampler::{SamplerPart, SamplerPlan};
 use fsot::vk::{BufferTarget, ComputeDesc, ComputePipeline};
 
 fn u16s(bytes: &[u8]) -> Vec<u16> {
@@ -40,7 +40,7 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
     let host = Host::new(true);
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let mut settings =
-        Settings::new(fsot::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 7);
+        Settings::new(fsot::core::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 7);
     settings.iterations = 3;
     let image = host.image(vk::Format::R16G16_UNORM, 16, 16, layers_for(&tile, 1), SAMPLED);
     let made = {
@@ -215,7 +215,7 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
         // Refused before the optimizer starts: no iteration is run.
         let mut events = 0;
         let settings =
-            Settings::new(fsot::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
+            Settings::new(fsot::core::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
         let err =
             make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| events += 1)
                 .unwrap_err();
@@ -249,42 +249,50 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
                 [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
-    let scene = fsot::scene::Scene::parse(text, "small").unwrap();
-    let plan = fsot::plan::Plan::new(&scene, &fsot::plan::CostModel::unmeasured()).unwrap();
+    let scene = fsot::scene::file::Scene::parse(text, "small").unwrap();
+    let plan = fsot::scene::plan::Plan::new(&scene, &fsot::scene::plan::CostModel::unmeasured()).unwrap();
     assert_eq!(plan.masks.len(), 3);
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     // One layer short: refused before the first run.
     let short = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3) - 1, SAMPLED);
     let ctx = host.fsot();
     let mut events = 0;
-    let err =
-        fsot::renderer::make_plan_into_image(&ctx, &plan, &short.target, &CancelFlag::new(), &mut |_| {
-            events += 1
-        })
-        .unwrap_err();
+    let err = fsot::render::device::make_plan_into_image(
+        &ctx,
+        &plan,
+        &short.target,
+        &CancelFlag::new(),
+        &mut |_| events += 1,
+    )
+    .unwrap_err();
     assert!(err.to_string().contains("need 12"), "{err}");
     assert_eq!(events, 0);
     host.free_image(short);
 
     let image = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3), SAMPLED);
     let mut done = Vec::new();
-    let sampler =
-        fsot::renderer::make_plan_into_image(&ctx, &plan, &image.target, &CancelFlag::new(), &mut |e| {
-            if let fsot::plan::PlanEvent::Done { file, iterations, .. } = e {
+    let sampler = fsot::render::device::make_plan_into_image(
+        &ctx,
+        &plan,
+        &image.target,
+        &CancelFlag::new(),
+        &mut |e| {
+            if let fsot::scene::plan::PlanEvent::Done { file, iterations, .. } = e {
                 done.push((file.to_string(), iterations))
             }
-        })
-        .unwrap()
-        .expect("not cancelled");
+        },
+    )
+    .unwrap()
+    .expect("not cancelled");
     drop(ctx);
     // The optimized masks ran until the plateau rule stopped them; the invisible
     // group reads white noise, made from its seed.
     assert_eq!(done.iter().map(|d| d.0.as_str()).collect::<Vec<_>>(), ["pick.exr", "lens.exr"]);
     assert!(done.iter().all(|d| d.1 > 0 && d.1 < 10_000), "{done:?}");
     assert_eq!(sampler.masks[2].samples, Mask::white(tile, plan.masks[2].seed).samples);
-    let kernel = fsot::plan::kernel_for(&scene.display).unwrap().0;
+    let kernel = fsot::scene::plan::kernel_for(&scene.display).unwrap().0;
     for k in 0..2 {
-        let ratio = fsot::score::score(&sampler.masks[k], kernel, 4096).ratio();
+        let ratio = fsot::core::objective::score(&sampler.masks[k], kernel, 4096).ratio();
         assert!(ratio < 0.8, "mask {k}: {ratio} x white");
     }
     // Parts as the plan says, in the order the groups consume them.

@@ -1,17 +1,17 @@
 //! The public GLSL include (`glsl/include/fsot.glsl`): a renderer's shader fsot
 //! never saw compiles against it with glslangValidator, at the renderer's own set
 //! and binding and at the defaults, and its plan block's std140 layout (read from
-//! the SPIR-V with rspirv) is what `fsot::sampler` fills. The sampler's CPU
+//! the SPIR-V with rspirv) is what `fsot::render::sampler` fills. The sampler's CPU
 //! formula is checked against the include's documented rule by hand.
 
 mod common;
 
 use std::collections::HashMap;
 
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::ktx2::Format;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::sampler::{PartBlock, PlanHead, SamplerPart, SamplerPlan, MAX_PARTS, R4};
+use fsot::render::sampler::{PartBlock, PlanHead, SamplerPart, SamplerPlan, MAX_PARTS, R4};
 use rspirv::dr::{load_bytes, Operand};
 use rspirv::spirv::{Decoration, Op};
 
@@ -184,18 +184,19 @@ fn a_get_reads_the_offset_texel_adds_the_shift_and_a_new_r4_turn_per_loop_of_the
 fn a_plan_folder_reads_into_a_sampler_plan_and_a_bad_one_is_refused() {
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"4x4x2\"\n\
                 [[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n";
-    let scene = fsot::scene::Scene::parse(text, "s").unwrap();
-    let options = fsot::run::RunOptions {
-        backend: fsot::backend::BackendChoice::Cpu,
-        ..fsot::run::RunOptions::default()
+    let scene = fsot::scene::file::Scene::parse(text, "s").unwrap();
+    let options = fsot::optimize::run::RunOptions {
+        backend: fsot::optimize::backend::BackendChoice::Cpu,
+        ..fsot::optimize::run::RunOptions::default()
     };
-    let plan = fsot::plan::Plan::new(&scene, &fsot::plan::CostModel::unmeasured()).unwrap();
+    let plan = fsot::scene::plan::Plan::new(&scene, &fsot::scene::plan::CostModel::unmeasured()).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    plan.execute(dir.path(), &options, 100, false, &fsot::run::CancelFlag::new(), &mut |_| {}).unwrap();
+    plan.execute(dir.path(), &options, 100, false, &fsot::optimize::run::CancelFlag::new(), &mut |_| {})
+        .unwrap();
     let sp = SamplerPlan::read(dir.path()).unwrap();
     assert_eq!(sp.masks.len(), 1, "bsdf shares light's mask");
     assert_eq!(sp.parts.len(), 2);
-    assert_eq!(sp.parts[1].offset, fsot::plan::share_offset(1, [4, 4, 2]));
+    assert_eq!(sp.parts[1].offset, fsot::scene::plan::share_offset(1, [4, 4, 2]));
     std::fs::write(dir.path().join("plan.json"), "{\"tile\": [4, 4, 2], \"groups\": 3}").unwrap();
     assert!(SamplerPlan::read(dir.path()).unwrap_err().to_string().contains("not a plan file"));
     assert!(SamplerPlan::read(&dir.path().join("missing")).is_err());

@@ -2,10 +2,10 @@
 //! header a renderer uploads from, the data format descriptor the format calls
 //! for, the provenance, and texels within half a quantisation level of the mask.
 
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::io::ktx2::{encode, format_for, Format};
 use fsot::io::MaskFile;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
 
 fn mask(dims: usize, spp: usize) -> Mask {
     let mut m = Mask::white(Tile::new(5, 3, 4, spp, dims).unwrap(), 11);

@@ -1,12 +1,12 @@
 //! The optimizer, end to end on small tiles.
 
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::objective::score;
+use fsot::core::tile::Tile;
+use fsot::optimize::run::optimize;
+use fsot::optimize::settings::Settings;
 use fsot::quality::perceived::{perceived_error, TestSetup};
-use fsot::run::optimize;
-use fsot::score::score;
-use fsot::settings::Settings;
 
 fn spec(name: &str) -> KernelSpec {
     KernelSpec::from_name(name, 2.1, None, 0.1, 60.0).unwrap()

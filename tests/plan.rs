@@ -1,12 +1,12 @@
 //! Scene plans: what each sampling decision reads and why, and the masks made
 //! from a plan.
 
-use fsot::backend::BackendChoice;
-use fsot::plan::{kernel_for, share_offset, share_shift, tile_size, CostModel, Plan, PlanEvent};
-use fsot::problem::Tile;
-use fsot::run::{CancelFlag, Outcome, RunOptions};
-use fsot::scene::Scene;
-use fsot::score::score;
+use fsot::core::objective::score;
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::BackendChoice;
+use fsot::optimize::run::{CancelFlag, Outcome, RunOptions};
+use fsot::scene::file::Scene;
+use fsot::scene::plan::{kernel_for, share_offset, share_shift, tile_size, CostModel, Plan, PlanEvent};
 
 fn scene(display: &str, groups: &str) -> Scene {
     Scene::parse(&format!("[display]\n{display}\n{groups}"), "test").unwrap()
@@ -89,8 +89,8 @@ fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_a
         ["light.exr", "many.exr", "own.exr"],
         "other spp and share = false: masks of their own"
     );
-    let reads: Vec<&fsot::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
-    let lent: Vec<&&fsot::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
+    let reads: Vec<&fsot::scene::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
+    let lent: Vec<&&fsot::scene::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
     assert_eq!(lent.len(), 4, "light, bsdf and quad's two pairs");
     assert_eq!(
         (lent[0].offset, lent[0].shift.as_slice(), &lent[0].shares),
@@ -186,7 +186,7 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
             let iterations = g["iterations"].as_u64().unwrap();
             assert_eq!(done.iter().find(|d| d.0 == format!("{name}.exr")).unwrap().1 as u64, iterations);
             assert!(iterations > 0 && iterations < 10_000, "stopped by the rule: {iterations}");
-            let s = score(&mask, fsot::plan::kernel_for(&scene.display).unwrap().0, 4096);
+            let s = score(&mask, fsot::scene::plan::kernel_for(&scene.display).unwrap().0, 4096);
             // Measured 0.157 (pick) and 0.321 (lens); 15% margins.
             let bound = if name == "pick" { 0.18 } else { 0.37 };
             assert!(s.ratio() < bound, "{name}: {} x white", s.ratio());
@@ -213,7 +213,11 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     let cancel = CancelFlag::new();
     let outcome = plan
         .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
-            if let PlanEvent::Run { index: 1, event: fsot::run::Event::Progress { iteration: 25, .. } } = e {
+            if let PlanEvent::Run {
+                index: 1,
+                event: fsot::optimize::run::Event::Progress { iteration: 25, .. },
+            } = e
+            {
                 cancel.cancel()
             }
         })

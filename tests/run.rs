@@ -4,17 +4,17 @@
 
 mod common;
 
-use fsot::backend::BackendChoice;
-#[cfg(feature = "vulkan")]
-use fsot::backend::BackendKind;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::error::Error;
+use fsot::optimize::backend::BackendChoice;
 #[cfg(feature = "vulkan")]
-use fsot::gpu::VulkanOptions;
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-use fsot::settings::Settings;
+use fsot::optimize::backend::BackendKind;
+use fsot::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+use fsot::optimize::settings::Settings;
+#[cfg(feature = "vulkan")]
+use fsot::optimize::vulkan::VulkanOptions;
 
 /// The test of the run's pacing times its iterations: it runs alone (write),
 /// the others of this file together (read), so that their work on the same
@@ -200,8 +200,8 @@ fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
 #[test]
 fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would_have() {
     let _others = others();
-    use fsot::settings::Until;
-    use fsot::step_rule::Plateau;
+    use fsot::core::step_rule::Plateau;
+    use fsot::optimize::settings::Until;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     // A quick rule: 8-iteration windows.
     let rule = Plateau { window: 8, ..Plateau::DEFAULT };
@@ -241,7 +241,7 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
 #[test]
 fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
     let _others = others();
-    use fsot::settings::Until;
+    use fsot::optimize::settings::Until;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
     // Where a plateau run's objective estimate goes, then a target short of it.

@@ -50,8 +50,8 @@ type Family = &'static [(&'static str, &'static [u8])];
 fn families() -> [(&'static str, Family); 3] {
     [
         ("sort", fsot::vk::shaders::ALL),
-        ("fsot", fsot::gpu::shaders::ALL),
-        ("swap", fsot::gpu::swap::shaders::ALL),
+        ("fsot", fsot::optimize::vulkan::shaders::ALL),
+        ("swap", fsot::peers::swap::vulkan::shaders::ALL),
     ]
 }
 

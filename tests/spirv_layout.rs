@@ -8,11 +8,11 @@
 
 use std::collections::HashMap;
 
-use fsot::gpu::layout::{
+use fsot::optimize::vulkan::layout::{
     self, HashPush, LargeMetaHead, LargeSegment, PlateauPush, RuleState, ScatterPush, TransportPush,
     UpdatePush,
 };
-use fsot::gpu::swap::layout::{self as swap, SwapOffset, SwapProposal, SwapPush, SwapStats};
+use fsot::peers::swap::vulkan::layout::{self as swap, SwapOffset, SwapProposal, SwapPush, SwapStats};
 use fsot::vk::sort::{self, RadixPush};
 use rspirv::dr::{load_bytes, Module, Operand};
 use rspirv::spirv::{Decoration, Op, StorageClass};
@@ -72,7 +72,7 @@ fn mirrors() -> Vec<Mirror> {
 }
 
 fn fsot_named() -> &'static [(&'static str, &'static [u8])] {
-    named("fsot", fsot::gpu::shaders::ALL)
+    named("fsot", fsot::optimize::vulkan::shaders::ALL)
 }
 
 /// What one shader declares.
@@ -278,7 +278,7 @@ fn every_sort_binding_and_struct_matches_its_rust_mirror() {
 fn every_swap_binding_and_struct_matches_its_rust_mirror() {
     let seen = check_family(
         "swap",
-        named("swap", fsot::gpu::swap::shaders::ALL),
+        named("swap", fsot::peers::swap::vulkan::shaders::ALL),
         &swap::binding::BLOCKS,
         &[],
         swap::binding::BINDINGS,

@@ -1,7 +1,7 @@
 //! Exact 1-D targets against brute force: a million projected uniform points.
 
-use fsot::rng::{derive, Stream};
-use fsot::targets::ProjectedUniform;
+use fsot::core::rng::{derive, Stream};
+use fsot::core::targets::ProjectedUniform;
 
 /// Projects `count` uniform points of [0,1)^d on theta and sorts them.
 fn projected_points(theta: &[f64], count: usize, key: u32) -> Vec<f64> {

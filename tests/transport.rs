@@ -1,9 +1,9 @@
 //! The transport rule, checked on sets whose answer is known.
 
-use fsot::kernel::{Kernel, KernelSpec};
-use fsot::problem::{Tile, MAX_DIMS};
-use fsot::slice::Slice;
-use fsot::transport::{transport_slice, Scratch};
+use fsot::core::kernel::{Kernel, KernelSpec};
+use fsot::core::slice::Slice;
+use fsot::core::tile::{Tile, MAX_DIMS};
+use fsot::core::transport::{transport_slice, Scratch};
 
 #[test]
 fn one_step_moves_a_1d_set_exactly_onto_its_quantiles() {
@@ -45,7 +45,7 @@ fn classes_follow_the_kernel_prefix_and_wrap_around_the_tile() {
     let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
     let slice = Slice { theta: [0.0; MAX_DIMS], shift: [0.0; MAX_DIMS], cx: 7, cy: 0, ct: 0, len: 3 };
     let mut points = Vec::new();
-    fsot::transport::gather_class(&tile, &kernel, &slice, &mut points);
+    fsot::core::transport::gather_class(&tile, &kernel, &slice, &mut points);
     assert_eq!(points.len(), 3 * 2, "three pixels, two samples each");
     // The heaviest tap is the centre itself: pixel (7, 0, 0), samples 0 and 1.
     assert_eq!(&points[..2], &[7 * 2, 7 * 2 + 1]);
@@ -60,7 +60,7 @@ fn classes_follow_the_kernel_prefix_and_wrap_around_the_tile() {
 /// means, with its standard error from their spread (which counts the noise of
 /// the bins' edges as well as of their contents).
 fn brute_force_targets(theta: &[f64], n: usize, m: usize, batches: usize, key: u32) -> Vec<(f64, f64)> {
-    let mut rng = fsot::rng::Stream::new(key);
+    let mut rng = fsot::core::rng::Stream::new(key);
     let per_batch: Vec<Vec<f64>> = (0..batches)
         .map(|_| {
             let mut p: Vec<f64> = (0..m).map(|_| theta.iter().map(|t| t * rng.next_f64()).sum()).collect();
@@ -83,8 +83,8 @@ fn displacements_in_two_to_eight_dimensions_are_the_brute_force_targets_minus_th
     // One class per d: random samples, a slice in a generic direction with a
     // toroidal shift; each member must move by (its rank's target - its
     // projection) along theta, the targets taken from 3.8 million projected
-    // uniform points (not from fsot::targets) and the projections recomputed here.
-    let mut rng = fsot::rng::Stream::new(fsot::rng::derive(9, 9));
+    // uniform points (not from fsot::core::targets) and the projections recomputed here.
+    let mut rng = fsot::core::rng::Stream::new(fsot::core::rng::derive(9, 9));
     for d in [2usize, 3, 4, 8] {
         let tile = Tile::new(8, 8, 4, 1, d).unwrap();
         let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);

@@ -6,7 +6,7 @@
 mod common;
 
 use ash::vk;
-use fsot::rng::{derive, Stream};
+use fsot::core::rng::{derive, Stream};
 use fsot::vk::{RadixSort, SortCount};
 
 fn random_pairs(seed: u32, n: usize) -> (Vec<u32>, Vec<u32>) {

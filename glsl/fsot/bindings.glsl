@@ -1,5 +1,5 @@
 // Every buffer, push-constant struct and binding index of the fsot passes, declared
-// once. Mirrored once in Rust (src/gpu/layout.rs); tests/spirv_layout.rs checks
+// once. Mirrored once in Rust (src/optimize/vulkan/layout.rs); tests/spirv_layout.rs checks
 // the compiled SPIR-V against the mirror. Every pass uses the same descriptor set
 // layout (FSOT_BINDINGS bindings: storage buffers, and two uniform texel
 // buffers that view some of them again) and touches only the buffers it names.
@@ -43,7 +43,7 @@
 #define FSOT_BINDING_DEFERRED 25
 #define FSOT_BINDINGS 26
 
-// Fixed-point scale of the int64 accumulators: 2^40, as src/cpu_backend.rs.
+// Fixed-point scale of the int64 accumulators: 2^40, as src/optimize/cpu.rs.
 #define FSOT_FIXED_SCALE 1099511627776.0
 // Fixed-point scale of the objective's squared distances: 2^32.
 #define FSOT_COST_SCALE 4294967296.0
@@ -89,7 +89,7 @@ struct PlateauPush {
     uint iteration;
 };
 
-// The stopping rule on the device (src/step_rule.rs: Plateau and PlateauState,
+// The stopping rule on the device (src/core/step_rule.rs: Plateau and PlateauState,
 // and Until::Objective), evaluated by plateau.comp. Its f64 values are kept as
 // their bits (uvec2), so that passes compiled without shaderFloat64 can bind it.
 struct RuleState {

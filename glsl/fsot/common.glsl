@@ -1,5 +1,5 @@
 // Shared by every fsot compute pass: the counter-based random generator and the
-// slice drawing (mirrors src/rng.rs and src/slice.rs), exact 1-D targets for
+// slice drawing (mirrors src/core/rng.rs and src/core/slice.rs), exact 1-D targets for
 // d <= 2 in closed form, and sortable float keys. Buffers and push constants are
 // in bindings.glsl.
 #ifndef FSOT_COMMON_GLSL
@@ -10,7 +10,7 @@
 
 #include "rng.glsl"
 
-// ---- slices (src/slice.rs) ----
+// ---- slices (src/core/slice.rs) ----
 
 // cos and sin of an angle given in turns (u in [0, 1)), to float32 rounding on
 // every device (hardware sin/cos may be off by 1e-6): exact quadrant reduction,
@@ -89,7 +89,7 @@ FsotSlice fsot_draw_slice(uint slice_key, uint iteration, uint index, uint dims,
     return s;
 }
 
-// ---- exact targets for d <= 2 (src/targets.rs gives the general form) ----
+// ---- exact targets for d <= 2 (src/core/targets.rs gives the general form) ----
 //
 // theta . U for U uniform on the square is a trapezoid on [0, a1 + a2]
 // (a1 <= a2 the sorted |theta_k|), shifted by the sum of negative components.

@@ -1,7 +1,7 @@
 #version 450
 // The stopping rule on the device, one invocation after each iteration: the
-// same f64 operations as the host's (src/step_rule.rs: PlateauState::observe,
-// and Until::Objective in src/run.rs). It takes the iteration's objective
+// same f64 operations as the host's (src/core/step_rule.rs: PlateauState::observe,
+// and Until::Objective in src/optimize/run.rs). It takes the iteration's objective
 // estimate from its cost slot; every `window` iterations it closes a window,
 // multiplies the step scale by `factor` when the window gained less than
 // `decay_below`, and ends the run when, with the scale at its floor, a window

@@ -1,4 +1,4 @@
-// The counter-based random generator of src/rng.rs (mix32, hash2, derive, the
+// The counter-based random generator of src/core/rng.rs (mix32, hash2, derive, the
 // stream and its draws), shared by the fsot passes and, by `../fsot/rng.glsl`,
 // the swap passes.
 #ifndef FSOT_RNG_GLSL

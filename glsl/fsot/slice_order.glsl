@@ -12,12 +12,12 @@
 // Include after transport_common.glsl (`pc`: TransportPush).
 //
 // `slice_order` holds a lane table, then the orders of up to B iterations of S
-// slices, in slots k (src/gpu/layout.rs: slice_order_words; fewer slots where a
+// slices, in slots k (src/optimize/vulkan/layout.rs: slice_order_words; fewer slots where a
 // binding cannot hold B, and the host then orders that many iterations at a
 // time). With L = FSOT_LANE_TABLE_WORDS, P = FSOT_LANE_PLAN_WORDS and
 // H = L + B * (BINS + P):
 //   [0, L)                          the lane table, written once by the host
-//                                   (src/gpu/shape.rs: lane_table): lanes a
+//                                   (src/optimize/vulkan/shape.rs: lane_table): lanes a
 //                                   chunk, chunks aimed at, each bin's tier,
 //                                   each tier's cost and most rounds;
 //   [L + k * BINS, ... + BINS)      slices of slot k in each bin;
@@ -25,7 +25,7 @@
 //   [H + 2 k S, ... + S)            each slice's class, in taps (the transport
 //                                   reads it in place of searching the taps);
 //   [H + (2 k + 1) S, ... + S)      the slices in order.
-// B is the batch (FSOT_ORDER_BATCH, the same as src/gpu/run.rs's BATCH). The
+// B is the batch (FSOT_ORDER_BATCH, the same as src/optimize/vulkan/run.rs's BATCH). The
 // bins and plans are zero before the ordering passes, which fill slots 0, 1,
 // ... (workgroup row k) for iterations pc.iteration + k; the transport reads
 // slot pc.order_slot and takes its chunks from that slot's queue.
@@ -70,7 +70,7 @@ uint fsot_order_rank_at(uint k, uint rank) {
 }
 
 // The bin of a class of `class_taps` taps: bin 0 holds the largest classes
-// (every tap), the last bin the smallest (src/gpu/layout.rs: order_bin, which
+// (every tap), the last bin the smallest (src/optimize/vulkan/layout.rs: order_bin, which
 // the lane table's tiers follow; in 64 bits, for kernels of past 2^24 taps).
 uint fsot_order_bin(uint class_taps) {
     uint smaller = pc.taps - class_taps;

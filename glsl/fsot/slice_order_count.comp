@@ -1,7 +1,7 @@
 #version 450
 // The slice order's first pass (slice_order.glsl): the invocations of each
 // iteration of the batch (workgroup row k: iteration pc.iteration + k) draw its
-// slices, a few each (src/gpu/layout.rs: ORDER_SLICES_PER_INVOCATION), record
+// slices, a few each (src/optimize/vulkan/layout.rs: ORDER_SLICES_PER_INVOCATION), record
 // each slice's class's size in taps (which the transport reads) and count it
 // in its bin. The bins must be zero before. Run on CPU implementations only:
 // the class size's binary search reads the taps through their texel view.

@@ -1,5 +1,5 @@
 // Exact 1-D targets for any d (1 to 8): the projection of the uniform hypercube
-// on theta (a box spline), mirrored from src/targets.rs, which explains the
+// on theta (a box spline), mirrored from src/core/targets.rs, which explains the
 // inclusion-exclusion form, its conditioning rule and the rank means. Only the
 // FSOT_ANY_DIMS variants include it. Written once in the number type of
 // real.glsl: f64 (shaderFloat64), or with FSOT_DF32 pairs of float32s for
@@ -10,7 +10,7 @@
 #include "real.glsl"
 
 // Condition number above which the smallest components are replaced by their
-// mean (src/targets.rs: MAX_CONDITION; the same rule in both number types, so
+// mean (src/core/targets.rs: MAX_CONDITION; the same rule in both number types, so
 // both keep the CPU's components), and Newton's tolerances on F and on the
 // bracket (relative to the support): float32 pairs stop sooner, at what their 48
 // bits can resolve.
@@ -22,7 +22,7 @@
 #define FSOT_F_TOL 1e-15LF
 #define FSOT_BRACKET_TOL 1e-15LF
 #endif
-// Newton steps per quantile at most (src/targets.rs allows 200; a bracketed
+// Newton steps per quantile at most (src/core/targets.rs allows 200; a bracketed
 // Newton from a guess below the root needs far fewer, and lavapipe's loop
 // budget is short).
 #define FSOT_NEWTON_MAX 60u
@@ -159,7 +159,7 @@ void fsot_box_eval(FsotBox z, FsotReal s, out FsotReal f, out FsotReal dens, out
 }
 
 // Solves F(s) = u for u <= 1/2 (local coordinates) from `guess`, with Newton
-// steps kept inside a shrinking bracket (src/targets.rs: local_quantile); also
+// steps kept inside a shrinking bracket (src/core/targets.rs: local_quantile); also
 // gives the density at the last point evaluated.
 FsotReal fsot_box_quantile(FsotBox z, FsotReal u, FsotReal guess, out FsotReal dens) {
     FsotReal lo = r_of(0.0), hi = r_mul(r_of(0.5), z.total);
@@ -195,7 +195,7 @@ FsotReal fsot_box_guess(FsotBox z, FsotReal u) {
 }
 
 // A walk over consecutive ranks of the lower half (q < n / 2), each quantile
-// solved from the last (src/targets.rs: rank_targets): the quantile, G and the
+// solved from the last (src/core/targets.rs: rank_targets): the quantile, G and the
 // density at the lower end of rank `next`.
 struct FsotWalk { FsotReal q; FsotReal g; FsotReal dens; uint next; };
 

@@ -25,22 +25,22 @@ layout(local_size_x_id = 0) in;
 // synchronises it).
 layout(constant_id = 1) const uint SLICES_PER_GROUP = 1u;
 layout(constant_id = 2) const bool ONE_SUBGROUP = false;
-// Largest class sorted in shared memory (src/gpu/shape.rs: LOCAL_MAX).
+// Largest class sorted in shared memory (src/optimize/vulkan/shape.rs: LOCAL_MAX).
 layout(constant_id = 3) const uint FSOT_LOCAL_MAX = 2048u;
 // Classes larger than FSOT_LOCAL_MAX and at most FSOT_DEFER_MAX are listed for a
 // second pass (0: none) instead of the large-class stage's global sorts: the
 // same shader made with FSOT_FROM_LIST, a larger FSOT_LOCAL_MAX and more
-// invocations, one workgroup per listed slice (src/gpu/shape.rs: defer_max).
+// invocations, one workgroup per listed slice (src/optimize/vulkan/shape.rs: defer_max).
 // The few classes past the first pass's limit then cost neither the global
 // sorts nor the first pass's occupancy (its shared memory).
 layout(constant_id = 4) const uint FSOT_DEFER_MAX = 0u;
 layout(constant_id = 5) const bool FSOT_FROM_LIST = false;
 // Workgroups of the second pass at most (65535, the least maxComputeWorkGroupCount
 // a device gives; less in tests): past it, each workgroup takes several listed
-// slices (src/gpu/shape.rs: DEFER_GROUPS).
+// slices (src/optimize/vulkan/shape.rs: DEFER_GROUPS).
 layout(constant_id = 6) const uint FSOT_DEFER_GROUPS = 65535u;
 // Classes that fit one subgroup taken by the first subgroup alone (true where
-// the targets are in closed form, d <= 2; src/gpu/shape.rs: subgroup_classes).
+// the targets are in closed form, d <= 2; src/optimize/vulkan/shape.rs: subgroup_classes).
 layout(constant_id = 7) const bool FSOT_SUBGROUP_CLASSES = true;
 
 void sync() {
@@ -53,7 +53,7 @@ void sync() {
 
 // Pairs sharing a bucket in one invocation's run of buckets, per bucket of the
 // run plus sixteen, above which the bucket sort leaves the class to the bitonic
-// network (src/gpu/shape.rs: GROUP_INSERTION_BUDGET).
+// network (src/optimize/vulkan/shape.rs: GROUP_INSERTION_BUDGET).
 #define FSOT_INSERTION_BUDGET 4u
 // Members one invocation gathers: at most ceil(FSOT_LOCAL_MAX / workgroup).
 const uint FSOT_PER_INVOCATION = (FSOT_LOCAL_MAX + gl_WorkGroupSize.x - 1u) / gl_WorkGroupSize.x;

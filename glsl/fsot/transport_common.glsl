@@ -24,13 +24,13 @@ uint fsot_class_size(FsotSlice s) {
     return fsot_class_taps(s) * pc.spp;
 }
 
-// Bits of a coordinate in [0, size) (0 for a size of 1): src/gpu/layout.rs
+// Bits of a coordinate in [0, size) (0 for a size of 1): src/optimize/vulkan/layout.rs
 // axis_bits.
 uint fsot_axis_bits(uint size) {
     return size > 1u ? uint(findMSB(size - 1u)) + 1u : 0u;
 }
 
-// A tap's offsets (dx, dy, dt) from its packed word (src/gpu/layout.rs pack_tap):
+// A tap's offsets (dx, dy, dt) from its packed word (src/optimize/vulkan/layout.rs pack_tap):
 // one word per member read where three would be (on a SIMD driver each read is
 // a loop over the lanes).
 uvec3 fsot_tap_offsets(uint packed) {
@@ -45,7 +45,7 @@ uint fsot_class_point(FsotSlice s, uint i) {
     // one is a scalar divide per lane, both sides of a select included. i / spp
     // is the high word of i * m, m = floor((2^32 - 1) / spp) + 1 (the same for
     // every member, so computed once), exact while i * spp < 2^32
-    // (src/gpu/layout.rs: spp_reciprocal; a class holds at most taps x spp
+    // (src/optimize/vulkan/layout.rs: spp_reciprocal; a class holds at most taps x spp
     // members). Taps and centres both lie in [0, size), so one conditional
     // subtraction wraps.
     uint high, low;

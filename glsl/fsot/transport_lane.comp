@@ -24,7 +24,7 @@ layout(push_constant) uniform Push { TransportPush pc; };
 #include "slice_order.glsl"
 
 layout(local_size_x_id = 0) in;
-// Largest class sorted in one invocation (set by the host: src/gpu/shape.rs
+// Largest class sorted in one invocation (set by the host: src/optimize/vulkan/shape.rs
 // lane_limit_for, at most 65535 for the 16-bit counters); 36 KiB of private
 // memory per invocation at 2048, which llvmpipe zero-fills at each workgroup's start.
 layout(constant_id = 3) const uint FSOT_LANE_MAX = 2048u;
@@ -146,7 +146,7 @@ void transport_rank(uint rank) {
     // lane of the subgroup takes the heap sort if one does (the same order
     // either way): a SIMD driver runs both sides of a branch, and a group
     // whose lanes took both would spend the two sorts' loops in one slice,
-    // past what the budget allows for it (src/gpu/shape.rs: lane_iterations).
+    // past what the budget allows for it (src/optimize/vulkan/shape.rs: lane_iterations).
     bool piled = pairs > FSOT_INSERTION_BUDGET * n;
     if (!subgroupAny(piled)) {
         // In two loops, because a SIMD driver (llvmpipe) runs both sides of a
@@ -182,7 +182,7 @@ void transport_rank(uint rank) {
     float cost = 0.0;
 #ifdef FSOT_ANY_DIMS
     // The lower half's ranks in order, each quantile solved from the last
-    // (src/targets.rs: rank_targets), each with its mirror n - 1 - q.
+    // (src/core/targets.rs: rank_targets), each with its mirror n - 1 - q.
     fsot_fill_breaks_alone(z);
     uint half_n = n / 2u;
     FsotWalk w = fsot_walk(z, n, 0u);
@@ -206,12 +206,12 @@ void main() {
     if (schedule.stopped != 0u) {
         return; // the stopping rule ended the run
     }
-    // The workgroup (one subgroup: src/gpu/shape.rs) takes the next chunk of
+    // The workgroup (one subgroup: src/optimize/vulkan/shape.rs) takes the next chunk of
     // the iteration's plan (slice_order.glsl), the largest classes first, so
     // that the driver's threads, each running its share of the workgroups,
     // take large classes and small. A chunk is `rounds` rounds of neighbouring
     // ranks, one a lane each round, as many as its tier's cost allows within
-    // the loop budget (src/gpu/shape.rs: lane_table). The dispatch holds a
+    // the loop budget (src/optimize/vulkan/shape.rs: lane_table). The dispatch holds a
     // workgroup for every chunk (more past 65535 chunks: those take none).
     uint plan = fsot_lane_plan_at(pc.order_slot);
     uint chunk = 0u;

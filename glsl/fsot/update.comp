@@ -1,6 +1,6 @@
 #version 450
 // The update pass, one invocation per coordinate: read its accumulated
-// displacement and reset it, apply the step rule (src/step_rule.rs: step_value),
+// displacement and reset it, apply the step rule (src/core/step_rule.rs: step_value),
 // wrap into [0, 1). The step scale is the push constant's (the cosine schedule,
 // or the host's stopping rule) or the device's stopping rule's (plateau.comp).
 // The TEXELS variants (CPU implementations) read through the texel views and
@@ -45,7 +45,7 @@ void main() {
     float m = pc.p1 * fsot_first(i) + (1.0 - pc.p1) * g;
     first[i] = m;
     // The step is p0 scale m (momentum) or p0 scale mh / (sqrt(vh) + p3) (Adam),
-    // in src/step_rule.rs's order of operations (a division by 1 is exact).
+    // in src/core/step_rule.rs's order of operations (a division by 1 is exact).
     float moment = m;
     float divisor = 1.0;
     if (pc.rule != 0u) {

@@ -1,6 +1,6 @@
 // Every buffer, push-constant struct and binding index of the swap passes (the
-// peers' swap search, src/baselines/swap.rs), declared once. Mirrored once in
-// Rust (src/gpu/swap.rs, `layout`); tests/spirv_layout.rs checks the compiled
+// peers' swap search, src/peers/swap/mod.rs), declared once. Mirrored once in
+// Rust (src/peers/swap/vulkan.rs, `layout`); tests/spirv_layout.rs checks the compiled
 // SPIR-V against the mirror. Both passes use this one layout.
 #ifndef SWAP_BINDINGS_GLSL
 #define SWAP_BINDINGS_GLSL

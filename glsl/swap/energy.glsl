@@ -1,4 +1,4 @@
-// The energy change of a swap (src/baselines/swap.rs: PairEnergy::swap_delta),
+// The energy change of a swap (src/peers/swap/mod.rs: PairEnergy::swap_delta),
 // shared by the swap passes. The value term's loop over dimensions unrolls (its
 // length is a specialization constant: no loop iterations against lavapipe's
 // per-invocation budget); the loop over offsets runs offsets iterations.

@@ -6,10 +6,10 @@
 //! `(((t * spp + s) * H + y) * W + x) * D + k` is component k of sample s of
 //! pixel (x, y) in frame t.
 
+use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::io::ktx2::quantize;
-use crate::mask::Mask;
 
 /// A C identifier from a file stem: letters, digits and `_`, not starting with
 /// a digit.

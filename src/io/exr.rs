@@ -17,10 +17,10 @@ use std::path::Path;
 
 use exr::prelude::*;
 
+use crate::core::mask::Mask;
+use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::mask::Mask;
-use crate::problem::Tile;
 
 const RGBA: [&str; 4] = ["R", "G", "B", "A"];
 
@@ -156,7 +156,7 @@ fn check_promised_size(bytes: &[u8]) -> std::result::Result<(), String> {
             .and_then(|b| promised.checked_add(b));
         promised = part.unwrap_or(usize::MAX);
     }
-    let largest_tile = crate::problem::MAX_POINTS * crate::problem::MAX_DIMS * 4;
+    let largest_tile = crate::core::tile::MAX_POINTS * crate::core::tile::MAX_DIMS * 4;
     let limit = bytes.len().saturating_mul(MAX_EXPANSION).min(largest_tile);
     if promised > limit {
         return Err(format!(

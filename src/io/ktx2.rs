@@ -13,9 +13,9 @@
 //! mask is toroidal, so that is the value's nearest point on the circle. SFLOAT
 //! formats hold v exactly.
 
+use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::mask::Mask;
 
 /// The formats fsot writes, with their Vulkan `VkFormat` numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -9,8 +9,8 @@ pub mod stacked_png;
 
 use std::path::Path;
 
+use crate::core::mask::Mask;
 use crate::error::{Error, Result};
-use crate::mask::Mask;
 
 /// What a mask file is, from its name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,9 +8,9 @@
 
 use std::path::Path;
 
+use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::mask::Mask;
 
 /// Quantises one value to 16 bits.
 pub fn quantize(v: f32) -> u16 {

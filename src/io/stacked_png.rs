@@ -5,9 +5,9 @@
 
 use std::path::Path;
 
+use crate::core::mask::Mask;
+use crate::core::tile::Tile;
 use crate::error::{Error, Result};
-use crate::mask::Mask;
-use crate::problem::Tile;
 
 pub fn read(path: &Path) -> Result<Mask> {
     let bad = |what: String| Error::invalid(format!("{}: {what}", path.display()));

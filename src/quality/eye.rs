@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use crate::kernel::perceptual_taps;
+use crate::core::kernel::perceptual_taps;
 
 pub struct Eye {
     /// 1-D Gaussian taps at offsets -margin..=margin; the 2-D filter is their
@@ -47,7 +47,7 @@ impl Eye {
     /// FovVideoVDP's two temporal channels at `fps` as two eyes (sustained,
     /// transient), scaled so that their filters add up to `Eye::new`'s.
     pub fn channels(sigma: f64, fps: f64) -> (Self, Self) {
-        let (sustained, transient) = crate::kernel::perceptual_channels(fps);
+        let (sustained, transient) = crate::core::kernel::perceptual_channels(fps);
         (Self::with_raw_temporal(sigma, &sustained), Self::with_raw_temporal(sigma, &transient))
     }
 
@@ -121,7 +121,7 @@ mod tests {
         let eye = Eye::new(1.3, 60.0);
         let (w, h) = (17, 11);
         let history = eye.history();
-        let mut stream = crate::rng::Stream::new(5);
+        let mut stream = crate::core::rng::Stream::new(5);
         let frames: Vec<Vec<f64>> =
             (0..=history).map(|_| (0..w * h).map(|_| stream.next_f64()).collect()).collect();
         let got = eye.filter_rect(&frames, history, w, h);
@@ -154,7 +154,7 @@ mod tests {
         let (w, h) = (20, 20);
         let eye = Eye::new(2.1, 60.0);
         let (sustained, transient) = Eye::channels(2.1, 60.0);
-        let mut stream = crate::rng::Stream::new(11);
+        let mut stream = crate::core::rng::Stream::new(11);
         let frames: Vec<Vec<f64>> =
             (0..=eye.history()).map(|_| (0..w * h).map(|_| stream.next_f64()).collect()).collect();
         let f = eye.history();

@@ -9,11 +9,11 @@
 
 use rayon::prelude::*;
 
-use crate::mask::Mask;
-use crate::problem::Tile;
+use crate::core::mask::Mask;
+use crate::core::rng::{derive, seed_key, Stream};
+use crate::core::tile::Tile;
 use crate::quality::eye::Eye;
 use crate::quality::integrands::{Family, FAMILIES_1D, FAMILIES_2D};
-use crate::rng::{derive, seed_key, Stream};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TestSetup {

@@ -10,10 +10,10 @@
 //! RGB/RGBA, first channel read), the 64 frames
 //! stacked vertically, value v standing for (v + 0.5) / 256 (see
 //! ../shared/data/peer-masks/README.md; used for comparison only).
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::objective::{score, SCORE_SLICES};
 use fsot::quality::perceived::{ratio_to_white, TestSetup};
-use fsot::score::{score, SCORE_SLICES};
 
 fn read_peer_png(path: &str) -> Result<Mask, String> {
     fsot::io::stacked_png::read(std::path::Path::new(path)).map_err(|e| e.to_string())

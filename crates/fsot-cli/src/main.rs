@@ -11,19 +11,19 @@ use std::time::Instant;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use fsot::backend::{BackendChoice, Report};
-use fsot::baselines::fast::{Combine, Filter};
-use fsot::baselines::swap::SwapDevice;
+use fsot::core::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
+use fsot::core::mask::Mask;
+use fsot::core::objective::{score, SCORE_SLICES};
+use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
-use fsot::gpu::VulkanOptions;
 use fsot::io::atomic::AtomicFile;
 use fsot::io::MaskFile;
-use fsot::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::run::{Checkpointing, Event, Outcome, Run, RunOptions};
-use fsot::score::{score, SCORE_SLICES};
-use fsot::settings::{Settings, Until};
+use fsot::optimize::backend::{BackendChoice, Report};
+use fsot::optimize::run::{Checkpointing, Event, Outcome, Run, RunOptions};
+use fsot::optimize::settings::{Settings, Until};
+use fsot::optimize::vulkan::VulkanOptions;
+use fsot::peers::fast::{Combine, Filter};
+use fsot::peers::swap::SwapDevice;
 
 #[derive(Parser)]
 #[command(
@@ -306,7 +306,7 @@ impl KernelArgs {
 }
 
 /// The kernel of `name`: a Gaussian of `sigma` pixels when given, else the eye
-/// on `display` (by default `fsot::display::DEFAULT_DISPLAY`).
+/// on `display` (by default `fsot::quality::display::DEFAULT_DISPLAY`).
 fn kernel_spec(
     name: &str,
     display: Option<&str>,
@@ -318,7 +318,9 @@ fn kernel_spec(
     let spec = KernelSpec::from_name(name, sigma.unwrap_or(DEFAULT_SIGMA), sigma_t, alpha, fps)?;
     match sigma {
         Some(_) => Ok(spec),
-        None => spec.on_display(fsot::display::parse(display.unwrap_or(fsot::display::DEFAULT_DISPLAY))?),
+        None => spec.on_display(fsot::quality::display::parse(
+            display.unwrap_or(fsot::quality::display::DEFAULT_DISPLAY),
+        )?),
     }
 }
 

@@ -8,17 +8,17 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use fsot::backend::BackendChoice;
-use fsot::cpu_backend::{reference_displacements, Accumulator, FIXED_SCALE};
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::objective::score;
+use fsot::core::rng::{derive, Stream};
+use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
-use fsot::gpu::VulkanOptions;
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
-use fsot::rng::{derive, Stream};
-use fsot::run::{CancelFlag, Run, RunOptions};
-use fsot::score::score;
-use fsot::settings::Settings;
+use fsot::optimize::backend::BackendChoice;
+use fsot::optimize::cpu::{reference_displacements, Accumulator, FIXED_SCALE};
+use fsot::optimize::run::{CancelFlag, Run, RunOptions};
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::VulkanOptions;
 use fsot::vk::Context;
 
 /// How big the suite runs.

@@ -4,10 +4,10 @@
 #[path = "../../../tests/common/mod.rs"]
 mod common;
 
-use fsot::backend::BackendChoice;
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::run::RunOptions;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::tile::Tile;
+use fsot::optimize::backend::BackendChoice;
+use fsot::optimize::run::RunOptions;
 use fsot_cli::bench::convergence::{convergence, SceneJudge};
 
 /// The convergence suite on each backend given; with both, they end at about

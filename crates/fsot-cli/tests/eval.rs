@@ -2,14 +2,16 @@
 //! measured with and without TAA. Tiny sizes here; the figures come from the
 //! command itself (RESULTS.md).
 
-use fsot::problem::Tile;
+use fsot::core::tile::Tile;
 use fsot_cli::eval::render::Shot;
 use fsot_cli::eval::scenes::Scene;
 use fsot_cli::eval::suite::{run_eval, to_json, to_markdown, EvalSize, METHODS};
 
 /// The eye of the evaluation's display, which `fsot-planned` plans for.
-fn judged_on() -> fsot::kernel::Spatial {
-    fsot::kernel::Spatial::Display { ppd: fsot::display::preset_ppd(fsot_cli::eval::jod::DISPLAY).unwrap() }
+fn judged_on() -> fsot::core::kernel::Spatial {
+    fsot::core::kernel::Spatial::Display {
+        ppd: fsot::quality::display::preset_ppd(fsot_cli::eval::jod::DISPLAY).unwrap(),
+    }
 }
 
 fn tiny() -> EvalSize {
@@ -311,9 +313,9 @@ fn a_run_measures_only_the_methods_named_and_dissects_their_error_when_asked() {
 #[test]
 fn fsots_display_geometry_gives_colorvideovdps_pixels_per_degree() {
     // An independent reference: ColorVideoVDP's own display models.
-    for (name, ..) in fsot::display::PRESETS {
+    for (name, ..) in fsot::quality::display::PRESETS {
         let theirs = colorvideovdp::DisplayModel::from_name(name).unwrap().geometry.pixels_per_degree();
-        let ours = fsot::display::preset_ppd(name).unwrap();
+        let ours = fsot::quality::display::preset_ppd(name).unwrap();
         assert!((ours - theirs).abs() <= 0.005 + 1e-9, "{name}: {ours} against {theirs}");
     }
 }
@@ -336,7 +338,7 @@ fn flip_python() -> std::path::PathBuf {
 fn flip_sees_no_difference_in_equal_frames_and_more_in_noisier_ones_and_judges_after_taa() {
     let flip = fsot_cli::eval::flip::Flip::start(&flip_python()).unwrap();
     let n = 32;
-    let mut rng = fsot::rng::Stream::new(4);
+    let mut rng = fsot::core::rng::Stream::new(4);
     let reference: Vec<Vec<f64>> = (0..6).map(|_| vec![0.5; n * n]).collect();
     let mut noisy = |a: f64| -> Vec<Vec<f64>> {
         reference.iter().map(|f| f.iter().map(|v| v + a * (rng.next_f64() - 0.5)).collect()).collect()

@@ -1,5 +1,5 @@
 //! What users see when Vulkan fails (failures injected with FSOT_FAULT, see
-//! src/gpu/fault.rs, or a missing driver): `--backend vulkan` stops with a clear
+//! src/optimize/vulkan/fault.rs, or a missing driver): `--backend vulkan` stops with a clear
 //! error and writes nothing; `--backend auto` says so and finishes on the CPU path.
 
 use std::path::Path;

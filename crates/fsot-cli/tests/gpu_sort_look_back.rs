@@ -9,7 +9,7 @@
 #[path = "../../../tests/common/mod.rs"]
 mod common;
 
-use fsot::rng::{derive, Stream};
+use fsot::core::rng::{derive, Stream};
 use fsot::vk::buffer::{Buffer, Location};
 use fsot::vk::{RadixSort, SortCount, SortPath};
 

@@ -13,18 +13,18 @@ use serde::Serialize;
 
 use crate::eval::render::{references, render, taa, MaskSampler, Shot};
 use crate::eval::scenes::Scene;
-use fsot::backend::{BackendChoice, BackendKind};
+use fsot::core::kernel::KernelSpec;
+use fsot::core::mask::Mask;
+use fsot::core::objective::{score, SCORE_SLICES};
+use fsot::core::tile::Tile;
 use fsot::error::Result;
-use fsot::gpu::VulkanOptions;
-use fsot::kernel::KernelSpec;
-use fsot::mask::Mask;
-use fsot::problem::Tile;
+use fsot::optimize::backend::{BackendChoice, BackendKind};
+use fsot::optimize::run::{CancelFlag, Run, RunOptions};
+use fsot::optimize::settings::Settings;
+use fsot::optimize::vulkan::VulkanOptions;
 use fsot::quality::eye::Eye;
 use fsot::quality::metric::relative_errors;
 use fsot::quality::perceived::{perceived_error, TestSetup};
-use fsot::run::{CancelFlag, Run, RunOptions};
-use fsot::score::{score, SCORE_SLICES};
-use fsot::settings::Settings;
 
 /// One checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize)]

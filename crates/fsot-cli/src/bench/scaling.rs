@@ -4,12 +4,12 @@
 
 use std::time::Instant;
 
-use fsot::backend::BackendChoice;
+use fsot::core::kernel::KernelSpec;
+use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
-use fsot::kernel::KernelSpec;
-use fsot::problem::Tile;
-use fsot::run::{CancelFlag, Run, RunOptions};
-use fsot::settings::Settings;
+use fsot::optimize::backend::BackendChoice;
+use fsot::optimize::run::{CancelFlag, Run, RunOptions};
+use fsot::optimize::settings::Settings;
 
 /// One configuration's figures.
 #[derive(Clone, Debug, PartialEq)]

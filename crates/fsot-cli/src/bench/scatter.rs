@@ -10,11 +10,11 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::timing::median;
-use fsot::cpu_backend::{Accumulator, FIXED_SCALE};
+use fsot::core::rng::{derive, Stream};
 use fsot::error::{Error, Result};
-use fsot::gpu::layout::{binding, ScatterPush};
-use fsot::gpu::shaders;
-use fsot::rng::{derive, Stream};
+use fsot::optimize::cpu::{Accumulator, FIXED_SCALE};
+use fsot::optimize::vulkan::layout::{binding, ScatterPush};
+use fsot::optimize::vulkan::shaders;
 use fsot::vk::commands::{barrier, zero};
 use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Context, Location, Timer};
 

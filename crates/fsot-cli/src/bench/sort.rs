@@ -5,8 +5,8 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::timing::median;
+use fsot::core::rng::{derive, Stream};
 use fsot::error::{Error, Result};
-use fsot::rng::{derive, Stream};
 use fsot::vk::commands::{barrier, copy};
 use fsot::vk::{Buffer, Context, Location, RadixSort, SortCount, SortPath, Timer};
 

@@ -22,8 +22,8 @@ pub(crate) fn context(flag: Option<String>) -> Result<Context> {
 }
 
 /// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set. Once per process.
-pub fn interrupt_flag() -> Result<fsot::run::CancelFlag> {
-    let flag = fsot::run::CancelFlag::new();
+pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
+    let flag = fsot::optimize::run::CancelFlag::new();
     let set = flag.clone();
     ctrlc::set_handler(move || set.cancel())
         .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;

@@ -19,8 +19,8 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let tile = Tile::new(w, h, t, spp, dims)?;
     let until = parse_until(args.until.as_deref())?;
     let iterations = args.iterations.unwrap_or(match until {
-        Until::Iterations => fsot::settings::DEFAULT_ITERATIONS,
-        _ => fsot::settings::DEFAULT_CAP,
+        Until::Iterations => fsot::optimize::settings::DEFAULT_ITERATIONS,
+        _ => fsot::optimize::settings::DEFAULT_CAP,
     });
     if iterations == 0 {
         return Err(Error::invalid("--iterations must be at least 1"));
@@ -62,7 +62,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         spec.describe(),
         run.backend().slices_per_iteration()
     );
-    let start_samples = fsot::settings::initial_samples(&tile, &settings, init.as_ref())?;
+    let start_samples = fsot::optimize::settings::initial_samples(&tile, &settings, init.as_ref())?;
     let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
     let bar = iteration_bar(iterations, run.iteration());
     // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
@@ -129,7 +129,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
 fn parse_until(text: Option<&str>) -> Result<Until> {
     let Some(text) = text else { return Ok(Until::Iterations) };
     if text == "plateau" {
-        return Ok(Until::Plateau(fsot::step_rule::Plateau::DEFAULT));
+        return Ok(Until::Plateau(fsot::core::step_rule::Plateau::DEFAULT));
     }
     match text.strip_prefix("objective:").map(|x| x.trim().parse::<f64>()) {
         Some(Ok(x)) if x.is_finite() && x > 0.0 => Ok(Until::Objective(x)),
@@ -256,17 +256,17 @@ pub(crate) fn make_baseline(
         return Err(Error::invalid(format!("--passes must be in 1..=100000, got {}", args.passes)));
     }
     let method = match args.method {
-        Method::White => fsot::method::Method::White,
+        Method::White => fsot::peers::method::Method::White,
         Method::Stbn => {
-            let sigma = args.kernel.sigma.unwrap_or(fsot::baselines::stbn::DEFAULT_SIGMA);
-            fsot::method::Method::Stbn {
+            let sigma = args.kernel.sigma.unwrap_or(fsot::peers::stbn::DEFAULT_SIGMA);
+            fsot::peers::method::Method::Stbn {
                 sigma,
                 sigma_t: args.kernel.sigma_t.unwrap_or(sigma),
                 passes: args.passes,
             }
         }
-        Method::Fast => fsot::method::Method::Fast {
-            spec: fsot::baselines::fast::FastSpec {
+        Method::Fast => fsot::peers::method::Method::Fast {
+            spec: fsot::peers::fast::FastSpec {
                 spatial: Filter::parse(&args.fast_spatial, false)?,
                 temporal: Filter::parse(&args.fast_temporal, true)?,
                 combine: Combine::parse(&args.fast_combine)
@@ -279,7 +279,7 @@ pub(crate) fn make_baseline(
     // The swap searches go where --backend says, as fsot's runs do; white noise
     // and void-and-cluster are made on the CPU.
     let device = if method.swaps(&tile) {
-        let (device, note) = fsot::run::swap_device(&run_options(args)?)?;
+        let (device, note) = fsot::optimize::run::swap_device(&run_options(args)?)?;
         eprintln!("backend: {note}");
         device
     } else {
@@ -287,7 +287,7 @@ pub(crate) fn make_baseline(
     };
     let start = Instant::now();
     let bar = swap_bar(args.passes, method.swaps(&tile));
-    let made = fsot::method::make(&method, tile, args.seed, &device, &mut |_, e| {
+    let made = fsot::peers::method::make(&method, tile, args.seed, &device, &mut |_, e| {
         bar.inc(1);
         bar.set_message(format!("{e:.6e}"));
     })?;

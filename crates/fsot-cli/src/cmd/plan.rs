@@ -2,8 +2,8 @@
 //! runs it.
 
 use crate::*;
-use fsot::plan::{CostModel, Plan, PlanEvent};
-use fsot::scene::Scene;
+use fsot::scene::file::Scene;
+use fsot::scene::plan::{CostModel, Plan, PlanEvent};
 
 pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
     let scene = Scene::read(&args.scene)?;

@@ -178,7 +178,7 @@ mod tests {
     #[test]
     fn white_noise_reads_its_variance_in_every_bin_and_a_wave_only_in_its_own() {
         let n = 24;
-        let mut rng = fsot::rng::Stream::new(5);
+        let mut rng = fsot::core::rng::Stream::new(5);
         let grid: Vec<f64> = (0..n * n).map(|_| rng.next_f64() - 0.5).collect();
         let p = dft_power_2d(&grid, n);
         // Parseval: the mean of |DFT|^2 / N is the mean square.

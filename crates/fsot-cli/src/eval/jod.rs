@@ -185,9 +185,9 @@ mod tests {
     fn identical_sequences_score_ten_and_more_noise_scores_lower() {
         let judge = Judge::new(DISPLAY, 60.0, Grey::Luminance).unwrap();
         let n = 32;
-        let mut stream = fsot::rng::Stream::new(3);
+        let mut stream = fsot::core::rng::Stream::new(3);
         let reference: Vec<Vec<f64>> = (0..12).map(|_| vec![0.5; n * n]).collect();
-        let noisy = |amplitude: f64, stream: &mut fsot::rng::Stream| -> Vec<Vec<f64>> {
+        let noisy = |amplitude: f64, stream: &mut fsot::core::rng::Stream| -> Vec<Vec<f64>> {
             reference
                 .iter()
                 .map(|f| f.iter().map(|v| v + amplitude * (stream.next_f64() - 0.5)).collect())

@@ -6,10 +6,10 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::eval::scenes::{reference, Scene};
+use fsot::core::mask::Mask;
+use fsot::core::rng::{derive, seed_key, Stream};
 use fsot::error::Result;
 use fsot::io::atomic::AtomicFile;
-use fsot::mask::Mask;
-use fsot::rng::{derive, seed_key, Stream};
 
 /// Image size and frames of a render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -212,7 +212,7 @@ pub fn taa(frames: &[Vec<f64>], alpha: f64) -> Vec<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fsot::problem::Tile;
+    use fsot::core::tile::Tile;
 
     #[test]
     fn groups_read_the_mask_at_their_own_offset_and_shift() {

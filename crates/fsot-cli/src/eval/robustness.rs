@@ -20,8 +20,8 @@ use crate::eval::render::{references, render, taa, MaskSampler};
 use crate::eval::scenes::Scene;
 use crate::eval::stats::Interval;
 use crate::eval::suite::{method_mask, planned_masks, EvalSize, METHODS};
+use fsot::core::mask::Mask;
 use fsot::error::Result;
-use fsot::mask::Mask;
 use fsot::quality::eye::Eye;
 use fsot::quality::metric::{channels_apart, channels_seen, relative_errors};
 
@@ -110,7 +110,7 @@ pub fn run_robustness(
     let seeds = size.seeds as usize;
     // fsot-planned as planned for the run's first display.
     let first = size.displays.first().ok_or_else(|| fsot::error::Error::invalid("no display to judge on"))?;
-    let viewing = fsot::kernel::Spatial::Display { ppd: fsot::display::preset_ppd(first)? };
+    let viewing = fsot::core::kernel::Spatial::Display { ppd: fsot::quality::display::preset_ppd(first)? };
     // Each method's masks, read once (none for fsot-planned: its masks are per scene).
     let masks: Vec<Vec<Mask>> = methods
         .iter()

@@ -315,7 +315,14 @@ fn cone_pdf(p: DVec3, c: DVec3, r: f64) -> f64 {
 /// Mean of the scene's estimator over the cube by a stratified rule of about
 /// `m` samples: jittered grids per pair of dimensions, the pairs' strata
 /// matched by a random permutation (padding), from the deterministic `stream`.
-pub fn reference(scene: Scene, px: f64, py: f64, f: f64, m: usize, stream: &mut fsot::rng::Stream) -> f64 {
+pub fn reference(
+    scene: Scene,
+    px: f64,
+    py: f64,
+    f: f64,
+    m: usize,
+    stream: &mut fsot::core::rng::Stream,
+) -> f64 {
     let dims = scene.dims();
     let k = (m as f64).sqrt().round().max(1.0) as usize;
     let n = k * k;
@@ -349,7 +356,7 @@ mod tests {
         let phase = f / CYCLE;
         let a = 0.6 + 0.4 * (TAU * (x + 0.3 * phase)).sin();
         let b = 0.5 + 0.5 * (TAU * (y - 0.5 * phase) + 1.0).cos();
-        let mut s = fsot::rng::Stream::new(1);
+        let mut s = fsot::core::rng::Stream::new(1);
         let r = reference(Scene::LightPick, x, y, f, 4096, &mut s);
         assert!((r - (a + b)).abs() < 2e-3, "{r} vs {}", a + b);
     }
@@ -359,7 +366,7 @@ mod tests {
         for (u0, u1) in [(0.0, 0.0), (0.5, 0.25), (0.999, 0.9)] {
             assert!((cosine_dir(u0, u1).length() - 1.0).abs() < 1e-12);
         }
-        let mut s = fsot::rng::Stream::new(2);
+        let mut s = fsot::core::rng::Stream::new(2);
         // A corner far from the three spheres: nothing occludes.
         assert_eq!(reference(Scene::Occlusion, 0.02, 0.98, 0.0, 256, &mut s), 1.0);
     }
@@ -368,7 +375,7 @@ mod tests {
     fn phong_sampling_density_integrates_to_one() {
         // Monte Carlo over the sphere of directions: mean of pdf / (1 / 4 pi).
         let w = DVec3::new(0.3, 0.2, 0.9).normalize();
-        let mut s = fsot::rng::Stream::new(3);
+        let mut s = fsot::core::rng::Stream::new(3);
         let n = 200_000;
         let mut sum = 0.0;
         for _ in 0..n {
@@ -393,7 +400,7 @@ mod tests {
             for (k, strategies) in
                 [Strategies::Mis, Strategies::LightOnly, Strategies::BsdfOnly].into_iter().enumerate()
             {
-                let mut s = fsot::rng::Stream::new(40 + k as u32);
+                let mut s = fsot::core::rng::Stream::new(40 + k as u32);
                 let mut sum = 0.0;
                 for _ in 0..n {
                     let u = [s.next_f64(), s.next_f64(), s.next_f64(), s.next_f64()];

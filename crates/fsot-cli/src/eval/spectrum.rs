@@ -3,8 +3,8 @@
 //! average the 2-D spectrum of every frame; XT spectra average, over rows, the
 //! 2-D spectrum of (x, t) slices. Sizes must be powers of two.
 
+use fsot::core::mask::Mask;
 use fsot::error::{Error, Result};
-use fsot::mask::Mask;
 
 /// In-place radix-2 FFT (forward, no scaling). `re.len()` must be a power of two.
 pub fn fft(re: &mut [f64], im: &mut [f64]) {
@@ -142,7 +142,7 @@ pub use fsot::io::png::grey_png;
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fsot::problem::Tile;
+    use fsot::core::tile::Tile;
 
     #[test]
     fn fft_matches_the_direct_dft() {

@@ -19,18 +19,18 @@ use crate::eval::pictures::scene_pictures;
 use crate::eval::render::{references, render, taa, MaskSampler, Read, Shot};
 use crate::eval::scenes::Scene;
 use crate::eval::stats::Interval;
-use fsot::baselines::fast::{FastSpec, Filter};
-use fsot::baselines::swap::SwapDevice;
+use fsot::core::kernel::{KernelSpec, Spatial};
+use fsot::core::mask::Mask;
+use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
 use fsot::io::atomic::AtomicFile;
-use fsot::kernel::{KernelSpec, Spatial};
-use fsot::mask::Mask;
-use fsot::method::{make, Method};
-use fsot::plan::{CostModel, Plan};
-use fsot::problem::Tile;
+use fsot::optimize::settings::Settings;
+use fsot::peers::fast::{FastSpec, Filter};
+use fsot::peers::method::{make, Method};
+use fsot::peers::swap::SwapDevice;
 use fsot::quality::eye::Eye;
 use fsot::quality::metric::relative_errors;
-use fsot::settings::Settings;
+use fsot::scene::plan::{CostModel, Plan};
 
 pub const TAA_ALPHA: f64 = 0.1;
 
@@ -328,9 +328,10 @@ pub fn planned_masks(
         let mut planned = planned.clone();
         let same_shape =
             plan.masks[..i].iter().filter(|m| (m.dims, m.spp) == (planned.dims, planned.spp)).count();
-        let key =
-            fsot::rng::seed_key(0x9a11_0000 + (planned.dims * 1000 + planned.spp * 10 + same_shape) as u64);
-        planned.seed = fsot::rng::derive(key, seed as u32) as u64;
+        let key = fsot::core::rng::seed_key(
+            0x9a11_0000 + (planned.dims * 1000 + planned.spp * 10 + same_shape) as u64,
+        );
+        planned.seed = fsot::core::rng::derive(key, seed as u32) as u64;
         let planned = &planned;
         let slug: String = plan
             .kernel
@@ -350,7 +351,7 @@ pub fn planned_masks(
                 let mut s = plan.settings(planned);
                 s.iterations = cap;
                 let start = std::time::Instant::now();
-                let m = fsot::run::optimize(tile, s, None)?;
+                let m = fsot::optimize::run::optimize(tile, s, None)?;
                 out.seconds += start.elapsed().as_secs_f64();
                 fsot::io::atomic::make_folder(cache)?;
                 fsot::io::exr::write(&m, AtomicFile::create(&path)?)?;
@@ -382,7 +383,7 @@ pub fn scene_plan(scene: Scene, viewing: Spatial, taa: bool, share: bool, size: 
         .find(|(name, _)| *name == scene.name())
         .map(|s| s.1)
         .ok_or_else(|| Error::invalid(format!("no scene file for {}", scene.name())))?;
-    let mut file = fsot::scene::Scene::parse(text, scene.name())
+    let mut file = fsot::scene::file::Scene::parse(text, scene.name())
         .map_err(|e| Error::invalid(format!("scenes/{}.toml: {e}", scene.name())))?;
     file.display.spatial = viewing;
     file.display.seen_on = match viewing {
@@ -540,7 +541,9 @@ pub fn run_eval(
     let every: Vec<usize> = (0..judges.len()).collect();
     let flip = size.flip.as_deref().map(Flip::start).transpose()?;
     let ppds: Vec<f64> = match flip {
-        Some(_) => size.displays.iter().map(|d| fsot::display::preset_ppd(d)).collect::<Result<_>>()?,
+        Some(_) => {
+            size.displays.iter().map(|d| fsot::quality::display::preset_ppd(d)).collect::<Result<_>>()?
+        }
         None => Vec::new(),
     };
     if size.seeds == 0 {
@@ -642,7 +645,7 @@ fn planned_records(
     let (scene, size) = (judging.scene, judging.size);
     let mut records = Vec::new();
     for (d, display) in size.displays.iter().enumerate() {
-        let viewing = Spatial::Display { ppd: fsot::display::preset_ppd(display)? };
+        let viewing = Spatial::Display { ppd: fsot::quality::display::preset_ppd(display)? };
         let mut any_shares = false;
         for share in [true, false] {
             if !(share || any_shares && size.planned_unshared) {

@@ -1,0 +1,46 @@
+//! `fsot score`: the objective of any mask on a fixed set of slices, so masks from
+//! any source (and any run) are compared on the same footing.
+
+use rayon::prelude::*;
+
+use crate::core::kernel::{Kernel, KernelSpec};
+use crate::core::mask::Mask;
+use crate::core::rng::seed_key;
+use crate::core::slice::{Slice, SliceSampler};
+use crate::core::transport::objective;
+
+/// Slices in the fixed scoring set.
+pub const SCORE_SLICES: u32 = 16384;
+/// Seed of the fixed scoring set (never a run's own slices: a different stream).
+const SCORE_SEED: u64 = 0x5c0e_5c0e;
+
+/// The fixed slices for a tile and kernel.
+pub fn score_slices(kernel: &Kernel, tile: &crate::core::tile::Tile, count: u32) -> Vec<Slice> {
+    let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel);
+    (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Score {
+    /// The mask's objective (mean squared transport distance; lower is better).
+    pub objective: f64,
+    /// The same for white noise of the same shape (mean of 4 seeds).
+    pub white: f64,
+}
+
+impl Score {
+    pub fn ratio(&self) -> f64 {
+        self.objective / self.white
+    }
+}
+
+pub fn score(mask: &Mask, spec: KernelSpec, count: u32) -> Score {
+    let kernel = Kernel::new(spec, &mask.tile);
+    let slices = score_slices(&kernel, &mask.tile, count);
+    let own = objective(&mask.samples, &mask.tile, &kernel, &slices);
+    let white = (0..4u64)
+        .map(|s| objective(&Mask::white(mask.tile, 0xa11ce + s).samples, &mask.tile, &kernel, &slices))
+        .sum::<f64>()
+        / 4.0;
+    Score { objective: own, white }
+}

@@ -1,0 +1,167 @@
+//! One slice of the stochastic step: a direction, a kernel centre, a level and a
+//! toroidal shift, all drawn from the counter-based generator, so a slice is a pure
+//! function of (seed, iteration, slice index) and both backends draw the same ones.
+
+use crate::core::kernel::Kernel;
+use crate::core::rng::{derive, hash2, Stream};
+use crate::core::tile::{Tile, MAX_DIMS};
+
+/// Probability of an axis-aligned direction (one coordinate alone), for d >= 2.
+pub const AXIS_PROBABILITY: f64 = 0.2;
+/// Probability of a direction inside one pair of coordinates (2k, 2k+1), for
+/// d >= 3: renderers consume dimensions in pairs, so these 2-D projections matter.
+pub const PAIR_PROBABILITY: f64 = 0.2;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Slice {
+    /// Unit direction; entries past `dims` are 0.
+    pub theta: [f64; MAX_DIMS],
+    /// Toroidal shift of the sample domain: samples are projected as
+    /// theta . ((x - shift) mod 1).
+    pub shift: [f64; MAX_DIMS],
+    /// Kernel centre pixel.
+    pub cx: u32,
+    pub cy: u32,
+    pub ct: u32,
+    /// Class size in pixels: the first `len` taps of the kernel.
+    pub len: u32,
+}
+
+/// Level thresholds of a kernel's taps as 32-bit integers: tap i belongs to the
+/// class of level bits L (uniform over u32) when `threshold[i] > L`, i.e. with
+/// probability weight_i / max weight. Integer comparison makes the class size the
+/// same on every backend.
+pub fn level_thresholds(kernel: &Kernel) -> Vec<u32> {
+    let max = kernel.max_weight();
+    kernel
+        .taps
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            if i == 0 {
+                u32::MAX
+            } else {
+                ((t.weight / max) * 4_294_967_296.0).floor().min(u32::MAX as f64) as u32
+            }
+        })
+        .collect()
+}
+
+/// Integer threshold of `probability` over the u32 range.
+pub const fn probability_bits(probability: f64) -> u32 {
+    (probability * 4_294_967_296.0) as u32
+}
+
+/// Draws the slices of one run. The order and use of the draws is mirrored by
+/// `fsot_draw_slice` in `glsl/fsot/common.glsl`: integer decisions (axis, pair,
+/// centre, level) are bit-identical on both backends; angles and Gaussian
+/// directions agree to float32 rounding.
+#[derive(Clone, Debug)]
+pub struct SliceSampler {
+    key: u32,
+    tile: Tile,
+    thresholds: Vec<u32>,
+}
+
+impl SliceSampler {
+    pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel) -> Self {
+        Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel) }
+    }
+
+    pub fn draw(&self, iteration: u32, index: u32) -> Slice {
+        let d = self.tile.dims;
+        let mut rng = Stream::new(hash2(derive(self.key, iteration), index));
+        let mut theta = [0.0; MAX_DIMS];
+        let pick = rng.next_u32();
+        let angle = |rng: &mut Stream| turn_cos_sin(rng.next_f32() as f64);
+        if d == 1 {
+            theta[0] = 1.0;
+        } else if pick < probability_bits(AXIS_PROBABILITY) {
+            theta[rng.below(d as u32) as usize] = 1.0;
+        } else if d >= 3 && pick < probability_bits(AXIS_PROBABILITY + PAIR_PROBABILITY) {
+            let p = 2 * rng.below((d / 2) as u32) as usize;
+            (theta[p], theta[p + 1]) = angle(&mut rng);
+        } else if d == 2 {
+            (theta[0], theta[1]) = angle(&mut rng);
+        } else {
+            // Gaussian direction; retried (at most 4 times) in the astronomically
+            // unlikely case of a near-zero vector.
+            for _ in 0..4 {
+                let mut norm = 0.0;
+                for t in theta.iter_mut().take(d) {
+                    let u1 = 1.0 - rng.next_f32() as f64;
+                    let u2 = rng.next_f32() as f64;
+                    *t = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                    norm += *t * *t;
+                }
+                if norm > 1e-12 {
+                    let inv = 1.0 / norm.sqrt();
+                    theta.iter_mut().take(d).for_each(|t| *t *= inv);
+                    break;
+                }
+                theta = [0.0; MAX_DIMS];
+                theta[0] = 1.0;
+            }
+        }
+        let mut shift = [0.0; MAX_DIMS];
+        for s in shift.iter_mut().take(d) {
+            *s = rng.next_f32() as f64;
+        }
+        let cx = rng.below(self.tile.width as u32);
+        let cy = rng.below(self.tile.height as u32);
+        let ct = rng.below(self.tile.frames as u32);
+        let level = rng.next_u32();
+        let len = self.thresholds.partition_point(|&q| q > level) as u32;
+        Slice { theta, shift, cx, cy, ct, len }
+    }
+}
+
+/// cos and sin of an angle in turns (u in [0, 1)): exact quadrant reduction and
+/// Taylor polynomials on |z| <= pi/4, the same formula the GPU evaluates in
+/// float32 (`fsot_turn_cos_sin` in common.glsl), so both backends draw the same
+/// directions to float32 rounding whatever the device's own sin and cos do.
+pub fn turn_cos_sin(u: f64) -> (f64, f64) {
+    let x = 4.0 * u;
+    let q = x.floor();
+    let z = (x - q - 0.5) * std::f64::consts::FRAC_PI_2;
+    let z2 = z * z;
+    let s = z
+        * (1.0
+            + z2 * (-1.0 / 6.0
+                + z2 * (1.0 / 120.0
+                    + z2 * (-1.0 / 5040.0
+                        + z2 * (1.0 / 362880.0 + z2 * (-1.0 / 39916800.0 + z2 * (1.0 / 6227020800.0)))))));
+    let c = 1.0
+        + z2 * (-0.5
+            + z2 * (1.0 / 24.0
+                + z2 * (-1.0 / 720.0
+                    + z2 * (1.0 / 40320.0 + z2 * (-1.0 / 3628800.0 + z2 * (1.0 / 479001600.0))))));
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let (cq, sq) = (h * (c - s), h * (c + s));
+    match (q as i64) & 3 {
+        0 => (cq, sq),
+        1 => (-sq, cq),
+        2 => (-cq, -sq),
+        _ => (sq, -cq),
+    }
+}
+
+/// The key of a run's slice stream, from its seed key.
+pub fn slice_key(seed_key: u32) -> u32 {
+    derive(seed_key, 0x51ce)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn turn_cos_sin_matches_the_library_to_1e_12() {
+        for i in 0..10_000 {
+            let u = i as f64 / 10_000.0;
+            let (c, s) = turn_cos_sin(u);
+            let a = std::f64::consts::TAU * u;
+            assert!((c - a.cos()).abs() < 1e-12 && (s - a.sin()).abs() < 1e-12, "{u}");
+        }
+    }
+}

@@ -1,0 +1,706 @@
+//! A run of the optimizer, owned by the library whatever calls it (the command
+//! line, a benchmark, a renderer): it picks the backend (`auto | cpu | vulkan`)
+//! and says why, falls back to the CPU path when a GPU fails mid-run (from the
+//! last checkpoint), writes checkpoints every N iterations and when cancelled,
+//! resumes from one, stops when the caller's cancel flag is set, and reports
+//! progress through a callback.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use crate::core::mask::Mask;
+use crate::core::step_rule::{Plateau, PlateauState};
+use crate::core::tile::Tile;
+use crate::error::{Error, Result};
+use crate::io::atomic::AtomicFile;
+use crate::optimize::backend::{Backend, BackendChoice};
+use crate::optimize::checkpoint;
+use crate::optimize::cpu::CpuRun;
+use crate::optimize::settings::{RunState, Settings, Until};
+#[cfg(feature = "vulkan")]
+use crate::optimize::vulkan::{VulkanOptions, VulkanRun};
+use crate::peers::swap::SwapDevice;
+#[cfg(feature = "vulkan")]
+use crate::vk::{Context, ContextOptions};
+
+/// Checkpoints of a run.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Checkpointing {
+    /// The checkpoint file: written atomically every `every` iterations and when
+    /// the run is cancelled, removed when the run completes.
+    pub path: PathBuf,
+    pub every: u32,
+    /// Continue from the checkpoint at `path` (which must be this very run's).
+    /// Without it an existing file at `path` is refused, never overwritten.
+    pub resume: bool,
+}
+
+/// How a run is made.
+#[derive(Clone, Default)]
+pub struct RunOptions {
+    pub backend: BackendChoice,
+    /// The Vulkan device: its index or part of its name [default: the first
+    /// discrete GPU]. A device named here is taken by `Auto` whatever its type.
+    pub device: Option<String>,
+    /// Work on this context (a renderer's wrapped device, or one the caller made)
+    /// instead of making one; `Auto` then takes it whatever its type.
+    #[cfg(feature = "vulkan")]
+    pub context: Option<Context>,
+    /// Vulkan's validation layer on (its messages in `Backend::report`).
+    pub validation: bool,
+    #[cfg(feature = "vulkan")]
+    pub vulkan: VulkanOptions,
+    pub checkpoint: Option<Checkpointing>,
+}
+
+/// What a run tells its observer.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum Event<'a> {
+    /// Iterations done; the objective estimate of the last one.
+    Progress { iteration: u32, iterations: u32, objective: Option<f64> },
+    /// A checkpoint was written.
+    Checkpoint { iteration: u32, path: &'a Path },
+    /// The GPU failed at iteration `at`; the run goes on on `backend` from
+    /// iteration `from` (its checkpoint's, or 0).
+    FellBack { error: &'a Error, at: u32, backend: &'a str, from: u32, checkpoint: Option<&'a Path> },
+}
+
+/// How `Run::advance` ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Outcome {
+    /// The asked iteration was reached.
+    Reached,
+    /// The cancel flag was set: stopped between iterations, the state saved to
+    /// `saved` when checkpointing.
+    Cancelled { iteration: u32, saved: Option<PathBuf> },
+}
+
+/// A flag the caller sets to stop a run between iterations (a renderer wires its
+/// own; the command line sets it on Ctrl-C and SIGTERM).
+#[derive(Clone, Debug, Default)]
+pub struct CancelFlag(Arc<AtomicBool>);
+
+impl CancelFlag {
+    pub fn new() -> Self {
+        Self::default()
+    }
+    pub fn cancel(&self) {
+        self.0.store(true, Ordering::SeqCst);
+    }
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(Ordering::SeqCst)
+    }
+}
+
+/// A step (one submission on the GPU) is sized from the pace of the step before
+/// it to last about this long, so that cancelling and the progress report answer
+/// within it even where an iteration takes seconds (a large tile on lavapipe).
+/// A GPU's batch (32 iterations) lasts far less.
+const STEP_SECONDS: f64 = 0.5;
+
+/// An optimization in progress, on whichever backend it was given.
+pub struct Run {
+    tile: Tile,
+    settings: Settings,
+    init: Option<Mask>,
+    options: RunOptions,
+    backend: Box<dyn Backend>,
+    note: String,
+    fingerprint: String,
+    resumed_from: Option<u32>,
+    next_checkpoint: u32,
+    /// The end-agnostic schedule of a run that stops by a rule, and where it stands.
+    plateau: Option<(Plateau, PlateauState)>,
+    /// The stopping rule ended the run.
+    stopped: bool,
+    /// The backend evaluates the stopping rule itself (Vulkan, on the device);
+    /// otherwise this run does, once per window.
+    rule_on_backend: bool,
+    /// Seconds spent stepping this run (a step shared with other runs counts in
+    /// full for each).
+    busy: f64,
+    /// Seconds per iteration of the last step; None before the first step,
+    /// which then takes one iteration.
+    pace: Option<f64>,
+}
+
+impl Run {
+    /// Starts a run: checks the checkpoint rules (before any long work), picks the
+    /// backend, and resumes from the checkpoint when asked.
+    pub fn start(tile: Tile, settings: Settings, init: Option<&Mask>, options: RunOptions) -> Result<Self> {
+        if settings.iterations == 0 {
+            return Err(Error::invalid("iterations must be at least 1"));
+        }
+        let fingerprint = checkpoint::fingerprint(&tile, &settings);
+        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
+        let (mut backend, note) = start_backend(tile, settings, init, &options)?;
+        if let Some(state) = &saved {
+            backend.restore(state)?;
+        }
+        let plateau = schedule(&settings, saved.as_ref());
+        let resumed_from = saved.map(|s| s.iteration);
+        let every = options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
+        let next_checkpoint = backend.iteration().saturating_add(every);
+        let mut run = Self {
+            tile,
+            settings,
+            init: init.cloned(),
+            options,
+            backend,
+            note,
+            fingerprint,
+            resumed_from,
+            next_checkpoint,
+            plateau,
+            stopped: false,
+            rule_on_backend: false,
+            busy: 0.0,
+            pace: None,
+        };
+        run.hand_over_rule()?;
+        Ok(run)
+    }
+
+    /// Hands the stopping rule, where it stands, to a backend that evaluates it
+    /// itself (on the GPU); otherwise the run keeps it.
+    fn hand_over_rule(&mut self) -> Result<()> {
+        let target = match self.settings.until {
+            Until::Objective(t) => Some(t),
+            _ => None,
+        };
+        self.rule_on_backend = match &self.plateau {
+            Some((rule, state)) => self.backend.adopt_plateau(rule, state, target)?,
+            None => false,
+        };
+        Ok(())
+    }
+
+    /// The stopping rule is evaluated by the backend (on the GPU), not by the host.
+    pub fn rule_on_device(&self) -> bool {
+        self.rule_on_backend
+    }
+
+    /// The backend in words, and why it was chosen when not the one asked for.
+    pub fn note(&self) -> &str {
+        &self.note
+    }
+    /// The iteration the run resumed from, when it did.
+    pub fn resumed_from(&self) -> Option<u32> {
+        self.resumed_from
+    }
+    pub fn backend(&self) -> &dyn Backend {
+        self.backend.as_ref()
+    }
+    pub fn backend_mut(&mut self) -> &mut dyn Backend {
+        self.backend.as_mut()
+    }
+    pub fn tile(&self) -> &Tile {
+        &self.tile
+    }
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+    pub fn iteration(&self) -> u32 {
+        self.backend.iteration()
+    }
+    /// The run's length reached, or its stopping rule ended it.
+    pub fn finished(&self) -> bool {
+        self.stopped || self.iteration() >= self.settings.iterations
+    }
+    /// The iterations asked for: the run's length, or its cap under a stopping rule.
+    pub fn iterations(&self) -> u32 {
+        self.settings.iterations
+    }
+
+    /// Runs to the end (see `advance`).
+    pub fn run(&mut self, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
+        self.advance(self.settings.iterations, cancel, on)
+    }
+
+    /// Runs until iteration `to` (at most the run's length), checkpointing on the
+    /// way; stops between iterations when `cancel` is set. A GPU that fails under
+    /// `BackendChoice::Auto` hands over to the CPU path, from the last checkpoint.
+    pub fn advance(&mut self, to: u32, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
+        let to = to.min(self.settings.iterations);
+        while self.iteration() < to && !self.stopped {
+            if cancel.is_cancelled() {
+                let saved = self.save()?;
+                return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
+            }
+            match self.step_once(to, on) {
+                Ok(()) => {}
+                // The GPU failed (in an iteration or reading its state back for a
+                // checkpoint): continue on the CPU path.
+                Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on)?,
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(Outcome::Reached)
+    }
+
+    /// One step of the backend towards `to` (a batch on the GPU, stopping at the
+    /// next checkpoint), then the checkpoint when one is due.
+    fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
+        let count = self.next_step(to);
+        let start = std::time::Instant::now();
+        let costs = self.backend.step_up_to(count)?;
+        let seconds = start.elapsed().as_secs_f64();
+        self.busy += seconds;
+        self.paced(seconds, costs.len());
+        self.stepped(&costs, on)
+    }
+
+    /// Seconds spent stepping this run (a step shared with other runs, in
+    /// `run_together`, counts in full for each).
+    pub fn seconds(&self) -> f64 {
+        self.busy
+    }
+
+    /// Notes the pace of a step of `iterations` that took `seconds`.
+    fn paced(&mut self, seconds: f64, iterations: usize) {
+        if iterations > 0 {
+            self.pace = Some(seconds / iterations as f64);
+        }
+    }
+
+    /// The iterations the next step may take towards `to`: up to the next
+    /// checkpoint, under a stopping rule to the end of its window (where the
+    /// rule decides), and as many as last about `STEP_SECONDS` at the last
+    /// step's pace; sets the step scale the rule's schedule gives.
+    fn next_step(&mut self, to: u32) -> u32 {
+        let mut stop = match &self.options.checkpoint {
+            Some(_) => to.min(self.next_checkpoint),
+            None => to,
+        };
+        match &self.plateau {
+            // The backend decides where it stands and ends the run itself.
+            Some(_) if self.rule_on_backend => {}
+            Some((rule, state)) => {
+                // Batches end at windows' ends, where the schedule decides.
+                stop = stop.min(self.iteration() + rule.window.max(1) - state.count);
+                self.backend.set_scale(Some(state.scale));
+            }
+            None => {}
+        }
+        stop.saturating_sub(self.iteration()).max(1).min(paced_iterations(self.pace))
+    }
+
+    /// After a step that gave `costs`: the stopping rule, progress, and the
+    /// checkpoint when one is due.
+    fn stepped(&mut self, costs: &[f64], on: &mut dyn FnMut(Event)) -> Result<()> {
+        if let (true, Some((_, state))) = (self.rule_on_backend, &mut self.plateau) {
+            if let Some((device, stop)) = self.backend.plateau() {
+                *state = device;
+                self.stopped |= stop;
+            }
+        } else if let Some((rule, state)) = &mut self.plateau {
+            for &c in costs {
+                let window_end = state.count + 1 == rule.window.max(1);
+                self.stopped |= state.observe(rule, c);
+                if let (true, Until::Objective(target)) = (window_end, self.settings.until) {
+                    self.stopped |= state.previous <= target;
+                }
+            }
+        }
+        let iteration = self.iteration();
+        on(Event::Progress {
+            iteration,
+            iterations: self.settings.iterations,
+            objective: costs.last().copied(),
+        });
+        if iteration >= self.next_checkpoint && !self.finished() {
+            if let Some(path) = self.save()? {
+                on(Event::Checkpoint { iteration, path: &path });
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs several runs to their ends side by side (a scene plan's masks):
+    /// those on Vulkan on one device step together, a batch of each in one
+    /// submission (`VulkanRun::step_together`); any other steps on its own.
+    /// `on(r, event)` hears run r; `done(r, run)` is called once as run r ends
+    /// (to write its mask while the others go on). Stops between steps when
+    /// `cancel` is set, saving every unfinished run; a GPU that fails hands each
+    /// of its runs over to the CPU path as `advance` does.
+    pub fn run_together(
+        runs: &mut [Run],
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(usize, Event),
+        done: &mut dyn FnMut(usize, &Run) -> Result<()>,
+    ) -> Result<Outcome> {
+        let mut reported = vec![false; runs.len()];
+        loop {
+            for (r, run) in runs.iter().enumerate() {
+                if run.finished() && !reported[r] {
+                    reported[r] = true;
+                    done(r, run)?;
+                }
+            }
+            let open: Vec<usize> = (0..runs.len()).filter(|&r| !runs[r].finished()).collect();
+            if open.is_empty() {
+                return Ok(Outcome::Reached);
+            }
+            if cancel.is_cancelled() {
+                let mut saved = None;
+                for &r in &open {
+                    saved = runs[r].save()?.or(saved);
+                }
+                let iteration = runs[open[0]].iteration();
+                return Ok(Outcome::Cancelled { iteration, saved });
+            }
+            let group = shared_device_group(runs, &open);
+            if group.len() < 2 {
+                // Alone: the run's own step, with its fall-back.
+                let r = open[0];
+                let to = runs[r].settings.iterations;
+                match runs[r].step_once(to, &mut |e| on(r, e)) {
+                    Ok(()) => {}
+                    Err(e) if runs[r].can_fall_back(&e) => runs[r].fall_back(&e, &mut |ev| on(r, ev))?,
+                    Err(e) => return Err(e),
+                }
+                continue;
+            }
+            #[cfg(feature = "vulkan")]
+            step_shared(runs, &group, on)?;
+        }
+    }
+
+    /// The mask as it is now, with its provenance. When the run is complete its
+    /// checkpoint is removed.
+    pub fn finish(self) -> Result<Mask> {
+        self.finish_in_place()
+    }
+
+    /// As `finish`, leaving the run in place (for runs held in a slice).
+    pub fn finish_in_place(&self) -> Result<Mask> {
+        let mask = self.backend.mask()?;
+        if let (Some(c), true) = (&self.options.checkpoint, self.finished()) {
+            if c.path.exists() {
+                std::fs::remove_file(&c.path).map_err(|e| {
+                    Error::io(format!("the run is complete, but removing {} failed", c.path.display()), e)
+                })?;
+            }
+        }
+        Ok(mask)
+    }
+
+    /// Where the run stands (the backend's state and the schedule's).
+    pub fn state(&self) -> Result<RunState> {
+        let mut state = self.backend.state()?;
+        state.plateau = self.plateau.map(|(_, s)| s);
+        Ok(state)
+    }
+
+    /// Writes a checkpoint when checkpointing; where it went.
+    fn save(&mut self) -> Result<Option<PathBuf>> {
+        let Some(c) = &self.options.checkpoint else { return Ok(None) };
+        checkpoint::write(&c.path, &self.fingerprint, &self.state()?)?;
+        self.next_checkpoint = self.iteration().saturating_add(c.every);
+        Ok(Some(c.path.clone()))
+    }
+
+    fn can_fall_back(&self, e: &Error) -> bool {
+        self.options.backend == BackendChoice::Auto
+            && self.backend.kind() == crate::optimize::backend::BackendKind::Vulkan
+            && e.is_device_failure()
+    }
+
+    /// Continues on the CPU path, from the checkpoint when there is one.
+    fn fall_back(&mut self, e: &Error, on: &mut dyn FnMut(Event)) -> Result<()> {
+        let at = self.iteration();
+        let mut cpu = CpuRun::new(self.tile, self.settings, self.init.as_ref())?;
+        let checkpoint = self.options.checkpoint.as_ref().map(|c| c.path.clone()).filter(|p| p.exists());
+        let saved =
+            checkpoint.as_ref().map(|p| checkpoint::read(p, &self.fingerprint, &self.tile)).transpose()?;
+        if let Some(state) = &saved {
+            cpu.restore(state)?;
+        }
+        self.plateau = schedule(&self.settings, saved.as_ref());
+        self.backend = Box::new(cpu);
+        self.pace = None;
+        self.hand_over_rule()?;
+        self.note = self.backend.describe();
+        let from = self.iteration();
+        let every = self.options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
+        self.next_checkpoint = from.saturating_add(every);
+        on(Event::FellBack { error: e, at, backend: &self.note, from, checkpoint: checkpoint.as_deref() });
+        Ok(())
+    }
+}
+
+/// The iterations a step may take at `pace` seconds per iteration (the last
+/// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
+/// known.
+/// Of the open runs, those that can share a submission with the first open
+/// Vulkan run (empty where there is none).
+fn shared_device_group(runs: &[Run], open: &[usize]) -> Vec<usize> {
+    #[cfg(feature = "vulkan")]
+    if let Some(l) = open.iter().copied().find(|&r| runs[r].backend.as_vulkan().is_some()) {
+        return open
+            .iter()
+            .copied()
+            .filter(|&r| {
+                let (a, b) = (runs[l].backend.as_vulkan(), runs[r].backend.as_vulkan());
+                matches!((a, b), (Some(a), Some(b)) if a.shares_device_with(b))
+            })
+            .collect();
+    }
+    let _ = (runs, open);
+    Vec::new()
+}
+
+/// One step of every run in `group` (Vulkan runs on one device), in one
+/// submission; a GPU that fails hands each over to the CPU path.
+#[cfg(feature = "vulkan")]
+fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Event)) -> Result<()> {
+    let counts: Vec<u32> = group
+        .iter()
+        .map(|&r| {
+            let to = runs[r].settings.iterations;
+            runs[r].next_step(to)
+        })
+        .collect();
+    let start = std::time::Instant::now();
+    let result = {
+        let mut members: Vec<&mut VulkanRun> = Vec::with_capacity(group.len());
+        for (r, run) in runs.iter_mut().enumerate() {
+            if group.contains(&r) {
+                if let Some(v) = run.backend.as_vulkan_mut() {
+                    members.push(v);
+                }
+            }
+        }
+        VulkanRun::step_together(&mut members, &counts)
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));
+    for &r in group {
+        runs[r].busy += seconds;
+        runs[r].paced(seconds, most);
+    }
+    match result {
+        Ok(costs) => {
+            for (&r, c) in group.iter().zip(&costs) {
+                runs[r].stepped(c, &mut |e| on(r, e))?;
+            }
+        }
+        Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {
+            for &r in group {
+                runs[r].fall_back(&e, &mut |ev| on(r, ev))?;
+            }
+        }
+        Err(e) => return Err(e),
+    }
+    Ok(())
+}
+
+fn paced_iterations(pace: Option<f64>) -> u32 {
+    match pace {
+        Some(pace) if pace > 0.0 => (STEP_SECONDS / pace).clamp(1.0, u32::MAX as f64) as u32,
+        Some(_) => u32::MAX,
+        None => 1,
+    }
+}
+
+/// The end-agnostic schedule of a run that stops by a rule: where a saved state
+/// left it, or from the start.
+fn schedule(settings: &Settings, saved: Option<&RunState>) -> Option<(Plateau, PlateauState)> {
+    let rule = settings.until.plateau()?;
+    Some((rule, saved.and_then(|s| s.plateau).unwrap_or_default()))
+}
+
+/// The checkpoint rules: with `resume`, the file must hold a checkpoint of this
+/// very run; without, an existing file is left alone (an error); and the path
+/// must be writable before the work starts.
+fn saved_state(c: Option<&Checkpointing>, fingerprint: &str, tile: &Tile) -> Result<Option<RunState>> {
+    let Some(c) = c else { return Ok(None) };
+    if c.every == 0 {
+        return Err(Error::invalid("checkpoints must be at least 1 iteration apart"));
+    }
+    let saved = match c.resume {
+        true => Some(checkpoint::read(&c.path, fingerprint, tile)?),
+        false if c.path.exists() => return Err(Error::CheckpointExists(c.path.clone())),
+        false => None,
+    };
+    AtomicFile::create(&c.path)?; // a checkpoint that cannot be written fails now
+    Ok(saved)
+}
+
+/// The backend for `options.backend`, and the note that says which and why.
+fn start_backend(
+    tile: Tile,
+    settings: Settings,
+    init: Option<&Mask>,
+    options: &RunOptions,
+) -> Result<(Box<dyn Backend>, String)> {
+    let gpu = |require_gpu_type: bool| gpu_backend(tile, settings, init, options, require_gpu_type);
+    let cpu = || -> Result<Box<dyn Backend>> { Ok(Box::new(CpuRun::new(tile, settings, init)?)) };
+    let backend = match options.backend {
+        BackendChoice::Cpu => cpu()?,
+        BackendChoice::Vulkan => gpu(false)?,
+        // Any reason the GPU path cannot take the run (no device, d > 2, a tile
+        // too large for a binding) falls back to the CPU path, which reports input
+        // that is wrong everywhere itself. A device the caller named or handed in
+        // is taken whatever its type; otherwise only a GPU.
+        BackendChoice::Auto => match gpu(options.device.is_none() && !has_context(options)) {
+            Ok(b) => b,
+            Err(e) => {
+                let b = cpu()?;
+                let note = format!("{} (no Vulkan GPU used: {e})", b.describe());
+                return Ok((b, note));
+            }
+        },
+    };
+    let note = backend.describe();
+    Ok((backend, note))
+}
+
+/// A Vulkan backend for the run on the context `options` give.
+#[cfg(feature = "vulkan")]
+fn gpu_backend(
+    tile: Tile,
+    settings: Settings,
+    init: Option<&Mask>,
+    options: &RunOptions,
+    require_gpu_type: bool,
+) -> Result<Box<dyn Backend>> {
+    let ctx = context_for(options, require_gpu_type)?;
+    Ok(Box::new(VulkanRun::new(&ctx, tile, settings, init, options.vulkan)?))
+}
+#[cfg(not(feature = "vulkan"))]
+fn gpu_backend(_: Tile, _: Settings, _: Option<&Mask>, _: &RunOptions, _: bool) -> Result<Box<dyn Backend>> {
+    Err(without_vulkan())
+}
+
+/// The error of a Vulkan call in a build without the `vulkan` feature.
+#[cfg(not(feature = "vulkan"))]
+fn without_vulkan() -> Error {
+    Error::VulkanUnavailable("fsot was built without its `vulkan` feature".into())
+}
+
+/// Whether the caller handed in a Vulkan context.
+fn has_context(options: &RunOptions) -> bool {
+    #[cfg(feature = "vulkan")]
+    return options.context.is_some();
+    #[cfg(not(feature = "vulkan"))]
+    {
+        let _ = options;
+        false
+    }
+}
+
+/// The Vulkan context of a run: the caller's, or one made on the named device
+/// (or the first); with `require_gpu_type`, a CPU implementation is refused.
+#[cfg(feature = "vulkan")]
+pub(crate) fn context_for(options: &RunOptions, require_gpu_type: bool) -> Result<Context> {
+    let ctx = match &options.context {
+        Some(c) => c.clone(),
+        None => {
+            Context::new(&ContextOptions { validation: options.validation, device: options.device.clone() })?
+        }
+    };
+    if require_gpu_type && ctx.info().is_cpu() {
+        return Err(Error::VulkanUnavailable(format!(
+            "the only Vulkan device is {}, a CPU implementation",
+            ctx.info().name
+        )));
+    }
+    Ok(ctx)
+}
+
+/// Where the peers' swap searches run under `options`, by the rule of a run:
+/// `cpu`, `vulkan` (an error without a device), or `auto` (a GPU, or a device
+/// named or handed in, else the CPU). Returns the device and the choice in words.
+#[cfg(not(feature = "vulkan"))]
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    match options.backend {
+        BackendChoice::Vulkan => Err(without_vulkan()),
+        _ => Ok((SwapDevice::Cpu, SwapDevice::Cpu.describe())),
+    }
+}
+
+/// Where the peers' swap searches run (see above).
+#[cfg(feature = "vulkan")]
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    let device =
+        match options.backend {
+            BackendChoice::Cpu => SwapDevice::Cpu,
+            BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
+            BackendChoice::Auto => {
+                let usable = context_for(options, options.device.is_none() && !has_context(options))
+                    .and_then(|ctx| match ctx.info().int64_atomics {
+                        true => Ok(ctx),
+                        false => Err(Error::VulkanUnavailable(format!(
+                            "{} lacks 64-bit buffer atomics",
+                            ctx.info().name
+                        ))),
+                    });
+                match usable {
+                    Ok(ctx) => SwapDevice::Vulkan(ctx),
+                    Err(e) => {
+                        let cpu = SwapDevice::Cpu;
+                        let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
+                        return Ok((cpu, note));
+                    }
+                }
+            }
+        };
+    let note = device.describe();
+    Ok((device, note))
+}
+
+/// Options for several runs that should share one Vulkan device (a scene
+/// plan's masks, stepped together): the context `options` would open, made once,
+/// under the same rule (`auto`: a GPU, or a device named or handed in). Where
+/// `auto` finds none, or the choice is the CPU, `options` as they are.
+#[cfg(not(feature = "vulkan"))]
+pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
+    match options.backend {
+        BackendChoice::Vulkan => Err(without_vulkan()),
+        _ => Ok(options.clone()),
+    }
+}
+
+/// Options for several runs that share one Vulkan device (see above).
+#[cfg(feature = "vulkan")]
+pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
+    if options.context.is_some() || options.backend == BackendChoice::Cpu {
+        return Ok(options.clone());
+    }
+    let context = match options.backend {
+        BackendChoice::Auto => match context_for(options, options.device.is_none()) {
+            Ok(ctx) => ctx,
+            Err(_) => return Ok(options.clone()),
+        },
+        _ => context_for(options, false)?,
+    };
+    Ok(RunOptions { context: Some(context), ..options.clone() })
+}
+
+/// Runs the optimizer to the end on the CPU path, with no observer.
+pub fn optimize(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<Mask> {
+    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let mut run = Run::start(tile, settings, init, options)?;
+    run.run(&CancelFlag::new(), &mut |_| {})?;
+    run.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{paced_iterations, STEP_SECONDS};
+
+    #[test]
+    fn a_step_takes_one_iteration_until_the_pace_is_known_then_about_step_seconds_worth() {
+        assert_eq!(paced_iterations(None), 1);
+        assert_eq!(paced_iterations(Some(STEP_SECONDS / 32.0)), 32);
+        assert_eq!(paced_iterations(Some(0.001)), (STEP_SECONDS / 0.001) as u32);
+        // Slower than a step's worth: still one iteration at a time.
+        assert_eq!(paced_iterations(Some(3.0 * STEP_SECONDS)), 1);
+        // A step too quick to time does not limit the next.
+        assert_eq!(paced_iterations(Some(0.0)), u32::MAX);
+    }
+}

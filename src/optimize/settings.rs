@@ -1,0 +1,139 @@
+//! What defines an optimization, whatever runs it: the settings, the state a run
+//! can be saved in and resumed from, the slices per iteration, the starting
+//! samples and the provenance written into a mask.
+
+use crate::core::kernel::{Kernel, KernelSpec};
+use crate::core::mask::Mask;
+use crate::core::step_rule::{Plateau, PlateauState, StepRule};
+use crate::core::tile::Tile;
+use crate::error::{Error, Result};
+
+/// Default number of times each sample is in a slice's class per iteration; sets
+/// the default slices per iteration.
+pub const DEFAULT_HITS: f64 = 16.0;
+pub const DEFAULT_ITERATIONS: u32 = 1000;
+
+/// A cap on the iterations of a run that stops by a rule.
+pub const DEFAULT_CAP: u32 = 10_000;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Settings {
+    pub kernel: KernelSpec,
+    /// The run's length (`Until::Iterations`) or its cap (the other rules).
+    pub iterations: u32,
+    /// Slices per iteration; `None`: enough for DEFAULT_HITS hits per sample.
+    pub slices: Option<u32>,
+    pub seed: u64,
+    pub rule: StepRule,
+    pub until: Until,
+}
+
+/// When a run ends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Until {
+    /// After exactly `iterations` iterations, with the cosine schedule over them.
+    Iterations,
+    /// When the plateau schedule says further iterations no longer pay.
+    Plateau(Plateau),
+    /// When a window's mean objective estimate is at most this (or the plateau
+    /// schedule stops first).
+    Objective(f64),
+}
+
+impl Until {
+    /// The end-agnostic schedule the rule runs, if any.
+    pub fn plateau(&self) -> Option<Plateau> {
+        match self {
+            Until::Iterations => None,
+            Until::Plateau(p) => Some(*p),
+            Until::Objective(_) => Some(Plateau::DEFAULT),
+        }
+    }
+}
+
+impl Settings {
+    pub fn new(kernel: KernelSpec, seed: u64) -> Self {
+        Self {
+            kernel,
+            iterations: DEFAULT_ITERATIONS,
+            slices: None,
+            seed,
+            rule: StepRule::DEFAULT,
+            until: Until::Iterations,
+        }
+    }
+}
+
+/// Where a run stands after some iterations: enough to continue it exactly
+/// (`checkpoint.rs` stores it). `second` is empty unless the rule is Adam;
+/// `plateau` is the end-agnostic schedule's state, for runs that stop by a rule.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunState {
+    pub iteration: u32,
+    pub samples: Vec<f32>,
+    pub first: Vec<f32>,
+    pub second: Vec<f32>,
+    pub plateau: Option<PlateauState>,
+}
+
+impl RunState {
+    /// Checks the state against a run's tile, rule and length.
+    pub fn check(&self, tile: &Tile, settings: &Settings) -> Result<()> {
+        let n = tile.values();
+        let adam = matches!(settings.rule, StepRule::Adam { .. });
+        if self.samples.len() != n || self.first.len() != n || self.second.len() != if adam { n } else { 0 } {
+            return Err(Error::invalid("the saved state does not match this run's tile or step rule"));
+        }
+        if self.plateau.is_some() != settings.until.plateau().is_some() {
+            return Err(Error::invalid("the saved state does not match this run's stopping rule"));
+        }
+        if self.iteration > settings.iterations {
+            return Err(Error::invalid(format!(
+                "the saved state is at iteration {} of a run of {}",
+                self.iteration, settings.iterations
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// The starting samples: `init` (checked against the tile) or white noise drawn
+/// from the seed.
+pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) -> Result<Vec<f32>> {
+    match init {
+        Some(mask) if mask.tile != *tile => Err(Error::invalid(format!(
+            "the initial mask is {} but the run asks for {}",
+            mask.tile.describe(),
+            tile.describe()
+        ))),
+        Some(mask) => Ok(mask.samples.clone()),
+        None => Ok(Mask::white(*tile, settings.seed).samples),
+    }
+}
+
+/// Slices per iteration (the setting, or enough for DEFAULT_HITS class
+/// memberships per sample) and the resulting expected hits per sample.
+pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Result<(u32, f64)> {
+    let mean_points = kernel.mean_class_len() * tile.spp as f64;
+    let slices = match settings.slices {
+        Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
+        Some(s) => s,
+        None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
+    };
+    Ok((slices, slices as f64 * mean_points / tile.points() as f64))
+}
+
+/// A mask with the provenance of a run.
+pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples: Vec<f32>) -> Mask {
+    let mut meta = vec![
+        ("method".to_string(), "fsot".to_string()),
+        ("kernel".to_string(), s.kernel.describe()),
+        ("seed".to_string(), s.seed.to_string()),
+        ("iterations".to_string(), iterations.to_string()),
+        ("slices".to_string(), slices.to_string()),
+        ("step".to_string(), format!("{:?}", s.rule)),
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+    ];
+    meta.sort();
+    Mask { tile: *tile, samples, meta }
+}

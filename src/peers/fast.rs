@@ -1,0 +1,380 @@
+//! FAST, filter-adapted spatiotemporal masks (Donnelly et al. 2024): swaps that
+//! minimise the sum over pairs of pixels of the filter's autocorrelation at their
+//! offset times minus the distance between their values,
+//!
+//!   L = sum_{p != q} A(q - p) (-|x_p - x_q|),
+//!
+//! so pixels the filter mixes get values far apart. The filter is separable: a
+//! spatial filter (Gaussian, box or binomial, the same along x and y) and a
+//! temporal one (Gaussian, box, binomial, or an exponential moving average with
+//! blend alpha and history reset beta), combined as a product (one 3-D filter)
+//! or a weighted sum (a spatial loss within each frame plus a temporal loss at
+//! each pixel). Autocorrelations are taken on the wrapping tile, so the mask
+//! tiles seamlessly.
+
+use crate::core::mask::Mask;
+use crate::core::rng::{derive, seed_key, Stream};
+use crate::core::tile::Tile;
+use crate::error::{Error, Result};
+use crate::peers::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm};
+
+/// A 1-D filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Filter {
+    /// The identity (no filtering along this axis).
+    None,
+    /// exp(-k^2 / (2 sigma^2)).
+    Gaussian { sigma: f64 },
+    /// n equal taps.
+    Box { n: u32 },
+    /// Binomial coefficients C(n, k), k = 0..n.
+    Binomial { n: u32 },
+    /// Exponential moving average, causal: weight ((1 - alpha)(1 - beta))^k for
+    /// the frame k back, where beta is the chance per frame that the history is
+    /// thrown away (a reset); the TAA case.
+    Ema { alpha: f64, beta: f64 },
+}
+
+impl Filter {
+    /// Parses `none`, `gaussian:SIGMA`, `box:N`, `binomial:N`, `ema:ALPHA:BETA`.
+    pub fn parse(text: &str, temporal: bool) -> Result<Self> {
+        let parts: Vec<&str> = text.split(':').collect();
+        let num = |i: usize| -> Result<f64> {
+            parts
+                .get(i)
+                .and_then(|s| s.trim().parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| Error::invalid(format!("filter `{text}`: expected a number after `:`")))
+        };
+        let count = |i: usize| -> Result<u32> {
+            let v = num(i)?;
+            if v.fract() != 0.0 || !(0.0..=64.0).contains(&v) {
+                return Err(Error::invalid(format!("filter `{text}`: expected a whole number 0..64")));
+            }
+            Ok(v as u32)
+        };
+        let arity = |n: usize| -> Result<()> {
+            if parts.len() != n {
+                return Err(Error::invalid(format!("filter `{text}`: expected {} parameter(s)", n - 1)));
+            }
+            Ok(())
+        };
+        let filter = match parts[0] {
+            "none" => {
+                arity(1)?;
+                Filter::None
+            }
+            "gaussian" => {
+                arity(2)?;
+                Filter::Gaussian { sigma: num(1)? }
+            }
+            "box" => {
+                arity(2)?;
+                Filter::Box { n: count(1)? }
+            }
+            "binomial" => {
+                arity(2)?;
+                Filter::Binomial { n: count(1)? }
+            }
+            "ema" if temporal => {
+                arity(3)?;
+                Filter::Ema { alpha: num(1)?, beta: num(2)? }
+            }
+            _ => {
+                let names = if temporal {
+                    "none, gaussian, box, binomial, ema"
+                } else {
+                    "none, gaussian, box, binomial"
+                };
+                return Err(Error::invalid(format!("unknown filter `{text}` (one of {names})")));
+            }
+        };
+        filter.validate()?;
+        Ok(filter)
+    }
+
+    fn validate(&self) -> Result<()> {
+        let ok = match *self {
+            Filter::None => true,
+            Filter::Gaussian { sigma } => sigma > 0.0 && sigma <= 64.0,
+            Filter::Box { n } => (1..=64).contains(&n),
+            Filter::Binomial { n } => n <= 64,
+            Filter::Ema { alpha, beta } => alpha > 0.0 && alpha <= 1.0 && (0.0..1.0).contains(&beta),
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::invalid(format!(
+                "filter {self:?} out of range (sigma in (0, 64], box 1..64, binomial 0..64, alpha in (0, 1], beta in [0, 1))"
+            )))
+        }
+    }
+
+    /// Taps (offset, weight).
+    fn taps(&self) -> Vec<(i64, f64)> {
+        match *self {
+            Filter::None => vec![(0, 1.0)],
+            Filter::Gaussian { sigma } => {
+                let r = (4.0 * sigma).ceil() as i64;
+                (-r..=r).map(|k| (k, (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())).collect()
+            }
+            Filter::Box { n } => (0..n as i64).map(|k| (k - (n as i64 - 1) / 2, 1.0)).collect(),
+            Filter::Binomial { n } => {
+                let mut c = 1.0f64;
+                (0..=n as i64)
+                    .map(|k| {
+                        let tap = (k - n as i64 / 2, c);
+                        c = c * (n as i64 - k) as f64 / (k + 1) as f64;
+                        tap
+                    })
+                    .collect()
+            }
+            Filter::Ema { alpha, beta } => {
+                let ratio = (1.0 - alpha) * (1.0 - beta);
+                let mut taps = vec![(0i64, 1.0)];
+                let mut w = ratio;
+                while w > 1e-9 && taps.len() < 100_000 {
+                    taps.push((-(taps.len() as i64), w));
+                    w *= ratio;
+                }
+                taps
+            }
+        }
+    }
+
+    /// Circular autocorrelation of the filter folded onto a wrapping axis of
+    /// length n: `A[tau] = sum_j F[j] F[(j + tau) mod n]`, normalised to sum 1.
+    pub fn autocorrelation(&self, n: usize) -> Vec<f64> {
+        let mut folded = vec![0.0f64; n];
+        for (k, w) in self.taps() {
+            folded[k.rem_euclid(n as i64) as usize] += w;
+        }
+        let mut a: Vec<f64> =
+            (0..n).map(|tau| (0..n).map(|j| folded[j] * folded[(j + tau) % n]).sum::<f64>()).collect();
+        // Exact symmetry (A[tau] = A[n - tau] up to the order of the sum).
+        for tau in 1..n {
+            let m = 0.5 * (a[tau] + a[n - tau]);
+            a[tau] = m;
+            a[n - tau] = m;
+        }
+        let total: f64 = a.iter().sum();
+        a.iter().map(|v| v / total).collect()
+    }
+}
+
+/// How the spatial and temporal filters make one loss.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Combine {
+    /// One separable 3-D filter: A(dx, dy, dt) = A_s(dx, dy) A_t(dt).
+    Product,
+    /// weight x (spatial loss within each frame) + (1 - weight) x (temporal loss
+    /// at each pixel).
+    Sum { spatial_weight: f64 },
+}
+
+impl Combine {
+    pub fn parse(text: &str) -> Result<Self> {
+        if text == "product" {
+            return Ok(Combine::Product);
+        }
+        if let Some(w) = text.strip_prefix("sum:") {
+            if let Ok(w) = w.parse::<f64>() {
+                if (0.0..=1.0).contains(&w) {
+                    return Ok(Combine::Sum { spatial_weight: w });
+                }
+            }
+        }
+        Err(Error::invalid(format!("combination `{text}`: expected `product` or `sum:W` with W in [0, 1]")))
+    }
+}
+
+/// A FAST filter setting.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FastSpec {
+    pub spatial: Filter,
+    pub temporal: Filter,
+    pub combine: Combine,
+}
+
+impl Default for FastSpec {
+    /// The published TAA mask's setting: Gaussian sigma 1.3435 times an EMA with
+    /// alpha 0.1 and history reset 0.1.
+    fn default() -> Self {
+        Self {
+            spatial: Filter::Gaussian { sigma: 1.3435 },
+            temporal: Filter::Ema { alpha: 0.1, beta: 0.1 },
+            combine: Combine::Product,
+        }
+    }
+}
+
+/// Autocorrelation weights below this share of the largest are dropped.
+const CUTOFF: f64 = 1e-3;
+
+impl FastSpec {
+    pub fn describe(&self) -> String {
+        let c = match self.combine {
+            Combine::Product => "product".to_string(),
+            Combine::Sum { spatial_weight } => format!("sum, spatial weight {spatial_weight}"),
+        };
+        format!("fast: spatial {:?}, temporal {:?}, {c}", self.spatial, self.temporal)
+    }
+
+    /// The pair weights of the loss on a tile.
+    pub fn offsets(&self, tile: &Tile) -> Vec<(i64, i64, i64, f64)> {
+        let ax = self.spatial.autocorrelation(tile.width);
+        let ay = self.spatial.autocorrelation(tile.height);
+        let at = self.temporal.autocorrelation(tile.frames);
+        let mut out = Vec::new();
+        match self.combine {
+            Combine::Product => {
+                let largest = ax[0] * ay[0] * at[0];
+                for (dt, &t) in at.iter().enumerate() {
+                    for (dy, &y) in ay.iter().enumerate() {
+                        for (dx, &x) in ax.iter().enumerate() {
+                            let w = x * y * t;
+                            if w >= CUTOFF * largest {
+                                out.push((dx as i64, dy as i64, dt as i64, w));
+                            }
+                        }
+                    }
+                }
+            }
+            Combine::Sum { spatial_weight } => {
+                let largest = (spatial_weight * ax[0] * ay[0]).max((1.0 - spatial_weight) * at[0]);
+                for (dy, &y) in ay.iter().enumerate() {
+                    for (dx, &x) in ax.iter().enumerate() {
+                        let w = spatial_weight * x * y;
+                        if w >= CUTOFF * largest && w > 0.0 {
+                            out.push((dx as i64, dy as i64, 0, w));
+                        }
+                    }
+                }
+                for (dt, &t) in at.iter().enumerate() {
+                    let w = (1.0 - spatial_weight) * t;
+                    if w >= CUTOFF * largest && w > 0.0 {
+                        out.push((0, 0, dt as i64, w));
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Starting values of a swap method: each dimension holds the N stratified
+/// values (r + 0.5) / N exactly once, shuffled independently per dimension, so
+/// every one-dimensional marginal is as uniform as N values can be and swaps
+/// (which move whole vectors) keep it so.
+pub fn stratified_values(tile: &Tile, seed: u64, label: u32) -> Vec<f32> {
+    let (n, d) = (tile.pixels(), tile.dims);
+    let mut values = vec![0.0f32; n * d];
+    for k in 0..d {
+        let mut rng = Stream::new(derive(derive(seed_key(seed), label), k as u32));
+        let mut order: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            order.swap(i, rng.below(i as u32 + 1) as usize);
+        }
+        for (p, &r) in order.iter().enumerate() {
+            values[p * d + k] = ((r as f64 + 0.5) / n as f64) as f32;
+        }
+    }
+    values
+}
+
+/// A FAST mask: greedy swaps from stratified values, searched on `device`.
+pub fn fast_mask(
+    tile: Tile,
+    spec: &FastSpec,
+    passes: u32,
+    seed: u64,
+    device: &SwapDevice,
+    on_pass: impl FnMut(u32, f64),
+) -> Result<(Mask, SwapReport)> {
+    let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance)?;
+    let mut samples = stratified_values(&tile, seed, 0xfa57);
+    let report = device.search(
+        &energy,
+        &mut samples,
+        Schedule::greedy(passes),
+        derive(seed_key(seed), 0xfa58),
+        on_pass,
+    )?;
+    let mut meta = vec![
+        ("method".to_string(), "fast".to_string()),
+        ("kernel".to_string(), spec.describe()),
+        ("seed".to_string(), seed.to_string()),
+        ("passes".to_string(), passes.to_string()),
+        ("backend".to_string(), device.kind().to_string()),
+        ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+    ];
+    meta.sort();
+    Ok((Mask { tile, samples, meta }, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn autocorrelations_match_direct_sums() {
+        // A box of 3 on a long axis: autocorrelation 3, 2, 1 at lags 0, 1, 2 (of 9).
+        let a = Filter::Box { n: 3 }.autocorrelation(16);
+        for (lag, want) in [(0, 3.0), (1, 2.0), (2, 1.0), (3, 0.0), (15, 2.0), (14, 1.0)] {
+            assert!((a[lag] - want / 9.0).abs() < 1e-12, "lag {lag}: {}", a[lag]);
+        }
+        // Binomial 2 = (1, 2, 1): autocorrelation (1, 4, 6, 4, 1) / 16.
+        let b = Filter::Binomial { n: 2 }.autocorrelation(8);
+        for (lag, want) in [(0, 6.0), (1, 4.0), (2, 1.0), (7, 4.0), (6, 1.0), (4, 0.0)] {
+            assert!((b[lag] - want / 16.0).abs() < 1e-12, "lag {lag}");
+        }
+        // EMA with ratio r on a wrapping axis of n frames: the folded filter is
+        // geometric with ratio r over one period, scaled; its autocorrelation
+        // against a direct double sum over the unfolded taps.
+        let (alpha, beta, n) = (0.3, 0.2, 5usize);
+        let r: f64 = 0.7 * 0.8;
+        let e = Filter::Ema { alpha, beta }.autocorrelation(n);
+        let mut direct = vec![0.0; n];
+        for i in 0..200i64 {
+            for j in 0..200i64 {
+                direct[(j - i).rem_euclid(n as i64) as usize] += r.powi(i as i32) * r.powi(j as i32);
+            }
+        }
+        let total: f64 = direct.iter().sum();
+        for lag in 0..n {
+            assert!((e[lag] - direct[lag] / total).abs() < 1e-9, "lag {lag}");
+        }
+    }
+
+    #[test]
+    fn filter_names_parse_and_bad_ones_are_refused() {
+        assert_eq!(Filter::parse("gaussian:1.5", false).unwrap(), Filter::Gaussian { sigma: 1.5 });
+        assert_eq!(Filter::parse("ema:0.1:0.1", true).unwrap(), Filter::Ema { alpha: 0.1, beta: 0.1 });
+        assert_eq!(Filter::parse("box:3", true).unwrap(), Filter::Box { n: 3 });
+        for bad in
+            ["ema:0.1:0.1", "gaussian", "gaussian:-1", "box:0", "box:2.5", "binomial:x", "sinc:2", "none:1"]
+        {
+            assert!(Filter::parse(bad, false).is_err(), "{bad}");
+        }
+        for bad in ["ema:0:0.1", "ema:0.5:1", "ema:1.5:0", "ema:0.1"] {
+            assert!(Filter::parse(bad, true).is_err(), "{bad}");
+        }
+        assert_eq!(Combine::parse("sum:0.25").unwrap(), Combine::Sum { spatial_weight: 0.25 });
+        assert!(Combine::parse("sum:2").is_err() && Combine::parse("mix").is_err());
+    }
+
+    #[test]
+    fn stratified_values_hold_each_stratum_once_per_dimension() {
+        let tile = Tile::new(6, 5, 3, 1, 3).unwrap();
+        let v = stratified_values(&tile, 4, 1);
+        let n = tile.pixels();
+        for k in 0..3 {
+            let mut seen = vec![false; n];
+            for p in 0..n {
+                let r = (v[p * 3 + k] as f64 * n as f64 - 0.5).round() as usize;
+                assert!(!seen[r]);
+                seen[r] = true;
+            }
+        }
+    }
+}

@@ -1,0 +1,309 @@
+//! What a renderer binds to read fsot's masks through `glsl/include/fsot.glsl`:
+//! every mask of a plan stacked in one 2-D array image, and the plan block (the
+//! tile and, per part in the order the renderer consumes them, the offset, the
+//! base layer and the toroidal shift). A single mask is a one-part plan.
+//!
+//! `SamplerPlan::value` is the include's formula on the CPU (the same f32
+//! operations), for tests and for renderers that sample on the host.
+
+use std::path::Path;
+
+use bytemuck::{Pod, Zeroable};
+use serde::Deserialize;
+
+use crate::core::mask::Mask;
+use crate::error::{Error, Result};
+use crate::io::ktx2::Format;
+
+/// Parts the include's plan block holds by default (`FSOT_MAX_PARTS`).
+pub const MAX_PARTS: usize = 16;
+
+/// Roberts' R4 sequence in 0.32 fixed point (`FSOT_R4` in the include).
+pub const R4: [u32; 4] = [3_679_390_609, 3_152_041_523, 2_700_274_806, 2_313_257_605];
+
+/// One part of the plan block (`FsotPart`, std140: 32 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PartBlock {
+    /// x, y, frame offset; the mask's base layer.
+    pub offset_base: [u32; 4],
+    pub shift: [f32; 4],
+}
+
+/// The head of the plan block (`FsotPlan` before its parts).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PlanHead {
+    /// W, H, T, spp.
+    pub tile: [u32; 4],
+    /// Parts, then 0, 0, 0.
+    pub count: [u32; 4],
+}
+
+/// One read of the plan: which mask, where, how shifted.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SamplerPart {
+    pub mask: usize,
+    pub dims: usize,
+    pub offset: [u32; 3],
+    pub shift: Vec<f32>,
+}
+
+/// A plan ready to bind.
+#[derive(Clone, Debug)]
+pub struct SamplerPlan {
+    pub masks: Vec<Mask>,
+    pub parts: Vec<SamplerPart>,
+}
+
+#[derive(Deserialize)]
+struct PlanFile {
+    tile: [usize; 3],
+    groups: Vec<GroupFile>,
+}
+
+#[derive(Deserialize)]
+struct GroupFile {
+    parts: Vec<PartFile>,
+}
+
+#[derive(Deserialize)]
+struct PartFile {
+    mask: String,
+    dims: usize,
+    offset: [u32; 3],
+    shift: Vec<f32>,
+}
+
+impl SamplerPlan {
+    /// One mask read as one part: offset 0, no shift.
+    pub fn single(mask: Mask) -> Result<Self> {
+        let dims = mask.tile.dims;
+        if dims > 4 {
+            return Err(Error::invalid(format!("a part reads at most 4 dimensions, the mask has {dims}")));
+        }
+        Ok(Self {
+            masks: vec![mask],
+            parts: vec![SamplerPart { mask: 0, dims, offset: [0; 3], shift: vec![0.0; dims] }],
+        })
+    }
+
+    /// A plan folder (`read`) or a mask file (`.exr`, a one-part plan).
+    pub fn load(path: &Path) -> Result<Self> {
+        match path.is_dir() {
+            true => Self::read(path),
+            false => Self::single(crate::io::exr::read(path)?),
+        }
+    }
+
+    /// The plan `fsot optimize --scene` wrote into `dir` (`plan.json` and its masks).
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join("plan.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(path.display().to_string(), e))?;
+        let file: PlanFile = serde_json::from_str(&text)
+            .map_err(|e| Error::invalid(format!("{}: not a plan file: {e}", path.display())))?;
+        let parts = file
+            .groups
+            .iter()
+            .flat_map(|g| &g.parts)
+            .map(|p| (p.mask.as_str(), p.dims, p.offset, &p.shift[..]));
+        Self::assemble(&format!("{}: ", path.display()), parts, |name| {
+            if name.contains(['/', '\\']) || name.starts_with('.') {
+                return Err(Error::invalid(format!("{}: bad mask name {name:?}", path.display())));
+            }
+            let mask = crate::io::exr::read(&dir.join(name))?;
+            let t = mask.tile;
+            if [t.width, t.height, t.frames] != file.tile {
+                return Err(Error::invalid(format!(
+                    "{}: {name} is {}x{}x{}, the plan's tile {:?}",
+                    path.display(),
+                    t.width,
+                    t.height,
+                    t.frames,
+                    file.tile
+                )));
+            }
+            Ok(mask)
+        })
+        .map_err(|e| match e {
+            Error::Invalid(m) if m.starts_with("a part of") => {
+                Error::invalid(format!("{}: {m}", path.display()))
+            }
+            e => e,
+        })
+    }
+
+    /// A plan made in memory (`renderer::make_plan_into_image`): `masks[i]` is
+    /// the mask of `plan.masks[i]`; laid out as `read` lays out the folder
+    /// `Plan::execute` writes.
+    pub fn from_plan(plan: &crate::scene::plan::Plan, masks: Vec<Mask>) -> Result<Self> {
+        if masks.len() != plan.masks.len() {
+            return Err(Error::invalid(format!("{} masks for a plan of {}", masks.len(), plan.masks.len())));
+        }
+        let mut masks: Vec<Option<Mask>> = masks.into_iter().map(Some).collect();
+        let parts = plan
+            .groups
+            .iter()
+            .flat_map(|g| &g.parts)
+            .map(|p| (p.mask.as_str(), p.dims, p.offset, &p.shift[..]));
+        Self::assemble("", parts, |name| {
+            plan.masks
+                .iter()
+                .position(|m| m.file == name)
+                .and_then(|i| masks[i].take())
+                .ok_or_else(|| Error::invalid(format!("the plan has no mask {name}")))
+        })
+    }
+
+    /// The masks in the order the parts first read them, each loaded once;
+    /// errors start with `context`.
+    fn assemble<'a>(
+        context: &str,
+        parts: impl Iterator<Item = (&'a str, usize, [u32; 3], &'a [f32])>,
+        mut load: impl FnMut(&str) -> Result<Mask>,
+    ) -> Result<Self> {
+        let mut names: Vec<&str> = Vec::new();
+        let mut plan = Self { masks: Vec::new(), parts: Vec::new() };
+        for (name, dims, offset, shift) in parts {
+            let index = match names.iter().position(|n| *n == name) {
+                Some(i) => i,
+                None => {
+                    plan.masks.push(load(name)?);
+                    names.push(name);
+                    names.len() - 1
+                }
+            };
+            if dims > plan.masks[index].tile.dims || shift.len() != dims {
+                return Err(Error::invalid(format!("{context}a part of {name} does not fit it")));
+            }
+            plan.parts.push(SamplerPart { mask: index, dims, offset, shift: shift.to_vec() });
+        }
+        plan.check()?;
+        Ok(plan)
+    }
+
+    fn check(&self) -> Result<()> {
+        let first = self.masks.first().ok_or_else(|| Error::invalid("a plan without masks"))?.tile;
+        for m in &self.masks {
+            let t = m.tile;
+            if (t.width, t.height, t.frames, t.spp) != (first.width, first.height, first.frames, first.spp) {
+                return Err(Error::invalid("the masks of one sampler plan share W, H, T and spp"));
+            }
+            if t.dims > 4 {
+                return Err(Error::invalid(format!(
+                    "a mask of the sampler holds at most 4 dimensions, not {}",
+                    t.dims
+                )));
+            }
+        }
+        if self.parts.len() > MAX_PARTS {
+            return Err(Error::invalid(format!(
+                "{} parts, the include's block holds {MAX_PARTS} (define FSOT_MAX_PARTS and use plan_block_for)",
+                self.parts.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// W, H, T, spp.
+    pub fn tile(&self) -> [u32; 4] {
+        let t = self.masks[0].tile;
+        [t.width as u32, t.height as u32, t.frames as u32, t.spp as u32]
+    }
+
+    /// Layers per mask (T x spp); mask m starts at layer m x this.
+    pub fn layers_per_mask(&self) -> u32 {
+        let t = self.tile();
+        t[2] * t[3]
+    }
+
+    /// The largest dimension of the masks: the image's format needs that many channels.
+    pub fn max_dims(&self) -> usize {
+        self.masks.iter().map(|m| m.tile.dims).max().unwrap_or(1)
+    }
+
+    /// The plan block for the include with `FSOT_MAX_PARTS` = `capacity`.
+    pub fn plan_block_for(&self, capacity: usize) -> Result<Vec<u8>> {
+        if self.parts.len() > capacity {
+            return Err(Error::invalid(format!("{} parts, the block holds {capacity}", self.parts.len())));
+        }
+        let head = PlanHead { tile: self.tile(), count: [self.parts.len() as u32, 0, 0, 0] };
+        let mut out = bytemuck::bytes_of(&head).to_vec();
+        for k in 0..capacity {
+            let block = match self.parts.get(k) {
+                Some(p) => {
+                    let mut shift = [0.0; 4];
+                    shift[..p.shift.len()].copy_from_slice(&p.shift);
+                    PartBlock {
+                        offset_base: [
+                            p.offset[0],
+                            p.offset[1],
+                            p.offset[2],
+                            p.mask as u32 * self.layers_per_mask(),
+                        ],
+                        shift,
+                    }
+                }
+                None => PartBlock::default(),
+            };
+            out.extend_from_slice(bytemuck::bytes_of(&block));
+        }
+        Ok(out)
+    }
+
+    /// The plan block for the include's default `FSOT_MAX_PARTS` (16).
+    pub fn plan_block(&self) -> Result<Vec<u8>> {
+        self.plan_block_for(MAX_PARTS)
+    }
+
+    /// The stacked 2-D array image's texels in `format` (checked to hold every
+    /// mask): mask by mask, layer by layer, as `io::ktx2` lays out one mask.
+    pub fn texels(&self, format: Format) -> Result<Vec<u8>> {
+        let mut out = Vec::new();
+        for m in &self.masks {
+            out.extend(crate::io::ktx2::texels(m, format)?);
+        }
+        Ok(out)
+    }
+
+    /// The include's `fsot_get` for `part` at pixel (x, y), frame and sample,
+    /// from texels as `format` stores them; past the last part, None (the
+    /// include's hash fallback).
+    pub fn value(
+        &self,
+        part: usize,
+        x: u32,
+        y: u32,
+        frame: u32,
+        sample: u32,
+        format: Format,
+    ) -> Option<[f32; 4]> {
+        let p = self.parts.get(part)?;
+        let [w, h, t, spp] = self.tile();
+        let f = frame.wrapping_add(p.offset[2]);
+        let turn = f / t;
+        let m = &self.masks[p.mask];
+        let texel = m.sample(
+            ((x + p.offset[0]) % w) as usize,
+            ((y + p.offset[1]) % h) as usize,
+            (f % t) as usize,
+            (sample % spp) as usize,
+        );
+        let mut out = [0.0f32; 4];
+        for (j, o) in out.iter_mut().enumerate() {
+            let stored = texel.get(j).copied().unwrap_or(0.0);
+            let v = match format.bits() {
+                32 => stored,
+                b => {
+                    let top = ((1u64 << b) - 1) as f32;
+                    crate::io::ktx2::quantize(stored, b) as f32 / top
+                }
+            };
+            let r = (turn.wrapping_mul(R4[j]) >> 8) as f32 * (1.0 / 16_777_216.0);
+            let s = p.shift.get(j).copied().unwrap_or(0.0);
+            let sum = v + s + r;
+            *o = sum - sum.floor();
+        }
+        Some(out)
+    }
+}

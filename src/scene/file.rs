@@ -1,0 +1,320 @@
+//! A scene file: what a renderer samples and how its frames are seen (TOML).
+//!
+//! ```toml
+//! [display]
+//! fps = 60            # frame rate, for the perceptual filter
+//! taa_alpha = 0.1     # TAA blend weight of the current frame; absent: no TAA
+//! name = "standard_fhd"  # the display the frames are seen on (default), or:
+//! # ppd = 60          #   its pixels per degree, or:
+//! # resolution = [2560, 1440]
+//! # diagonal = 27.0   #   inches
+//! # distance = 0.7    #   metres
+//! # sigma = 2.1       # instead: the eye as a spatial Gaussian in pixels
+//! animated = true     # false: still camera and scene (accumulation)
+//!
+//! [tile]              # optional; the planner chooses what is absent
+//! size = "128x128x64"
+//! reading = "scalar"  # "scalar": a 1-D mask per dimension; "vector": masks of pairs
+//!
+//! [[group]]           # one per sampling decision, in the order the renderer consumes them
+//! name = "pick"       # unique, [a-z0-9_]
+//! dims = 1            # 1 to 8
+//! spp = 1             # optional, default 1
+//! visible = true      # optional; false: its error is not seen directly
+//! share = true        # optional; false: never reads another decision's mask
+//! ```
+//!
+//! Unknown keys are refused; every error names its line.
+
+use std::ops::Range;
+use std::path::Path;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::core::kernel::Spatial;
+use crate::core::tile::{Tile, MAX_DIMS, MAX_SPP};
+use crate::error::{Error, Result};
+
+/// How the renderer's frames are shown and seen.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Display {
+    pub fps: f64,
+    /// TAA's blend weight of the current frame; None: no TAA.
+    pub taa_alpha: Option<f64>,
+    /// The eye's spatial filter: the contrast sensitivity at the display's
+    /// pixels per degree, or a Gaussian given in pixels.
+    pub spatial: Spatial,
+    /// Where `spatial` came from, for the plan's reasons.
+    pub seen_on: String,
+    /// False: a still camera and scene, frames accumulated.
+    pub animated: bool,
+}
+
+/// One sampling decision of the renderer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Group {
+    pub name: String,
+    pub dims: usize,
+    pub spp: usize,
+    /// False: its error is not seen directly (deep bounces, roulette).
+    pub visible: bool,
+    /// False: the decision gets masks of its own even where it could share one.
+    pub share: bool,
+}
+
+/// How a decision of several dimensions reads its numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reading {
+    /// A 1-D mask per dimension, each read at its own offset and shift.
+    Scalar,
+    /// Masks of pairs of dimensions (and a single for an odd last one).
+    Vector,
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The file's stem.
+    pub name: String,
+    pub display: Display,
+    /// W, H, T when the file gives them.
+    pub size: Option<(usize, usize, usize)>,
+    /// How decisions of more than one dimension read masks, when the file says.
+    pub reading: Option<Reading>,
+    /// In the order the renderer consumes them.
+    pub groups: Vec<Group>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileScene {
+    display: Option<Spanned<FileDisplay>>,
+    tile: Option<FileTile>,
+    #[serde(default)]
+    group: Vec<Spanned<FileGroup>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileDisplay {
+    fps: Option<Spanned<f64>>,
+    taa_alpha: Option<Spanned<f64>>,
+    name: Option<Spanned<String>>,
+    ppd: Option<Spanned<f64>>,
+    resolution: Option<Spanned<[u32; 2]>>,
+    diagonal: Option<Spanned<f64>>,
+    distance: Option<Spanned<f64>>,
+    sigma: Option<Spanned<f64>>,
+    animated: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileTile {
+    size: Option<Spanned<String>>,
+    reading: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileGroup {
+    name: Spanned<String>,
+    dims: Spanned<i64>,
+    spp: Option<Spanned<i64>>,
+    visible: Option<bool>,
+    share: Option<bool>,
+}
+
+impl Scene {
+    /// Reads and checks a scene file.
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::io(format!("cannot read the scene {}", path.display()), e))?;
+        let name =
+            path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        Self::parse(&text, &name).map_err(|reason| Error::bad_file(path, reason))
+    }
+
+    /// Parses and checks scene text; the error names the line.
+    pub fn parse(text: &str, name: &str) -> std::result::Result<Self, String> {
+        let at = |span: Range<usize>, what: String| format!("line {}: {what}", line_of(text, span.start));
+        let file: FileScene = toml::from_str(text).map_err(|e| match e.span() {
+            Some(span) => at(span, e.message().trim().to_string()),
+            None => e.message().trim().to_string(),
+        })?;
+        let display = match &file.display {
+            Some(d) => check_display(d.get_ref(), &at)?,
+            None => Display::default(),
+        };
+        let size = match file.tile.as_ref().and_then(|t| t.size.as_ref()) {
+            Some(s) => Some(Tile::parse_size(s.get_ref()).map_err(|e| at(s.span(), e.to_string()))?),
+            None => None,
+        };
+        if file.group.is_empty() {
+            return Err("no [[group]]: a scene needs at least one sampling decision".into());
+        }
+        let mut groups: Vec<Group> = Vec::new();
+        for g in &file.group {
+            let group = check_group(g.get_ref(), &at)?;
+            if groups.iter().any(|o| o.name == group.name) {
+                return Err(at(g.get_ref().name.span(), format!("a second group named {:?}", group.name)));
+            }
+            groups.push(group);
+        }
+        let reading = match file.tile.as_ref().and_then(|t| t.reading.as_ref()) {
+            Some(r) => Some(match r.get_ref().as_str() {
+                "scalar" => Reading::Scalar,
+                "vector" => Reading::Vector,
+                other => {
+                    return Err(at(
+                        r.span(),
+                        format!("reading must be \"scalar\" or \"vector\", got {other:?}"),
+                    ))
+                }
+            }),
+            None => None,
+        };
+        Ok(Self { name: name.to_string(), display, size, reading, groups })
+    }
+}
+
+fn check_display(
+    d: &FileDisplay,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<Display, String> {
+    let fps = match &d.fps {
+        Some(f) if !(f.get_ref().is_finite() && *f.get_ref() > 0.0 && *f.get_ref() <= 1000.0) => {
+            return Err(at(f.span(), format!("fps must be in (0, 1000], got {}", f.get_ref())))
+        }
+        Some(f) => *f.get_ref(),
+        None => 60.0,
+    };
+    let taa_alpha = match &d.taa_alpha {
+        Some(a) if !(a.get_ref().is_finite() && *a.get_ref() > 0.0 && *a.get_ref() <= 1.0) => {
+            return Err(at(a.span(), format!("taa_alpha must be in (0, 1], got {}", a.get_ref())))
+        }
+        Some(a) => Some(*a.get_ref()),
+        None => None,
+    };
+    let (spatial, seen_on) = viewing(d, at)?;
+    Ok(Display { fps, taa_alpha, spatial, seen_on, animated: d.animated.unwrap_or(true) })
+}
+
+/// The spatial filter of a `[display]`: one of a name, ppd, the geometry
+/// (resolution, diagonal, distance, all three) or sigma.
+fn viewing(
+    d: &FileDisplay,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<(Spatial, String), String> {
+    let geometry = [
+        d.resolution.as_ref().map(|r| r.span()),
+        d.diagonal.as_ref().map(|r| r.span()),
+        d.distance.as_ref().map(|r| r.span()),
+    ];
+    let given: Vec<(&str, Range<usize>)> = [
+        ("name", d.name.as_ref().map(|v| v.span())),
+        ("ppd", d.ppd.as_ref().map(|v| v.span())),
+        ("resolution, diagonal and distance", geometry.iter().flatten().next().cloned()),
+        ("sigma", d.sigma.as_ref().map(|v| v.span())),
+    ]
+    .into_iter()
+    .filter_map(|(k, s)| s.map(|s| (k, s)))
+    .collect();
+    if let [_, (second, span), ..] = given.as_slice() {
+        return Err(at(
+            span.clone(),
+            format!(
+                "{second} with {}: give the display one way (name, ppd, the geometry or sigma)",
+                given[0].0
+            ),
+        ));
+    }
+    let on = |ppd: f64, span: Range<usize>, what: String| -> std::result::Result<(Spatial, String), String> {
+        let ppd = crate::quality::display::check_ppd(ppd).map_err(|e| at(span, e.to_string()))?;
+        Ok((Spatial::Display { ppd }, format!("{what}: {ppd:.1} pixels per degree")))
+    };
+    if let Some(s) = &d.sigma {
+        let sigma = *s.get_ref();
+        if !(sigma.is_finite() && sigma > 0.0 && sigma <= 8.0) {
+            return Err(at(s.span(), format!("sigma must be in (0, 8] pixels, got {sigma}")));
+        }
+        return Ok((Spatial::Gaussian { sigma }, format!("the eye as a Gaussian of sigma {sigma} pixels")));
+    }
+    if let Some(p) = &d.ppd {
+        return on(*p.get_ref(), p.span(), "the display".into());
+    }
+    if let Some(n) = &d.name {
+        let ppd =
+            crate::quality::display::preset_ppd(n.get_ref()).map_err(|e| at(n.span(), e.to_string()))?;
+        return on(ppd, n.span(), format!("display {}", n.get_ref()));
+    }
+    match (&d.resolution, &d.diagonal, &d.distance) {
+        (None, None, None) => Ok(Display::default_viewing()),
+        (Some(r), Some(g), Some(s)) => {
+            let ppd = crate::quality::display::pixels_per_degree(*r.get_ref(), *g.get_ref(), *s.get_ref())
+                .map_err(|e| at(r.span(), e.to_string()))?;
+            let [w, h] = *r.get_ref();
+            on(ppd, r.span(), format!("a {w} x {h} display of {} in at {} m", g.get_ref(), s.get_ref()))
+        }
+        _ => {
+            let span = geometry.iter().flatten().next().cloned().unwrap_or(0..0);
+            Err(at(
+                span,
+                "the display's geometry needs all of resolution, diagonal (inches) and distance (metres)"
+                    .into(),
+            ))
+        }
+    }
+}
+
+impl Display {
+    fn default_viewing() -> (Spatial, String) {
+        let name = crate::quality::display::DEFAULT_DISPLAY;
+        let ppd = crate::quality::display::preset_ppd(name).expect("the default display is a preset"); // ok: a constant
+        (Spatial::Display { ppd }, format!("display {name} (the default): {ppd:.1} pixels per degree"))
+    }
+}
+
+impl Default for Display {
+    /// 60 fps, no TAA, animated, seen on the default display.
+    fn default() -> Self {
+        let (spatial, seen_on) = Display::default_viewing();
+        Display { fps: 60.0, taa_alpha: None, spatial, seen_on, animated: true }
+    }
+}
+
+fn check_group(
+    g: &FileGroup,
+    at: &impl Fn(Range<usize>, String) -> String,
+) -> std::result::Result<Group, String> {
+    let name = g.name.get_ref();
+    let valid =
+        !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    if !valid {
+        return Err(at(g.name.span(), format!("group name {name:?} must be non-empty [a-z0-9_]")));
+    }
+    let dims = *g.dims.get_ref();
+    if !(1..=MAX_DIMS as i64).contains(&dims) {
+        return Err(at(g.dims.span(), format!("dims must be 1 to {MAX_DIMS}, got {dims}")));
+    }
+    let spp = match &g.spp {
+        Some(s) if !(1..=MAX_SPP as i64).contains(s.get_ref()) => {
+            return Err(at(s.span(), format!("spp must be 1 to {MAX_SPP}, got {}", s.get_ref())))
+        }
+        Some(s) => *s.get_ref() as usize,
+        None => 1,
+    };
+    Ok(Group {
+        name: name.clone(),
+        dims: dims as usize,
+        spp,
+        visible: g.visible.unwrap_or(true),
+        share: g.share.unwrap_or(true),
+    })
+}
+
+/// The 1-based line of a byte offset.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}

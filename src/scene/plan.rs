@@ -1,0 +1,609 @@
+//! The planner: from a scene (what a renderer samples and how its frames are
+//! seen) to the masks that pay off, each with the reason for it.
+//!
+//! - The kernel follows the display: TAA -> `perceptual-taa` at its alpha and frame
+//!   rate, no TAA -> `perceptual`, a still camera (frames accumulated) -> `spatial`.
+//! - The kernel's spatial filter is the eye at the scene's display (its contrast
+//!   sensitivity at the display's pixels per degree; `csf.rs`), or a Gaussian
+//!   the scene gives in pixels.
+//! - The tile: W = H from the scene or 128; T from the scene, or twice the TAA
+//!   history that carries 95% of the blend's weight rounded up to a power of two
+//!   (alpha 0.1 -> 64), or a quarter second of the eye's temporal filter without
+//!   TAA (60 fps -> 16), or 16 for a still camera.
+//! - Reading: decisions of two or more dimensions read masks of pairs (vector),
+//!   or a scalar mask per dimension where the scene asks (`reading = "scalar"`).
+//! - Each visible group gets masks of its own, one per pair of dimensions and one
+//!   for a last single dimension (a 1-D decision a scalar mask, a 2-D one a 2-D
+//!   mask, a 3-D one a pair and a single): renderers consume dimensions in pairs,
+//!   and a mask's quality in directions no decision reads is wasted. An invisible
+//!   group reads white noise (nothing is optimized for it).
+//! - A part of a decision whose dimension and spp match a mask an earlier part
+//!   owns reads that mask instead of a new one, at its own pixel and frame offset
+//!   and with its own toroidal shift (the k-th reader at the k-th point of the R3
+//!   and R_d sequences): measured to cost nothing against masks of its own
+//!   (RESULTS.md, `fsot-planned-unshared`), at none of the time. A group with
+//!   `share = false` owns all its masks and lends none.
+//! - Every optimized mask runs until further iterations no longer pay
+//!   (`Until::Plateau`); the estimate of its iterations is the measured stopping
+//!   point of the rule, its time a cost model: a calibration run on this machine
+//!   and backend scaled by the scaling suite's factors for dimension and spp.
+
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::core::kernel::KernelSpec;
+use crate::core::mask::Mask;
+use crate::core::step_rule::Plateau;
+use crate::core::tile::Tile;
+use crate::error::{Error, Result};
+use crate::io::atomic::AtomicFile;
+use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+use crate::optimize::settings::{Settings, Until, DEFAULT_CAP};
+use crate::scene::file::{Display, Reading, Scene};
+
+/// Tile width and height when the scene does not give them.
+pub const DEFAULT_SIZE: usize = 128;
+/// Iterations the plateau rule took on the measured tiles (BENCHMARKS.md: 640 to
+/// 672 on 32x32x16 `taa` and 64x64x32 `perceptual-taa`): the plan's estimate.
+pub const EXPECTED_ITERATIONS: u32 = 660;
+
+/// One mask file of the plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlannedMask {
+    /// File name in the output folder.
+    pub file: String,
+    pub dims: usize,
+    pub spp: usize,
+    /// White noise (nothing optimized).
+    pub white: bool,
+    pub seed: u64,
+    pub estimated_iterations: u32,
+    pub estimated_seconds: f64,
+}
+
+/// What one sampling decision reads.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Part {
+    /// The mask file (its own or one it shares).
+    pub mask: String,
+    /// The decision's dimensions this part covers, from `first`.
+    pub first: usize,
+    pub dims: usize,
+    /// Pixel and frame offset at which the decision reads the mask.
+    pub offset: [u32; 3],
+    /// Toroidal (Cranley-Patterson) shift per dimension.
+    pub shift: Vec<f32>,
+    /// The group whose mask this part reads, when it is not its own.
+    pub shares: Option<String>,
+}
+
+/// One sampling decision's plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PlannedGroup {
+    pub name: String,
+    pub dims: usize,
+    pub spp: usize,
+    pub parts: Vec<Part>,
+    /// Why nothing is optimized for it, when nothing is.
+    pub skipped: Option<String>,
+    pub reason: String,
+}
+
+/// A scene's plan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Plan {
+    pub scene: String,
+    pub tile: [usize; 3],
+    pub tile_reason: String,
+    /// "scalar" or "vector", and why.
+    pub reading: String,
+    pub reading_reason: String,
+    pub kernel: String,
+    pub kernel_reason: String,
+    /// The kernel itself (`kernel` is its description).
+    #[serde(skip)]
+    pub spec: KernelSpec,
+    pub backend: String,
+    pub groups: Vec<PlannedGroup>,
+    pub masks: Vec<PlannedMask>,
+    pub estimated_seconds: f64,
+    pub cost_model: String,
+}
+
+/// The kernel a display calls for, and why.
+pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
+    let (name, why) = match (display.animated, display.taa_alpha) {
+        (false, _) => (
+            "spatial",
+            "a still camera: frames are accumulated, each frame's error is seen alone".to_string(),
+        ),
+        (true, Some(a)) => ("perceptual-taa", format!("TAA (alpha {a}) then the eye at {} fps", display.fps)),
+        (true, None) => ("perceptual", format!("no TAA: the eye's temporal filter at {} fps", display.fps)),
+    };
+    let spec = KernelSpec::from_name(
+        name,
+        crate::core::kernel::DEFAULT_SIGMA,
+        None,
+        display.taa_alpha.unwrap_or(0.1),
+        display.fps,
+    )?;
+    let spec = KernelSpec { spatial: display.spatial, ..spec };
+    Ok((spec, format!("{why}; the eye: {}", display.seen_on)))
+}
+
+/// The tile's size, and why.
+pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
+    if let Some(size) = scene.size {
+        return (size, "as the scene gives it".into());
+    }
+    let d = &scene.display;
+    let (t, why) = match (d.animated, d.taa_alpha) {
+        (false, _) => (16, "a still camera: 16 frames to accumulate over".to_string()),
+        (true, Some(a)) => {
+            // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight.
+            let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (1.0 - a).ln()).ceil() };
+            // Twice that, so a pattern does not return within the history the
+            // judge integrates: at alpha 0.1, T = 32 scored level with or up
+            // to 0.06 JOD below T = 64 (RESULTS.md, the leads).
+            let t = (2 * frames as usize).clamp(1, 256).next_power_of_two();
+            (
+                t,
+                format!(
+                    "TAA alpha {a}: {frames} frames carry 95% of the history; twice that, rounded up to {t}"
+                ),
+            )
+        }
+        (true, None) => {
+            let frames = (0.25 * d.fps).ceil() as usize;
+            let t = frames.clamp(1, 256).next_power_of_two();
+            (t, format!("no TAA: the eye's filter spans about a quarter second, {frames} frames, rounded up to {t}"))
+        }
+    };
+    let wh = format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default: the published masks' size, no repeat across a 128-pixel view)");
+    ((DEFAULT_SIZE, DEFAULT_SIZE, t), format!("{wh}; T {why}"))
+}
+
+/// Per-point cost of an iteration relative to d = 2 (the scaling suite: 64x64x16,
+/// `perceptual-taa`, CPU path, 2 cores; BENCHMARKS.md "How cost grows").
+const DIMS_FACTOR: [f64; 8] = [0.52, 1.0, 1.04, 1.43, 2.37, 2.90, 4.28, 8.53];
+/// Per-point cost relative to spp 1 (the same suite: 32x32x8, d = 2, spp 1 to 16).
+const SPP_FACTOR: [(usize, f64); 5] = [(1, 1.0), (2, 0.73), (4, 0.60), (8, 0.58), (16, 0.63)];
+
+/// Seconds per iteration: a calibration on this machine and backend, scaled by
+/// the scaling suite's factors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CostModel {
+    /// Seconds per point and iteration at d = 2, spp 1 (the calibration tile's).
+    pub seconds_per_point: f64,
+    pub backend: String,
+}
+
+impl CostModel {
+    /// Times a few iterations of a 32x32x8, d = 2 `perceptual-taa` run (after a
+    /// warm-up) on the backend `options` choose.
+    pub fn calibrate(options: &RunOptions) -> Result<Self> {
+        let tile = Tile::new(32, 32, 8, 1, 2)?;
+        let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0)?, 1);
+        settings.iterations = 40;
+        let options = RunOptions { checkpoint: None, ..options.clone() };
+        let mut run = Run::start(tile, settings, None, options)?;
+        let never = CancelFlag::new();
+        run.advance(8, &never, &mut |_| {})?;
+        let start = Instant::now();
+        run.advance(40, &never, &mut |_| {})?;
+        let seconds = start.elapsed().as_secs_f64() / 32.0;
+        Ok(Self { seconds_per_point: seconds / tile.points() as f64, backend: run.note().to_string() })
+    }
+
+    /// A model with no calibration (estimates of 0 s): for plans whose masks are
+    /// made without asking how long they take.
+    pub fn unmeasured() -> Self {
+        Self { seconds_per_point: 0.0, backend: "not measured".into() }
+    }
+
+    /// Estimated seconds per iteration on `tile`.
+    pub fn seconds_per_iteration(&self, tile: &Tile) -> f64 {
+        let d = DIMS_FACTOR[tile.dims.clamp(1, 8) - 1];
+        let s = SPP_FACTOR.iter().rev().find(|(spp, _)| *spp <= tile.spp).map(|x| x.1).unwrap_or(1.0);
+        self.seconds_per_point * tile.points() as f64 * d * s
+    }
+}
+
+/// A stable seed per mask file, so a plan makes the same masks every time.
+fn seed_of(scene: &str, file: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in scene.bytes().chain([0]).chain(file.bytes()) {
+        h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The parts of a visible decision of `dims` dimensions: pairs then a single
+/// (vector reading), or one per dimension (scalar reading).
+fn split(dims: usize, reading: Reading) -> Vec<(usize, usize)> {
+    match reading {
+        Reading::Scalar => (0..dims).map(|first| (first, 1)).collect(),
+        Reading::Vector => (0..dims).step_by(2).map(|first| (first, (dims - first).min(2))).collect(),
+    }
+}
+
+/// The reading of a scene's decisions, and why.
+pub fn reading_for(scene: &Scene) -> (Reading, String) {
+    match scene.reading {
+        Some(r) => (r, "as the scene gives it".into()),
+        None => (
+            Reading::Vector,
+            "the default: masks of pairs of dimensions; judged by ColorVideoVDP a 2-D mask scores 0.04 to \
+             0.49 JOD above a scalar mask per dimension in the 2-D to 4-D scenes under TAA (RESULTS.md, the leads)"
+                .into(),
+        ),
+    }
+}
+
+/// Where the k-th extra reader (k >= 1) of a mask reads it: the k-th point of
+/// the R3 sequence (Roberts' generalised golden ratio) scaled to the tile, so
+/// readers' offsets stay far apart however many there are.
+pub fn share_offset(k: u32, tile: [usize; 3]) -> [u32; 3] {
+    let phi: f64 = 1.220_744_084_605_759_5; // x^4 = x + 1
+    let mut out = [0u32; 3];
+    for (j, (o, n)) in out.iter_mut().zip(tile).enumerate() {
+        let a = phi.powi(-(j as i32 + 1));
+        *o = (((k as f64 * a).fract() * n as f64) as u32).min(n as u32 - 1);
+    }
+    out
+}
+
+/// The toroidal shift of the k-th extra reader of a `dims`-dimensional mask: the
+/// k-th point of the R_d sequence.
+pub fn share_shift(k: u32, dims: usize) -> Vec<f32> {
+    // phi_d: the positive root of x^(d+1) = x + 1.
+    let mut phi = 2.0f64;
+    for _ in 0..64 {
+        phi = (1.0 + phi).powf(1.0 / (dims as f64 + 1.0));
+    }
+    (0..dims).map(|j| (k as f64 * phi.powi(-(j as i32 + 1))).fract() as f32).collect()
+}
+
+impl Plan {
+    /// Plans a scene with the cost model `cost`.
+    pub fn new(scene: &Scene, cost: &CostModel) -> Result<Self> {
+        let (kernel, kernel_reason) = kernel_for(&scene.display)?;
+        let (reading, reading_reason) = reading_for(scene);
+        let ((w, h, t), tile_reason) = tile_size(scene);
+        let mut groups = Vec::new();
+        let mut masks: Vec<PlannedMask> = Vec::new();
+        // Optimized masks other parts may read, and how many extra readers each has.
+        struct Lender {
+            file: String,
+            group: String,
+            dims: usize,
+            spp: usize,
+            readers: u32,
+        }
+        let mut lenders: Vec<Lender> = Vec::new();
+        for g in &scene.groups {
+            let mut parts = Vec::new();
+            let (skipped, reason) = if !g.visible {
+                let file = format!("{}.exr", g.name);
+                masks.push(PlannedMask {
+                    file: file.clone(),
+                    dims: g.dims,
+                    spp: g.spp,
+                    white: true,
+                    seed: seed_of(&scene.name, &file),
+                    estimated_iterations: 0,
+                    estimated_seconds: 0.0,
+                });
+                parts.push(Part {
+                    mask: file,
+                    first: 0,
+                    dims: g.dims,
+                    offset: [0; 3],
+                    shift: vec![0.0; g.dims],
+                    shares: None,
+                });
+                (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
+            } else {
+                let pieces = split(g.dims, reading);
+                for &(first, dims) in &pieces {
+                    let lender = lenders.iter_mut().find(|l| l.dims == dims && l.spp == g.spp && g.share);
+                    if let Some(l) = lender {
+                        l.readers += 1;
+                        parts.push(Part {
+                            mask: l.file.clone(),
+                            first,
+                            dims,
+                            offset: share_offset(l.readers, [w, h, t]),
+                            shift: share_shift(l.readers, dims),
+                            shares: Some(l.group.clone()),
+                        });
+                        continue;
+                    }
+                    let file = match pieces.len() {
+                        1 => format!("{}.exr", g.name),
+                        _ => format!("{}-{first}.exr", g.name),
+                    };
+                    let tile = Tile::new(w, h, t, g.spp, dims)?;
+                    let per = cost.seconds_per_iteration(&tile);
+                    masks.push(PlannedMask {
+                        file: file.clone(),
+                        dims,
+                        spp: g.spp,
+                        white: false,
+                        seed: seed_of(&scene.name, &file),
+                        estimated_iterations: EXPECTED_ITERATIONS,
+                        estimated_seconds: per * EXPECTED_ITERATIONS as f64,
+                    });
+                    if g.share {
+                        lenders.push(Lender {
+                            file: file.clone(),
+                            group: g.name.clone(),
+                            dims,
+                            spp: g.spp,
+                            readers: 0,
+                        });
+                    }
+                    parts.push(Part {
+                        mask: file,
+                        first,
+                        dims,
+                        offset: [0; 3],
+                        shift: vec![0.0; dims],
+                        shares: None,
+                    });
+                }
+                let what = match (g.dims, reading) {
+                    (1, _) => "a 1-D decision: a scalar mask".to_string(),
+                    (d, Reading::Scalar) => format!("a {d}-D decision: a scalar mask per dimension"),
+                    (2, Reading::Vector) => "a 2-D decision: a 2-D mask".to_string(),
+                    (d, Reading::Vector) => {
+                        format!("{d}-D: split into pairs and a single, as renderers consume them")
+                    }
+                };
+                let shared: Vec<String> = parts
+                    .iter()
+                    .filter_map(|p| p.shares.as_ref().map(|s| format!("{} ({s}'s)", p.mask)))
+                    .collect();
+                let reason = match (shared.is_empty(), g.share) {
+                    (true, true) => format!("{what} of its own"),
+                    (true, false) => format!("{what} of its own (share = false)"),
+                    (false, _) => format!(
+                        "{what}, sharing {}: as good as a mask of its own, measured, at none of the time",
+                        shared.join(", ")
+                    ),
+                };
+                (None, reason)
+            };
+            groups.push(PlannedGroup {
+                name: g.name.clone(),
+                dims: g.dims,
+                spp: g.spp,
+                parts,
+                skipped,
+                reason,
+            });
+        }
+        let estimated_seconds = masks.iter().map(|m| m.estimated_seconds).sum();
+        Ok(Self {
+            scene: scene.name.clone(),
+            tile: [w, h, t],
+            tile_reason,
+            reading: match reading {
+                Reading::Scalar => "scalar".into(),
+                Reading::Vector => "vector".into(),
+            },
+            reading_reason,
+            kernel: kernel.describe(),
+            kernel_reason,
+            spec: kernel,
+            backend: cost.backend.clone(),
+            groups,
+            masks,
+            estimated_seconds,
+            cost_model: format!(
+                "{:.3e} s per point and iteration at d = 2, measured here, times the scaling suite's factors for d and spp; {EXPECTED_ITERATIONS} iterations each (where the plateau rule stopped on the measured tiles)",
+                cost.seconds_per_point
+            ),
+        })
+    }
+
+    /// The settings of an optimized mask of the plan.
+    pub fn settings(&self, mask: &PlannedMask) -> Settings {
+        let mut s = Settings::new(self.spec, mask.seed);
+        s.iterations = DEFAULT_CAP;
+        s.until = Until::Plateau(Plateau::DEFAULT);
+        s
+    }
+
+    /// The tile of a mask of the plan.
+    pub fn tile(&self, mask: &PlannedMask) -> Result<Tile> {
+        Tile::new(self.tile[0], self.tile[1], self.tile[2], mask.spp, mask.dims)
+    }
+}
+
+/// What running a plan tells its observer.
+#[derive(Debug)]
+#[non_exhaustive]
+pub enum PlanEvent<'a> {
+    /// Mask `index` of the plan's masks starts (`iteration` when it resumes).
+    Start { index: usize, file: &'a str, iteration: u32 },
+    /// Its run's event.
+    Run { index: usize, event: Event<'a> },
+    /// It is written.
+    Done { index: usize, file: &'a str, iterations: u32, seconds: f64 },
+}
+
+/// What a made mask took.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Made {
+    pub file: String,
+    pub iterations: u32,
+    pub seconds: f64,
+}
+
+/// The plan as a renderer reads it (`plan.json`): per group, the mask it reads
+/// (its first part's), the offset and shift, the kernel, the iterations of the
+/// masks it reads and the seconds making the masks it owns took.
+#[derive(Serialize)]
+struct PlanFile<'a> {
+    scene: &'a str,
+    tile: [usize; 3],
+    kernel: &'a str,
+    groups: Vec<GroupFile<'a>>,
+}
+
+#[derive(Serialize)]
+struct GroupFile<'a> {
+    name: &'a str,
+    dims: usize,
+    spp: usize,
+    mask: &'a str,
+    offset: [u32; 3],
+    shift: &'a [f32],
+    /// Every mask the group reads, in dimension order (more than one when split).
+    parts: &'a [Part],
+    kernel: Option<&'a str>,
+    iterations: Option<u32>,
+    seconds: Option<f64>,
+    skipped: Option<&'a str>,
+}
+
+impl Plan {
+    /// Makes every mask of the plan into `dir` (each written atomically), then
+    /// `dir/plan.json`. The optimized masks run side by side
+    /// (`Run::run_together`): on Vulkan, on one device, a batch of each in one
+    /// submission; on the CPU, one after the other. Each checkpoints to
+    /// `dir/.NAME.ckpt` (every `every` iterations and when cancelled); with
+    /// `resume`, masks already written are kept and checkpoints are continued.
+    #[allow(clippy::too_many_arguments)]
+    pub fn execute(
+        &self,
+        dir: &Path,
+        options: &RunOptions,
+        every: u32,
+        resume: bool,
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(PlanEvent),
+    ) -> Result<Outcome> {
+        crate::io::atomic::make_folder(dir)?;
+        let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
+        let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
+        // The runs to make: the mask's index, its file reserved, the run.
+        let mut pending: Vec<(usize, AtomicFile)> = Vec::new();
+        let mut runs: Vec<Run> = Vec::new();
+        let mut shared: Option<RunOptions> = None;
+        for (index, m) in self.masks.iter().enumerate() {
+            let path = dir.join(&m.file);
+            let out = AtomicFile::create(&path)?;
+            let tile = self.tile(m)?;
+            if m.white {
+                let mut mask = Mask::white(tile, m.seed);
+                mask.set_meta("version", env!("CARGO_PKG_VERSION"));
+                crate::io::exr::write(&mask, out)?;
+                made[index] = Some(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
+                continue;
+            }
+            let settings = self.settings(m);
+            if resume {
+                if let Some(done) = already_made(&path, &tile, &settings) {
+                    made[index] = Some(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
+                    continue;
+                }
+            }
+            // One Vulkan device for the plan, opened once.
+            let options = match &shared {
+                Some(o) => o,
+                None => shared.insert(crate::optimize::run::shared_context(options)?),
+            };
+            let checkpoint = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
+            let resume_this = resume && checkpoint.exists();
+            let run_options = RunOptions {
+                checkpoint: Some(Checkpointing { path: checkpoint, every, resume: resume_this }),
+                ..options.clone()
+            };
+            let run = Run::start(tile, settings, None, run_options)?;
+            on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
+            pending.push((index, out));
+            runs.push(run);
+        }
+        let indices: Vec<usize> = pending.iter().map(|(i, _)| *i).collect();
+        let mut outs: Vec<Option<AtomicFile>> = pending.into_iter().map(|(_, out)| Some(out)).collect();
+        // Each mask is written as its run ends, so a cancel keeps what is made.
+        // (Both observers speak through `on`, never at once.)
+        let on = std::cell::RefCell::new(on);
+        let outcome = Run::run_together(
+            &mut runs,
+            cancel,
+            &mut |r, event| (*on.borrow_mut())(PlanEvent::Run { index: indices[r], event }),
+            &mut |r, run| {
+                let index = indices[r];
+                let file = &self.masks[index].file;
+                // With Vulkan's validation layer on, any message means a fault: stop.
+                if let Some(first) = run.backend().report().validation_messages.first() {
+                    return Err(Error::invalid(format!(
+                        "the Vulkan validation layer reported, making {file}: {first}"
+                    )));
+                }
+                let out = outs[r].take().ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
+                let (iterations, seconds) = (run.iteration(), run.seconds());
+                crate::io::exr::write(&run.finish_in_place()?, out)?;
+                (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });
+                made[index] = Some(Made { file: file.clone(), iterations, seconds });
+                Ok(())
+            },
+        )?;
+        if let Outcome::Cancelled { .. } = outcome {
+            return Ok(outcome);
+        }
+        let made: Vec<Made> = made.into_iter().flatten().collect();
+        plan_file.commit(self.document(&made)?.as_bytes())?;
+        Ok(Outcome::Reached)
+    }
+
+    /// `plan.json` with what making each mask took.
+    pub fn document(&self, made: &[Made]) -> Result<String> {
+        let took = |file: &str| made.iter().find(|m| m.file == file);
+        let groups = self
+            .groups
+            .iter()
+            .map(|g| {
+                let first = &g.parts[0];
+                let read: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                // What making it took counts once, for the group that owns the mask.
+                let own: Vec<&Made> =
+                    g.parts.iter().filter(|p| p.shares.is_none()).filter_map(|p| took(&p.mask)).collect();
+                let optimized = g.skipped.is_none();
+                GroupFile {
+                    name: &g.name,
+                    dims: g.dims,
+                    spp: g.spp,
+                    mask: &first.mask,
+                    offset: first.offset,
+                    shift: &first.shift,
+                    parts: &g.parts,
+                    kernel: optimized.then_some(self.kernel.as_str()),
+                    iterations: optimized.then(|| read.iter().map(|m| m.iterations).sum()),
+                    seconds: optimized.then(|| own.iter().map(|m| m.seconds).sum()),
+                    skipped: g.skipped.as_deref(),
+                }
+            })
+            .collect();
+        let file = PlanFile { scene: &self.scene, tile: self.tile, kernel: &self.kernel, groups };
+        let mut text = serde_json::to_string_pretty(&file)
+            .map_err(|e| Error::invalid(format!("cannot write the plan as JSON: {e}")))?;
+        text.push('\n');
+        Ok(text)
+    }
+}
+
+/// The iterations of a mask already written by this very plan (same tile, seed
+/// and kernel), if there is one at `path`.
+fn already_made(path: &Path, tile: &Tile, settings: &Settings) -> Option<u32> {
+    let mask = crate::io::exr::read(path).ok()?;
+    let same = mask.tile == *tile
+        && mask.meta("seed") == Some(settings.seed.to_string().as_str())
+        && mask.meta("kernel") == Some(settings.kernel.describe().as_str());
+    same.then(|| mask.meta("iterations").and_then(|i| i.parse().ok())).flatten()
+}
