@@ -297,12 +297,12 @@ fn run(args: &Args) -> Result<()> {
             let push = ScenePush { width: width as u32, height: height as u32, samples, seed: 99 };
             scene.dispatch(cmd, set, groups, bytemuck::bytes_of(&push));
         }
-        barrier(&ctx, cmd);
+        barrier(cmd);
         let push = ResolvePush { pixels: pixels as u32, frames: frames as u32, alpha: ALPHA };
         for set in 0..3 {
             resolve.dispatch(cmd, set, [(pixels as u32).div_ceil(64), 1, 1], bytemuck::bytes_of(&push));
         }
-        barrier(&ctx, cmd);
+        barrier(cmd);
     })?;
     let after_taa: Vec<Vec<Vec<f64>>> = resolved
         .iter()

@@ -38,7 +38,7 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
     let push = HashPush { key, count };
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [count.div_ceil(workgroup), 1, 1], bytemuck::bytes_of(&push));
-        barrier(&ctx, cmd);
+        barrier(cmd);
     })
     .unwrap();
     let got: Vec<u32> = out.download(count as usize).unwrap();

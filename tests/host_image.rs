@@ -155,7 +155,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     pipeline.bind_raw(0, &[(2, block)]).unwrap(); // the renderer's own uniform buffer
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &[]);
-        fsot::vk::commands::barrier(&ctx, cmd);
+        fsot::vk::commands::barrier(cmd);
     })
     .unwrap();
     let got: Vec<[f32; 4]> = out.download(count * reads).unwrap();
@@ -306,5 +306,41 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     let got = host.read_image(&image, 4);
     assert_eq!(got, sampler.texels(Format::R16G16Unorm).unwrap());
     host.free_image(image);
+    host.assert_silent();
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_host_records_the_sort_into_its_own_command_buffer() {
+    // The renderer's own command buffer, begun, submitted and waited for by
+    // the renderer; fsot's radix sort recorded into it through `Recording`.
+    // The pairs come out as a stable sort by key on the CPU orders them.
+    let host = Host::new(true);
+    let ctx = host.fsot();
+    let n = 5000u32;
+    let keys: Vec<u32> = (0..n).map(|i| i.wrapping_mul(2_654_435_761) >> 9).collect();
+    let vals: Vec<u32> = (0..n).collect();
+    let mut sort = fsot::vk::RadixSort::new(&ctx, n, fsot::vk::SortCount::Host).unwrap();
+    sort.set_count(n).unwrap();
+    sort.keys[0].upload(&keys).unwrap();
+    sort.vals[0].upload(&vals).unwrap();
+    host.run(|cmd| {
+        // SAFETY: `cmd` is the host's, begun on the device `ctx` wraps and its
+        // compute queue, recorded only here; `run` waits for the device before
+        // `sort` can go.
+        let recording = unsafe { fsot::vk::Recording::new(&ctx, cmd) };
+        sort.record(recording, 32, Some(n));
+    });
+    let got: Vec<(u32, u32)> = sort.keys[0]
+        .download::<u32>(n as usize)
+        .unwrap()
+        .into_iter()
+        .zip(sort.vals[0].download::<u32>(n as usize).unwrap())
+        .collect();
+    let mut expected: Vec<(u32, u32)> = keys.into_iter().zip(vals).collect();
+    expected.sort_by_key(|&(k, _)| k);
+    assert!(got == expected, "the sort recorded into the host's buffer is not the stable sort");
+    drop(sort);
+    drop(ctx);
     host.assert_silent();
 }

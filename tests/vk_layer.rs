@@ -136,7 +136,7 @@ fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_
     assert!(pipeline.bind_texels(0, &[(2, &float_view)]).is_err());
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &(count as u32).to_le_bytes());
-        fsot::vk::commands::barrier(&ctx, cmd);
+        fsot::vk::commands::barrier(cmd);
     })
     .unwrap();
     let got: Vec<[f32; 2]> = out.download(count).unwrap();

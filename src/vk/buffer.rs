@@ -7,7 +7,7 @@ use bytemuck::Pod;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::commands::{barrier, copy};
+use super::commands::{barrier, copy, Recording};
 use super::context::Context;
 use super::error::{Error, Result};
 use super::{check, fault};
@@ -170,7 +170,7 @@ impl Buffer {
 pub fn upload_batch(
     ctx: &Context,
     uploads: &[(&Buffer, &[u8])],
-    after: impl FnOnce(vk::CommandBuffer),
+    after: impl FnOnce(Recording<'_>),
 ) -> Result<()> {
     let mut offsets = Vec::with_capacity(uploads.len());
     let mut total = 0u64;
@@ -203,11 +203,11 @@ pub fn upload_batch(
                 if !bytes.is_empty() {
                     let region = [vk::BufferCopy::default().src_offset(at).size(bytes.len() as u64)];
                     // SAFETY: `cmd` is being recorded; both buffers are alive with TRANSFER usage.
-                    unsafe { ctx.device().cmd_copy_buffer(cmd, s.raw, buffer.raw, &region) };
+                    unsafe { ctx.device().cmd_copy_buffer(cmd.raw(), s.raw, buffer.raw, &region) };
                 }
             }
         }
-        barrier(ctx, cmd);
+        barrier(cmd);
         after(cmd);
     })
 }
@@ -248,9 +248,9 @@ pub fn download_batch(
     };
     ctx.submit(|cmd| {
         for ((buffer, bytes), &at) in sources.iter().zip(&offsets) {
-            copy(ctx, cmd, buffer, staging, *bytes, at);
+            copy(cmd, buffer, staging, *bytes, at);
         }
-        barrier(ctx, cmd);
+        barrier(cmd);
     })?;
     let all: Vec<u8> = staging.read(total as usize)?;
     Ok(sources
@@ -311,9 +311,25 @@ pub fn fill_buffer(ctx: &Context, target: &BufferTarget, bytes: &[u8]) -> Result
         // SAFETY: `cmd` is being recorded; the host's buffer is alive (its promise)
         // with TRANSFER_DST usage, and the range was checked above.
         unsafe {
-            device.cmd_pipeline_barrier(cmd, stages, transfer, flags, &[memory(access, write)], &[], &[]);
-            device.cmd_copy_buffer(cmd, staging.raw, target.buffer, &region);
-            device.cmd_pipeline_barrier(cmd, transfer, stages, flags, &[memory(write, access)], &[], &[]);
+            device.cmd_pipeline_barrier(
+                cmd.raw(),
+                stages,
+                transfer,
+                flags,
+                &[memory(access, write)],
+                &[],
+                &[],
+            );
+            device.cmd_copy_buffer(cmd.raw(), staging.raw, target.buffer, &region);
+            device.cmd_pipeline_barrier(
+                cmd.raw(),
+                transfer,
+                stages,
+                flags,
+                &[memory(write, access)],
+                &[],
+                &[],
+            );
         }
     })
 }

@@ -58,11 +58,51 @@ impl Commands {
     }
 }
 
+/// A command buffer in the recording state on a context's device: what every
+/// function that records commands takes. `Context::submit` hands one to its
+/// closure; a host recording into its own command buffer makes one with the
+/// unsafe `Recording::new`, which states what such recording relies on.
+#[derive(Clone, Copy)]
+pub struct Recording<'a> {
+    ctx: &'a Context,
+    cmd: vk::CommandBuffer,
+}
+
+impl<'a> Recording<'a> {
+    /// Records into the host's `cmd` on `ctx`'s device.
+    ///
+    /// # Safety
+    /// - `cmd` was allocated on `ctx`'s device, is in the recording state, and
+    ///   stays in it while this value (or a copy) is used;
+    /// - nothing else records into `cmd` meanwhile (Vulkan's external
+    ///   synchronisation of command buffers);
+    /// - the queue `cmd` is submitted to supports compute and transfer;
+    /// - every buffer, image, pipeline and sort recorded through it stays alive,
+    ///   and the host neither writes nor frees them, until the device has finished
+    ///   the commands (fsot waits for nothing it did not submit itself);
+    /// - the host orders fsot's commands against its own with barriers: fsot's
+    ///   recorded passes begin and end with a full compute barrier of their own,
+    ///   but cannot see what the host recorded around them.
+    pub unsafe fn new(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
+        Self { ctx, cmd }
+    }
+
+    /// The context whose device the commands are for.
+    pub fn context(&self) -> &'a Context {
+        self.ctx
+    }
+
+    /// The command buffer itself.
+    pub fn raw(&self) -> vk::CommandBuffer {
+        self.cmd
+    }
+}
+
 impl Context {
     /// Records commands with `record` into the context's command buffer, submits
     /// them and waits until the device has run them. Holds the context's command
     /// lock throughout and its queue lock around the submission.
-    pub fn submit(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+    pub fn submit(&self, record: impl FnOnce(Recording<'_>)) -> Result<()> {
         let s = &self.shared;
         let device = &s.device;
         let commands = s.commands.lock().map_err(|_| Error::invalid("the command lock is poisoned"))?;
@@ -75,7 +115,11 @@ impl Context {
         let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: the buffer is in the initial state after the pool reset.
         check("vkBeginCommandBuffer", unsafe { device.begin_command_buffer(cmd, &begin) })?;
-        record(cmd);
+        // SAFETY: `cmd` is this context's, in the recording state until the end
+        // call below, recorded only here (the command lock is held), on the
+        // context's compute queue; `submit` waits for the device before it
+        // returns, so everything the closure borrows outlives the commands.
+        record(unsafe { Recording::new(self, cmd) });
         // SAFETY: recording began above.
         check("vkEndCommandBuffer", unsafe { device.end_command_buffer(cmd) })?;
         let cmds = [cmd];
@@ -99,7 +143,7 @@ impl Context {
 
 /// A full memory barrier between recorded commands (compute and transfer writes
 /// made visible to compute, transfer, host and indirect-argument reads).
-pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
+pub fn barrier(cmd: Recording<'_>) {
     let mb = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
         .dst_access_mask(
@@ -109,10 +153,10 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
                 | vk::AccessFlags::HOST_READ
                 | vk::AccessFlags::INDIRECT_COMMAND_READ,
         );
-    // SAFETY: `cmd` is being recorded (inside `Context::submit`).
+    // SAFETY: `cmd` is being recorded (`Recording`).
     unsafe {
-        ctx.device().cmd_pipeline_barrier(
-            cmd,
+        cmd.context().device().cmd_pipeline_barrier(
+            cmd.raw(),
             vk::PipelineStageFlags::COMPUTE_SHADER | vk::PipelineStageFlags::TRANSFER,
             vk::PipelineStageFlags::COMPUTE_SHADER
                 | vk::PipelineStageFlags::TRANSFER
@@ -127,14 +171,14 @@ pub fn barrier(ctx: &Context, cmd: vk::CommandBuffer) {
 }
 
 /// Copies the first `bytes` bytes of `src` to `dst` at `dst_offset`.
-pub fn copy(ctx: &Context, cmd: vk::CommandBuffer, src: &Buffer, dst: &Buffer, bytes: u64, dst_offset: u64) {
+pub fn copy(cmd: Recording<'_>, src: &Buffer, dst: &Buffer, bytes: u64, dst_offset: u64) {
     let region = [vk::BufferCopy::default().size(bytes).dst_offset(dst_offset)];
     // SAFETY: `cmd` is being recorded; both buffers are alive and have TRANSFER usage.
-    unsafe { ctx.device().cmd_copy_buffer(cmd, src.raw, dst.raw, &region) };
+    unsafe { cmd.context().device().cmd_copy_buffer(cmd.raw(), src.raw, dst.raw, &region) };
 }
 
 /// Sets every byte of `buffer` from `offset` for `bytes` bytes (vk::WHOLE_SIZE: to the end) to zero.
-pub fn zero(ctx: &Context, cmd: vk::CommandBuffer, buffer: &Buffer, offset: u64, bytes: u64) {
+pub fn zero(cmd: Recording<'_>, buffer: &Buffer, offset: u64, bytes: u64) {
     // SAFETY: `cmd` is being recorded; the buffer has TRANSFER_DST usage.
-    unsafe { ctx.device().cmd_fill_buffer(cmd, buffer.raw, offset, bytes, 0) };
+    unsafe { cmd.context().device().cmd_fill_buffer(cmd.raw(), buffer.raw, offset, bytes, 0) };
 }

@@ -26,6 +26,7 @@ use gpu_allocator::MemoryLocation;
 use super::buffer::{Buffer, Location};
 use super::check;
 use super::commands::barrier;
+use super::commands::Recording;
 use super::context::Context;
 use super::error::{Error, Result};
 
@@ -277,7 +278,7 @@ pub fn check_copy(
 #[allow(clippy::too_many_arguments)]
 fn transition(
     ctx: &Context,
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     target: &ImageTarget,
     (from, to): (vk::ImageLayout, vk::ImageLayout),
     (src, src_access): (vk::PipelineStageFlags, vk::AccessFlags),
@@ -294,7 +295,15 @@ fn transition(
         .subresource_range(all_layers(target.layers));
     // SAFETY: `cmd` is being recorded; the image is alive (the caller's promise for a host's).
     unsafe {
-        ctx.device().cmd_pipeline_barrier(cmd, src, dst, vk::DependencyFlags::empty(), &[], &[], &[barrier])
+        ctx.device().cmd_pipeline_barrier(
+            cmd.raw(),
+            src,
+            dst,
+            vk::DependencyFlags::empty(),
+            &[],
+            &[],
+            &[barrier],
+        )
     };
 }
 
@@ -330,7 +339,13 @@ pub fn fill(ctx: &Context, target: &ImageTarget, bytes: &[u8], texel_bytes: u32)
         transition(ctx, cmd, target, (target.layout_before, dst), EVERY_COMMAND, write);
         // SAFETY: `cmd` is being recorded; the staging buffer holds every layer.
         unsafe {
-            ctx.device().cmd_copy_buffer_to_image(cmd, staging.raw, target.image, dst, &[whole_copy(target)])
+            ctx.device().cmd_copy_buffer_to_image(
+                cmd.raw(),
+                staging.raw,
+                target.image,
+                dst,
+                &[whole_copy(target)],
+            )
         };
         transition(ctx, cmd, target, (dst, target.layout_after), write, EVERY_COMMAND);
     })
@@ -349,10 +364,16 @@ pub fn read_back(ctx: &Context, target: &ImageTarget, texel_bytes: u32) -> Resul
         transition(ctx, cmd, target, (target.layout_before, src), EVERY_COMMAND, read);
         // SAFETY: `cmd` is being recorded; the staging buffer has room for every layer.
         unsafe {
-            ctx.device().cmd_copy_image_to_buffer(cmd, target.image, src, staging.raw, &[whole_copy(target)])
+            ctx.device().cmd_copy_image_to_buffer(
+                cmd.raw(),
+                target.image,
+                src,
+                staging.raw,
+                &[whole_copy(target)],
+            )
         };
         transition(ctx, cmd, target, (src, target.layout_after), read, EVERY_COMMAND);
-        barrier(ctx, cmd); // the copy's writes visible to the host
+        barrier(cmd); // the copy's writes visible to the host
     })?;
     staging.read(bytes)
 }

@@ -66,7 +66,9 @@ impl Instance {
             layers.push(VALIDATION_LAYER.as_ptr());
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
         }
-        let app = vk::ApplicationInfo::default().application_name(c"fsot").api_version(vk::API_VERSION_1_2);
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"fsot")
+            .api_version(super::requirements::API_VERSION);
         let create = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layers)

@@ -17,7 +17,8 @@
 //! - `pipeline`: compute pipelines with their descriptor sets;
 //! - `timer`: timestamp queries;
 //! - `sort`: a reusable radix sort of 32-bit keys with 32-bit payloads;
-//! - `sort_choice`: its path chosen at run time, timed on the device.
+//! - `sort_choice`: its path chosen at run time, timed on the device;
+//! - `requirements`: the features and extensions a host's device must enable.
 //!
 //! Every handle is destroyed in `Drop` and holds the context alive. Errors are
 //! this layer's own `vk::Error` (fsot's `Error` converts from it); `FSOT_FAULT`
@@ -39,6 +40,7 @@ pub mod image;
 pub mod instance;
 #[doc(hidden)]
 pub mod pipeline;
+mod requirements;
 #[doc(hidden)]
 pub mod sort;
 #[doc(hidden)]
@@ -49,12 +51,14 @@ pub mod texel_view;
 pub mod timer;
 
 pub use buffer::{Buffer, BufferTarget, Location};
+pub use commands::Recording;
 pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
 pub use error::{Error, Result};
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 #[doc(hidden)]
 pub use pipeline::{ComputeDesc, ComputePipeline};
+pub use requirements::{missing, requirements, Requirement, API_VERSION};
 #[doc(hidden)]
 pub use sort::{RadixSort, SortCount, SortPath};
 #[doc(hidden)]

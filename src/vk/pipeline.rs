@@ -8,6 +8,7 @@ use ash::vk;
 
 use super::buffer::Buffer;
 use super::check;
+use super::commands::Recording;
 use super::context::Context;
 use super::error::{Error, Result};
 use super::texel_view::TexelView;
@@ -253,13 +254,13 @@ impl ComputePipeline {
     }
 
     /// Binds the pipeline, descriptor set `set` and the push constants.
-    fn bind_for_dispatch(&self, cmd: vk::CommandBuffer, set: usize, push: &[u8]) {
+    fn bind_for_dispatch(&self, cmd: Recording<'_>, set: usize, push: &[u8]) {
         let device = self.ctx.device();
         // SAFETY: `cmd` is being recorded; the set index was checked when bound.
         unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+            device.cmd_bind_pipeline(cmd.raw(), vk::PipelineBindPoint::COMPUTE, self.raw);
             device.cmd_bind_descriptor_sets(
-                cmd,
+                cmd.raw(),
                 vk::PipelineBindPoint::COMPUTE,
                 self.layout,
                 0,
@@ -267,32 +268,25 @@ impl ComputePipeline {
                 &[],
             );
             if self.push_bytes > 0 {
-                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
+                device.cmd_push_constants(cmd.raw(), self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
         }
     }
 
     /// Records a dispatch of `groups` workgroups with descriptor set `set` and
     /// push constants `push` (`bytemuck::bytes_of` of the pass's push struct).
-    pub fn dispatch(&self, cmd: vk::CommandBuffer, set: usize, groups: [u32; 3], push: &[u8]) {
+    pub fn dispatch(&self, cmd: Recording<'_>, set: usize, groups: [u32; 3], push: &[u8]) {
         self.bind_for_dispatch(cmd, set, push);
         // SAFETY: `cmd` is being recorded with this pipeline bound.
-        unsafe { self.ctx.device().cmd_dispatch(cmd, groups[0], groups[1], groups[2]) };
+        unsafe { self.ctx.device().cmd_dispatch(cmd.raw(), groups[0], groups[1], groups[2]) };
     }
 
     /// Records a dispatch whose size the GPU wrote into `args` at `offset` (a
     /// VkDispatchIndirectCommand).
-    pub fn dispatch_indirect(
-        &self,
-        cmd: vk::CommandBuffer,
-        set: usize,
-        args: &Buffer,
-        offset: u64,
-        push: &[u8],
-    ) {
+    pub fn dispatch_indirect(&self, cmd: Recording<'_>, set: usize, args: &Buffer, offset: u64, push: &[u8]) {
         self.bind_for_dispatch(cmd, set, push);
         // SAFETY: `cmd` is being recorded; `args` has INDIRECT_BUFFER usage.
-        unsafe { self.ctx.device().cmd_dispatch_indirect(cmd, args.raw, offset) };
+        unsafe { self.ctx.device().cmd_dispatch_indirect(cmd.raw(), args.raw, offset) };
     }
 }
 

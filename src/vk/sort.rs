@@ -25,6 +25,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
 use super::buffer::{Buffer, Location};
+use super::commands::Recording;
 use super::commands::{barrier, copy, zero};
 use super::context::Context;
 use super::error::{Error, Result};
@@ -516,7 +517,7 @@ impl RadixSort {
     /// the result is in `keys[0]`/`vals[0]`. Barriers included before and after.
     /// `known`: the element count when the host knows it (smaller dispatches);
     /// None: the count is only on the GPU.
-    pub fn record(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>) {
+    pub fn record(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>) {
         self.record_timed(cmd, bits, known, None)
     }
 
@@ -542,21 +543,21 @@ impl RadixSort {
     /// and scatter (with the tail scan, the three after the histogram: the scan
     /// counts in it; on the single-workgroup path, the three before its one
     /// dispatch: all its time counts as scatter).
-    pub fn record_timed(&self, cmd: vk::CommandBuffer, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
+    pub fn record_timed(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
         let stamp = |i: u32| {
             if let Some(t) = timer {
                 t.stamp(cmd, i);
             }
         };
         let passes = bits.clamp(1, 32).div_ceil(8);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         if self.single_pass(known) {
             stamp(0);
             for pass in 0..passes {
                 let push = RadixPush { shift: 8 * pass, blocks: 0, chunks: 0, passes: 0 };
                 (1..4).for_each(|i| stamp(i + 4 * pass));
                 self.single.dispatch(cmd, (pass % 2) as usize, [1, 1, 1], bytemuck::bytes_of(&push));
-                barrier(&self.ctx, cmd);
+                barrier(cmd);
                 stamp(4 + 4 * pass);
             }
             self.finish_odd(cmd, passes);
@@ -579,8 +580,8 @@ impl RadixSort {
         let tail = self.tail_scan(known);
         if tail {
             // The finished-workgroup count starts at zero.
-            zero(&self.ctx, cmd, &self.partials, 0, 4);
-            barrier(&self.ctx, cmd);
+            zero(cmd, &self.partials, 0, 4);
+            barrier(cmd);
         }
         let pipelines = PassPipelines {
             histogram: if tail { &self.histogram_tail } else { &self.histogram },
@@ -596,13 +597,13 @@ impl RadixSort {
     /// output for the indirect dispatches.
     fn size_on_device<'a>(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         known: Option<u32>,
         args: &'a Option<(ComputePipeline, Buffer)>,
     ) -> Option<&'a Buffer> {
         let (None, Some((pipeline, buffer))) = (known, args) else { return None };
         pipeline.dispatch(cmd, 0, [1, 1, 1], &[]);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         Some(buffer)
     }
 
@@ -611,7 +612,7 @@ impl RadixSort {
     /// scan, the three after the histogram: the scan counts in it).
     fn record_passes(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         passes: u32,
         p: &PassPipelines,
         size: PassSize,
@@ -624,7 +625,7 @@ impl RadixSort {
             let push = RadixPush { shift: 8 * pass, blocks: size.blocks, chunks: size.chunks, passes: 0 };
             let run = |pipeline: &ComputePipeline, groups: u32, arg: u64| {
                 launch(cmd, pipeline, src, indirect, arg, groups, push);
-                barrier(&self.ctx, cmd);
+                barrier(cmd);
             };
             run(p.histogram, size.groups, ARG_BLOCKS);
             match p.scan {
@@ -674,7 +675,7 @@ impl RadixSort {
 
     /// The lanes path (`SortPath::Lanes`): per pass, the runs' histogram, the
     /// two scan dispatches and the runs' scatter; stamps as `record_timed`.
-    fn record_lanes(&self, cmd: vk::CommandBuffer, passes: u32, known: Option<u32>, stamp: &dyn Fn(u32)) {
+    fn record_lanes(&self, cmd: Recording<'_>, passes: u32, known: Option<u32>, stamp: &dyn Fn(u32)) {
         let lanes = &self.lanes;
         let indirect = self.size_on_device(cmd, known, &lanes.args);
         let runs = known.unwrap_or(self.capacity).div_ceil(LANE_RUN).max(1);
@@ -696,7 +697,7 @@ impl RadixSort {
     /// (a pass's time counts as scatter).
     fn record_look_back(
         &self,
-        cmd: vk::CommandBuffer,
+        cmd: Recording<'_>,
         passes: u32,
         blocks: u32,
         indirect: Option<&Buffer>,
@@ -706,19 +707,19 @@ impl RadixSort {
             let push = RadixPush { shift, blocks, chunks: 0, passes };
             launch(cmd, pipeline, set, indirect, ARG_BLOCKS, blocks, push)
         };
-        zero(&self.ctx, cmd, &self.look_back, 0, vk::WHOLE_SIZE);
-        barrier(&self.ctx, cmd);
+        zero(cmd, &self.look_back, 0, vk::WHOLE_SIZE);
+        barrier(cmd);
         stamp(0);
         run(&self.digits, 0, 0);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         for pass in 0..passes {
             if pass > 0 {
-                zero(&self.ctx, cmd, &self.look_back, LOOK_BACK_HEAD, vk::WHOLE_SIZE);
-                barrier(&self.ctx, cmd);
+                zero(cmd, &self.look_back, LOOK_BACK_HEAD, vk::WHOLE_SIZE);
+                barrier(cmd);
             }
             (1..4).for_each(|i| stamp(i + 4 * pass));
             run(&self.onesweep, (pass % 2) as usize, 8 * pass);
-            barrier(&self.ctx, cmd);
+            barrier(cmd);
             stamp(4 + 4 * pass);
         }
         self.finish_odd(cmd, passes);
@@ -726,11 +727,11 @@ impl RadixSort {
 
     /// After an odd number of passes the result is in the second buffers:
     /// copied back to the first.
-    fn finish_odd(&self, cmd: vk::CommandBuffer, passes: u32) {
+    fn finish_odd(&self, cmd: Recording<'_>, passes: u32) {
         if passes % 2 == 1 {
-            copy(&self.ctx, cmd, &self.keys[1], &self.keys[0], self.keys[1].size, 0);
-            copy(&self.ctx, cmd, &self.vals[1], &self.vals[0], self.vals[1].size, 0);
-            barrier(&self.ctx, cmd);
+            copy(cmd, &self.keys[1], &self.keys[0], self.keys[1].size, 0);
+            copy(cmd, &self.vals[1], &self.vals[0], self.vals[1].size, 0);
+            barrier(cmd);
         }
     }
 
@@ -762,7 +763,7 @@ impl RadixSort {
 /// chunk counts then 0: the shaders derive them from the count, as radix_args
 /// does).
 fn launch(
-    cmd: vk::CommandBuffer,
+    cmd: Recording<'_>,
     pipeline: &ComputePipeline,
     set: usize,
     indirect: Option<&Buffer>,

@@ -109,9 +109,9 @@ pub fn time_sort_paths(ctx: &Context, n: u32, bits: u32) -> Result<PathTimes> {
             sort.path = path;
             ctx.submit(|cmd| {
                 timer.reset(cmd);
-                copy(ctx, cmd, &pristine_keys, &sort.keys[0], bytes, 0);
-                copy(ctx, cmd, &pristine_vals, &sort.vals[0], bytes, 0);
-                barrier(ctx, cmd);
+                copy(cmd, &pristine_keys, &sort.keys[0], bytes, 0);
+                copy(cmd, &pristine_vals, &sort.vals[0], bytes, 0);
+                barrier(cmd);
                 timer.stamp(cmd, 0);
                 sort.record(cmd, bits, Some(n));
                 timer.stamp(cmd, 1);

@@ -3,6 +3,7 @@
 use ash::vk;
 
 use super::check;
+use super::commands::Recording;
 use super::context::Context;
 use super::error::Result;
 
@@ -21,17 +22,17 @@ impl Timer {
     }
 
     /// Resets every query; record before the first `stamp`.
-    pub fn reset(&self, cmd: vk::CommandBuffer) {
+    pub fn reset(&self, cmd: Recording<'_>) {
         // SAFETY: `cmd` is being recorded.
-        unsafe { self.ctx.device().cmd_reset_query_pool(cmd, self.pool, 0, self.count) };
+        unsafe { self.ctx.device().cmd_reset_query_pool(cmd.raw(), self.pool, 0, self.count) };
     }
 
     /// Writes timestamp `index` once all earlier commands have finished.
-    pub fn stamp(&self, cmd: vk::CommandBuffer, index: u32) {
+    pub fn stamp(&self, cmd: Recording<'_>, index: u32) {
         // SAFETY: `cmd` is being recorded; `index` < count is the caller's plan.
         unsafe {
             self.ctx.device().cmd_write_timestamp(
-                cmd,
+                cmd.raw(),
                 vk::PipelineStageFlags::BOTTOM_OF_PIPE,
                 self.pool,
                 index,

@@ -183,9 +183,9 @@ impl RunBuffers {
         ];
         upload_batch(ctx, &uploads, |cmd| {
             for b in [&me.first, &me.second, &me.acc, &me.costs, &me.large_meta, &me.schedule] {
-                zero(ctx, cmd, b, 0, ash::vk::WHOLE_SIZE);
+                zero(cmd, b, 0, ash::vk::WHOLE_SIZE);
             }
-            barrier(ctx, cmd);
+            barrier(cmd);
         })?;
         Ok(me)
     }

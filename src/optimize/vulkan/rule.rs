@@ -87,9 +87,9 @@ pub fn replay(ctx: &Context, start: RuleState, slots: &[CostSlot]) -> Result<Vec
         for k in 0..slots.len() as u32 {
             let push = PlateauPush { slot: k, iteration: k };
             pass.dispatch(cmd, 0, [1, 1, 1], bytemuck::bytes_of(&push));
-            barrier(ctx, cmd);
-            copy(ctx, cmd, &schedule, &readback, size, k as u64 * size);
-            barrier(ctx, cmd);
+            barrier(cmd);
+            copy(cmd, &schedule, &readback, size, k as u64 * size);
+            barrier(cmd);
         }
     })?;
     let raw: Vec<u8> = readback.read(size as usize * slots.len())?;

@@ -37,6 +37,7 @@ use crate::optimize::cpu::FIXED_SCALE;
 use crate::optimize::settings::{initial_samples, run_mask, slices_and_hits, RunState, Settings};
 use crate::vk::buffer::{download_batch, upload_batch};
 use crate::vk::commands::{barrier, copy, zero};
+use crate::vk::Recording;
 use crate::vk::{choose_sort_path, Buffer, Context, PathChoice, RadixSort, SortPath, Timer};
 
 /// One iteration's slice order as the per-lane transport takes it
@@ -112,11 +113,8 @@ impl VulkanRun {
             (true, true) => Targets::F64,
             (true, false) => Targets::FloatPairs,
         };
-        if !info.int64_atomics {
-            return Err(Error::VulkanUnavailable(format!("{} lacks 64-bit buffer atomics", info.name)));
-        }
-        if !info.subgroup_ballot {
-            return Err(Error::VulkanUnavailable(format!("{} lacks subgroup ballot in compute", info.name)));
+        if let Some(r) = crate::vk::missing(&info) {
+            return Err(Error::VulkanUnavailable(format!("{} lacks {} ({})", info.name, r.name, r.used_for)));
         }
         let kernel = Kernel::new(settings.kernel, &tile);
         let (slices, hits_per_value) = slices_and_hits(&tile, &kernel, &settings)?;
@@ -249,27 +247,27 @@ impl VulkanRun {
 
     /// Records the transport pass of one iteration (and the reset of the
     /// large-class counters), with the barriers around it.
-    fn record_transport(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+    fn record_transport(&self, cmd: Recording<'_>, push: &TransportPush) {
         self.record_reset_large(cmd);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         self.record_transport_pass(cmd, push);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
     }
 
     /// Records the slice orders of iterations `first..first + count` (count at
     /// most `order_slots`) into slots 0.. for the per-lane transport, barriers
     /// included; nothing for the other transport.
-    fn record_slice_order(&self, cmd: vk::CommandBuffer, first: u32, count: u32) {
+    fn record_slice_order(&self, cmd: Recording<'_>, first: u32, count: u32) {
         let Some([count_pass, place_pass]) = &self.pipelines.order else { return };
         let push = self.transport_push(first, 0);
         let table = LANE_TABLE_WORDS as u64 * 4;
-        zero(&self.ctx, cmd, &self.buffers.slice_order, table, ORDER_HEAD_WORDS as u64 * 4);
-        barrier(&self.ctx, cmd);
+        zero(cmd, &self.buffers.slice_order, table, ORDER_HEAD_WORDS as u64 * 4);
+        barrier(cmd);
         let groups = self.slices.div_ceil(64 * ORDER_SLICES_PER_INVOCATION).clamp(1, 65535);
         count_pass.dispatch(cmd, 0, [groups, count, 1], bytemuck::bytes_of(&push));
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         place_pass.dispatch(cmd, 0, [1, count, 1], bytemuck::bytes_of(&push));
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
     }
 
     /// The order the per-lane transport takes iteration `iteration`'s slices in,
@@ -307,19 +305,19 @@ impl VulkanRun {
 
     /// Zeroes the large-class counters of one iteration, the elements and
     /// classes (a barrier must follow); the batch's counts stay.
-    fn record_reset_large(&self, cmd: vk::CommandBuffer) {
-        zero(&self.ctx, cmd, &self.buffers.large_meta, 0, 8);
+    fn record_reset_large(&self, cmd: Recording<'_>) {
+        zero(cmd, &self.buffers.large_meta, 0, 8);
         if self.pipelines.deferred.is_some() {
             // The dispatch's x and the count of slices listed (Deferred).
-            zero(&self.ctx, cmd, &self.buffers.deferred, 0, 4);
-            zero(&self.ctx, cmd, &self.buffers.deferred, 12, 4);
+            zero(cmd, &self.buffers.deferred, 0, 4);
+            zero(cmd, &self.buffers.deferred, 12, 4);
         }
     }
 
     /// The transport dispatch alone (barriers are the caller's).
     /// Per lane, as many workgroups as the slot's chunk plan holds chunks (the
     /// ordering's second pass wrote the dispatch).
-    fn record_transport_pass(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+    fn record_transport_pass(&self, cmd: Recording<'_>, push: &TransportPush) {
         let pass = &self.pipelines.transport;
         if self.shape.per_lane {
             let offset = lane_dispatch_offset(push.order_slot);
@@ -337,7 +335,7 @@ impl VulkanRun {
 
     /// The update dispatch of iteration `iteration` alone (barriers are the
     /// caller's; so is the accumulators' reset where `update_leaves_reset`).
-    fn record_update_pass(&self, cmd: vk::CommandBuffer, iteration: u32) {
+    fn record_update_pass(&self, cmd: Recording<'_>, iteration: u32) {
         let update = self.update_push(iteration);
         let groups = two_d((self.tile.values() as u32).div_ceil(256));
         self.pipelines.update.dispatch(cmd, 0, groups, bytemuck::bytes_of(&update));
@@ -350,32 +348,32 @@ impl VulkanRun {
     /// stable sorts (by point, by projection, by class; so each class ends in
     /// projection order with ties in point order, the CPU's), the gathers between
     /// them, and the finishing pass.
-    fn record_large(&self, cmd: vk::CommandBuffer, push: &TransportPush) {
+    fn record_large(&self, cmd: Recording<'_>, push: &TransportPush) {
         // The workgroup transport's second pass, over the slices it listed
         // (as many workgroups as listed: the indirect dispatch's count).
         if let Some(deferred) = &self.pipelines.deferred {
             deferred.dispatch_indirect(cmd, 0, &self.buffers.deferred, 0, bytemuck::bytes_of(push));
-            barrier(&self.ctx, cmd);
+            barrier(cmd);
         }
         let (Some(sort), Some(large)) = (&self.sort, &self.pipelines.large) else { return };
         let args = &self.buffers.large_args;
         large.args.dispatch(cmd, 0, [1, 1, 1], &[]);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         sort.record(cmd, self.large.point_bits, None);
         large.gather.dispatch_indirect(cmd, GATHER_BY_PROJECTION, args, ARG_GATHER, &[]);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         sort.record(cmd, 32, None);
         large.gather.dispatch_indirect(cmd, GATHER_BY_SEGMENT, args, ARG_GATHER, &[]);
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
         sort.record(cmd, self.large.seg_bits, None);
         large.transport.dispatch_indirect(cmd, 0, args, ARG_SEGMENTS, bytemuck::bytes_of(push));
-        barrier(&self.ctx, cmd);
+        barrier(cmd);
     }
 
     /// The stopping rule's pass after the iteration in cost slot `slot` of the
     /// batch, when the device evaluates the rule (a barrier must precede it,
     /// after that iteration's update, and follow it).
-    fn record_rule(&self, cmd: vk::CommandBuffer, slot: u32) {
+    fn record_rule(&self, cmd: Recording<'_>, slot: u32) {
         if let (Some(pass), Some(_)) = (&self.pipelines.plateau, &self.rule) {
             let push = PlateauPush { slot, iteration: self.iteration + slot };
             pass.dispatch(cmd, 0, [1, 1, 1], bytemuck::bytes_of(&push));
@@ -463,20 +461,20 @@ impl VulkanRun {
         {
             let runs: Vec<&VulkanRun> = runs.iter().map(|r| &**r).collect();
             let timer = runs[0].timer.as_ref().filter(|_| alone);
-            let stamp = |cmd, i| {
+            let stamp = |cmd: Recording<'_>, i| {
                 if let Some(t) = timer {
                     t.stamp(cmd, i);
                 }
             };
             ctx.submit(|cmd| {
                 for r in &runs {
-                    zero(&ctx, cmd, &r.buffers.costs, 0, vk::WHOLE_SIZE);
-                    zero(&ctx, cmd, &r.buffers.large_meta, 0, head_bytes);
+                    zero(cmd, &r.buffers.costs, 0, vk::WHOLE_SIZE);
+                    zero(cmd, &r.buffers.large_meta, 0, head_bytes);
                 }
                 if let Some(t) = timer {
                     t.reset(cmd);
                 }
-                barrier(&ctx, cmd);
+                barrier(cmd);
                 // The runs still stepping at iteration k of the batch, with their pushes
                 // (one list, reused).
                 let mut active: Vec<(&VulkanRun, TransportPush)> = Vec::with_capacity(runs.len());
@@ -507,11 +505,11 @@ impl VulkanRun {
                             r.record_rule(cmd, k - 1);
                         }
                     }
-                    barrier(&ctx, cmd);
+                    barrier(cmd);
                     for (r, push) in &active {
                         r.record_transport_pass(cmd, push);
                     }
-                    barrier(&ctx, cmd);
+                    barrier(cmd);
                     stamp(cmd, 4 * k + 1);
                     for (r, push) in &active {
                         r.record_large(cmd, push);
@@ -520,12 +518,12 @@ impl VulkanRun {
                     for (r, _) in &active {
                         r.record_update_pass(cmd, r.iteration + k);
                     }
-                    barrier(&ctx, cmd);
+                    barrier(cmd);
                     if active.iter().any(|(r, _)| r.update_leaves_reset()) {
                         for (r, _) in active.iter().filter(|(r, _)| r.update_leaves_reset()) {
-                            zero(&ctx, cmd, &r.buffers.acc, 0, vk::WHOLE_SIZE);
+                            zero(cmd, &r.buffers.acc, 0, vk::WHOLE_SIZE);
                         }
-                        barrier(&ctx, cmd);
+                        barrier(cmd);
                     }
                     stamp(cmd, 4 * k + 3);
                 }
@@ -534,14 +532,14 @@ impl VulkanRun {
                         r.record_rule(cmd, most - 1);
                     }
                 }
-                barrier(&ctx, cmd);
+                barrier(cmd);
                 for r in &runs {
                     let b = &r.buffers;
-                    copy(&ctx, cmd, &b.costs, &b.readback, cost_bytes, 0);
-                    copy(&ctx, cmd, &b.large_meta, &b.readback, head_bytes, cost_bytes);
-                    copy(&ctx, cmd, &b.schedule, &b.readback, rule_bytes, cost_bytes + head_bytes);
+                    copy(cmd, &b.costs, &b.readback, cost_bytes, 0);
+                    copy(cmd, &b.large_meta, &b.readback, head_bytes, cost_bytes);
+                    copy(cmd, &b.schedule, &b.readback, rule_bytes, cost_bytes + head_bytes);
                 }
-                barrier(&ctx, cmd);
+                barrier(cmd);
             })?;
         }
         runs.iter_mut().zip(&counts).map(|(r, &count)| r.finish_batch(count, alone)).collect()
@@ -784,15 +782,15 @@ impl Backend for VulkanRun {
         let push = self.transport_push(iteration, 0);
         let acc = &self.buffers.acc;
         ctx.submit(|cmd| {
-            zero(ctx, cmd, acc, 0, vk::WHOLE_SIZE);
-            barrier(ctx, cmd);
+            zero(cmd, acc, 0, vk::WHOLE_SIZE);
+            barrier(cmd);
             self.record_slice_order(cmd, iteration, 1);
             self.record_transport(cmd, &push);
             self.record_large(cmd, &push);
-            copy(ctx, cmd, acc, &self.buffers.readback, (values * width) as u64, 0);
-            barrier(ctx, cmd);
-            zero(ctx, cmd, acc, 0, vk::WHOLE_SIZE);
-            barrier(ctx, cmd);
+            copy(cmd, acc, &self.buffers.readback, (values * width) as u64, 0);
+            barrier(cmd);
+            zero(cmd, acc, 0, vk::WHOLE_SIZE);
+            barrier(cmd);
         })?;
         Ok(if self.float_acc {
             self.buffers.readback.read::<f32>(values)?.into_iter().map(f64::from).collect()

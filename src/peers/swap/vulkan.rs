@@ -297,20 +297,20 @@ impl Passes {
     /// returns what it did. The claims are cleared before the first pass.
     fn pass(&self, batches: &[SwapPush], first: bool) -> Result<SwapStats> {
         let ctx = &self.ctx;
-        ctx.submit(|cmd: vk::CommandBuffer| {
-            zero(ctx, cmd, &self.stats, 0, vk::WHOLE_SIZE);
+        ctx.submit(|cmd| {
+            zero(cmd, &self.stats, 0, vk::WHOLE_SIZE);
             if first {
-                zero(ctx, cmd, &self.claims, 0, vk::WHOLE_SIZE);
+                zero(cmd, &self.claims, 0, vk::WHOLE_SIZE);
             }
-            barrier(ctx, cmd);
+            barrier(cmd);
             for push in batches {
                 let groups = [push.count.div_ceil(self.workgroup), 1, 1];
                 self.propose.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
-                barrier(ctx, cmd);
+                barrier(cmd);
                 self.commit.dispatch(cmd, 0, groups, bytemuck::bytes_of(push));
-                barrier(ctx, cmd);
+                barrier(cmd);
             }
-            copy(ctx, cmd, &self.stats, &self.readback, std::mem::size_of::<SwapStats>() as u64, 0);
+            copy(cmd, &self.stats, &self.readback, std::mem::size_of::<SwapStats>() as u64, 0);
         })?;
         self.readback
             .read::<SwapStats>(1)?

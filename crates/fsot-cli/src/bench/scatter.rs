@@ -141,11 +141,11 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
     ctx.submit(|cmd| {
         timer.reset(cmd);
         for r in 0..runs {
-            zero(ctx, cmd, &acc, 0, acc_bytes);
-            barrier(ctx, cmd);
+            zero(cmd, &acc, 0, acc_bytes);
+            barrier(cmd);
             timer.stamp(cmd, 2 * r);
             pipeline.dispatch(cmd, 0, [groups, 1, 1], bytemuck::bytes_of(&push));
-            barrier(ctx, cmd);
+            barrier(cmd);
             timer.stamp(cmd, 2 * r + 1);
         }
     })?;

@@ -80,11 +80,11 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
         timer.reset(cmd);
         for r in 0..runs {
             // The restore, timed: the copy bandwidth.
-            barrier(ctx, cmd);
+            barrier(cmd);
             timer.stamp(cmd, 4 * r);
-            copy(ctx, cmd, &pristine_k, &sort.keys[0], bytes, 0);
-            copy(ctx, cmd, &pristine_v, &sort.vals[0], bytes, 0);
-            barrier(ctx, cmd);
+            copy(cmd, &pristine_k, &sort.keys[0], bytes, 0);
+            copy(cmd, &pristine_v, &sort.vals[0], bytes, 0);
+            barrier(cmd);
             timer.stamp(cmd, 4 * r + 1);
             timer.stamp(cmd, 4 * r + 2);
             sort.record(cmd, 32, Some(n));
@@ -99,9 +99,9 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
     let stages = Timer::new(ctx, 17)?;
     ctx.submit(|cmd| {
         stages.reset(cmd);
-        copy(ctx, cmd, &pristine_k, &sort.keys[0], bytes, 0);
-        copy(ctx, cmd, &pristine_v, &sort.vals[0], bytes, 0);
-        barrier(ctx, cmd);
+        copy(cmd, &pristine_k, &sort.keys[0], bytes, 0);
+        copy(cmd, &pristine_v, &sort.vals[0], bytes, 0);
+        barrier(cmd);
         sort.record_timed(cmd, 32, Some(n), Some(&stages));
     })?;
     let t = stages.read_ns(17)?;
