@@ -118,14 +118,20 @@ pub trait Backend: Send {
         None
     }
     fn report(&self) -> Report;
-    /// The Vulkan run behind this backend, when it is one (runs on one device
-    /// can step together: `VulkanRun::step_together`).
-    #[cfg(feature = "vulkan")]
-    fn as_vulkan(&self) -> Option<&crate::optimize::vulkan::VulkanRun> {
+    /// Runs whose backends give the same group can step together in one
+    /// submission (`step_together`): on Vulkan, runs on one device. None: this
+    /// run steps alone.
+    fn group(&self) -> Option<usize> {
         None
     }
-    #[cfg(feature = "vulkan")]
-    fn as_vulkan_mut(&mut self) -> Option<&mut crate::optimize::vulkan::VulkanRun> {
-        None
+    /// Steps this run and `others` (runs of its group) together: up to `max[0]`
+    /// iterations of this run and `max[i + 1]` of `others[i]`; each run's
+    /// objective estimates, this run's first. Backends without groups refuse.
+    fn step_together(&mut self, others: &mut [&mut dyn Backend], max: &[u32]) -> Result<Vec<Vec<f64>>> {
+        let _ = (others, max);
+        Err(crate::error::Error::invalid("this backend steps its runs one at a time"))
     }
+    /// The run as `Any`, for a backend's own `step_together` to find its kind
+    /// among `others`.
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }

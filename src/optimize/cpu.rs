@@ -266,6 +266,10 @@ impl CpuRun {
 }
 
 impl Backend for CpuRun {
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+
     fn kind(&self) -> BackendKind {
         BackendKind::Cpu
     }

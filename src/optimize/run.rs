@@ -320,8 +320,9 @@ impl Run {
     }
 
     /// Runs several runs to their ends side by side (a scene plan's masks):
-    /// those on Vulkan on one device step together, a batch of each in one
-    /// submission (`VulkanRun::step_together`); any other steps on its own.
+    /// those whose backends share a group (Vulkan: one device) step together,
+    /// a batch of each in one submission (`Backend::step_together`); any other
+    /// steps on its own.
     /// `on(r, event)` hears run r; `done(r, run)` is called once as run r ends
     /// (to write its mask while the others go on). Stops between steps when
     /// `cancel` is set, saving every unfinished run; a GPU that fails hands each
@@ -364,7 +365,6 @@ impl Run {
                 }
                 continue;
             }
-            #[cfg(feature = "vulkan")]
             step_shared(runs, &group, on)?;
         }
     }
@@ -435,27 +435,16 @@ impl Run {
 /// The iterations a step may take at `pace` seconds per iteration (the last
 /// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
 /// known.
-/// Of the open runs, those that can share a submission with the first open
-/// Vulkan run (empty where there is none).
+/// Of the open runs, those whose backends share the first grouped open run's
+/// group (`Backend::group`), so can step in one submission (empty where none
+/// is grouped).
 fn shared_device_group(runs: &[Run], open: &[usize]) -> Vec<usize> {
-    #[cfg(feature = "vulkan")]
-    if let Some(l) = open.iter().copied().find(|&r| runs[r].backend.as_vulkan().is_some()) {
-        return open
-            .iter()
-            .copied()
-            .filter(|&r| {
-                let (a, b) = (runs[l].backend.as_vulkan(), runs[r].backend.as_vulkan());
-                matches!((a, b), (Some(a), Some(b)) if a.shares_device_with(b))
-            })
-            .collect();
-    }
-    let _ = (runs, open);
-    Vec::new()
+    let Some(group) = open.iter().find_map(|&r| runs[r].backend.group()) else { return Vec::new() };
+    open.iter().copied().filter(|&r| runs[r].backend.group() == Some(group)).collect()
 }
 
-/// One step of every run in `group` (Vulkan runs on one device), in one
-/// submission; a GPU that fails hands each over to the CPU path.
-#[cfg(feature = "vulkan")]
+/// One step of every run in `group` (runs on one device), in one submission;
+/// a GPU that fails hands each over to the CPU path.
 fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Event)) -> Result<()> {
     let counts: Vec<u32> = group
         .iter()
@@ -466,15 +455,16 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
         .collect();
     let start = std::time::Instant::now();
     let result = {
-        let mut members: Vec<&mut VulkanRun> = Vec::with_capacity(group.len());
-        for (r, run) in runs.iter_mut().enumerate() {
-            if group.contains(&r) {
-                if let Some(v) = run.backend.as_vulkan_mut() {
-                    members.push(v);
-                }
-            }
+        let mut members: Vec<&mut dyn Backend> = runs
+            .iter_mut()
+            .enumerate()
+            .filter(|(r, _)| group.contains(r))
+            .map(|(_, run)| &mut *run.backend as &mut dyn Backend)
+            .collect();
+        match members.split_first_mut() {
+            Some((first, others)) => first.step_together(others, &counts),
+            None => Ok(Vec::new()),
         }
-        VulkanRun::step_together(&mut members, &counts)
     };
     let seconds = start.elapsed().as_secs_f64();
     let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));

@@ -823,11 +823,22 @@ impl Backend for VulkanRun {
         self.rule.map(|r| (r.plateau_state(), r.stopped()))
     }
 
-    fn as_vulkan(&self) -> Option<&VulkanRun> {
-        Some(self)
+    /// Runs on one device share a group (its device handle).
+    fn group(&self) -> Option<usize> {
+        Some(ash::vk::Handle::as_raw(self.ctx.device().handle()) as usize)
     }
-    fn as_vulkan_mut(&mut self) -> Option<&mut VulkanRun> {
-        Some(self)
+
+    fn step_together(&mut self, others: &mut [&mut dyn Backend], max: &[u32]) -> Result<Vec<Vec<f64>>> {
+        let mut runs: Vec<&mut VulkanRun> = vec![self];
+        for other in others.iter_mut() {
+            let run = other.as_any_mut().downcast_mut::<VulkanRun>();
+            runs.push(run.ok_or_else(|| Error::invalid("only Vulkan runs step together with a Vulkan run"))?);
+        }
+        VulkanRun::step_together(&mut runs, max)
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
     }
 
     fn report(&self) -> Report {
