@@ -45,7 +45,7 @@ fn the_example_scene_reads_as_written() {
 fn what_is_absent_takes_its_default() {
     let s = Scene::parse("[[group]]\nname = \"a\"\ndims = 2\n", "minimal").unwrap();
     assert_eq!(s.display.taa_alpha, None, "no [display]: no TAA");
-    let fhd = fsot::quality::display::preset_ppd("standard_fhd").unwrap();
+    let fhd = fsot::core::display::preset_ppd("standard_fhd").unwrap();
     assert_eq!(
         (s.display.fps, s.display.spatial, s.display.animated),
         (60.0, Spatial::Display { ppd: fhd }, true)
@@ -118,7 +118,7 @@ fn a_display_is_named_or_given_by_its_pixels_per_degree_or_its_geometry() {
         other => panic!("{display}: {other:?}"),
     };
     assert_eq!(ppd("ppd = 60"), 60.0);
-    assert_eq!(ppd("name = \"standard_4k\""), fsot::quality::display::preset_ppd("standard_4k").unwrap());
+    assert_eq!(ppd("name = \"standard_4k\""), fsot::core::display::preset_ppd("standard_4k").unwrap());
     let fhd = ppd("resolution = [1920, 1080]\ndiagonal = 24.0\ndistance = 0.6");
     assert_eq!(fhd, ppd("name = \"standard_fhd\""));
     // Twice the distance: nearly twice the pixels per degree.

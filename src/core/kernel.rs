@@ -52,9 +52,9 @@ impl Spatial {
                 (r, Box::new(move |dx, dy| (-((dx * dx + dy * dy) as f64) / s2).exp()))
             }
             Spatial::Display { ppd } => {
-                let parts: Vec<(f64, Vec<f64>)> = crate::quality::csf::mixture(ppd)
+                let parts: Vec<(f64, Vec<f64>)> = crate::core::csf::mixture(ppd)
                     .into_iter()
-                    .map(|(w, s)| (w, crate::quality::csf::profile(s * widen)))
+                    .map(|(w, s)| (w, crate::core::csf::profile(s * widen)))
                     .collect();
                 let r = parts.iter().map(|p| p.1.len() / 2).max().unwrap_or(0) as i64;
                 let at = move |dx: i64, dy: i64| {
@@ -171,7 +171,7 @@ impl KernelSpec {
     /// The same kernel with the eye of a display of `ppd` pixels per degree as
     /// its spatial filter.
     pub fn on_display(self, ppd: f64) -> Result<Self> {
-        let ppd = crate::quality::display::check_ppd(ppd)?;
+        let ppd = crate::core::display::check_ppd(ppd)?;
         Ok(Self { spatial: Spatial::Display { ppd }, ..self })
     }
 
@@ -578,7 +578,7 @@ mod tests {
             for i in 0..=20 {
                 for j in 0..=20 {
                     let (fx, fy) = (0.025 * i as f64, 0.025 * j as f64);
-                    let want = crate::quality::csf::target(fx.hypot(fy), ppd);
+                    let want = crate::core::csf::target(fx.hypot(fy), ppd);
                     let d = response(&k, 128, fx, fy) - want;
                     worst = worst.max(d.abs());
                     square += d * d;

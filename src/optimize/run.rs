@@ -20,7 +20,6 @@ use crate::optimize::cpu::CpuRun;
 use crate::optimize::settings::{RunState, Settings, Until};
 #[cfg(feature = "vulkan")]
 use crate::optimize::vulkan::{VulkanOptions, VulkanRun};
-use crate::peers::swap::SwapDevice;
 #[cfg(feature = "vulkan")]
 use crate::vk::{Context, ContextOptions};
 
@@ -568,12 +567,12 @@ fn gpu_backend(_: Tile, _: Settings, _: Option<&Mask>, _: &RunOptions, _: bool) 
 
 /// The error of a Vulkan call in a build without the `vulkan` feature.
 #[cfg(not(feature = "vulkan"))]
-fn without_vulkan() -> Error {
+pub(crate) fn without_vulkan() -> Error {
     Error::VulkanUnavailable("fsot was built without its `vulkan` feature".into())
 }
 
 /// Whether the caller handed in a Vulkan context.
-fn has_context(options: &RunOptions) -> bool {
+pub(crate) fn has_context(options: &RunOptions) -> bool {
     #[cfg(feature = "vulkan")]
     return options.context.is_some();
     #[cfg(not(feature = "vulkan"))]
@@ -600,47 +599,6 @@ pub(crate) fn context_for(options: &RunOptions, require_gpu_type: bool) -> Resul
         )));
     }
     Ok(ctx)
-}
-
-/// Where the peers' swap searches run under `options`, by the rule of a run:
-/// `cpu`, `vulkan` (an error without a device), or `auto` (a GPU, or a device
-/// named or handed in, else the CPU). Returns the device and the choice in words.
-#[cfg(not(feature = "vulkan"))]
-pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
-    match options.backend {
-        BackendChoice::Vulkan => Err(without_vulkan()),
-        _ => Ok((SwapDevice::Cpu, SwapDevice::Cpu.describe())),
-    }
-}
-
-/// Where the peers' swap searches run (see above).
-#[cfg(feature = "vulkan")]
-pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
-    let device =
-        match options.backend {
-            BackendChoice::Cpu => SwapDevice::Cpu,
-            BackendChoice::Vulkan => SwapDevice::Vulkan(context_for(options, false)?),
-            BackendChoice::Auto => {
-                let usable = context_for(options, options.device.is_none() && !has_context(options))
-                    .and_then(|ctx| match ctx.info().int64_atomics {
-                        true => Ok(ctx),
-                        false => Err(Error::VulkanUnavailable(format!(
-                            "{} lacks 64-bit buffer atomics",
-                            ctx.info().name
-                        ))),
-                    });
-                match usable {
-                    Ok(ctx) => SwapDevice::Vulkan(ctx),
-                    Err(e) => {
-                        let cpu = SwapDevice::Cpu;
-                        let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
-                        return Ok((cpu, note));
-                    }
-                }
-            }
-        };
-    let note = device.describe();
-    Ok((device, note))
 }
 
 /// Options for several runs that should share one Vulkan device (a scene

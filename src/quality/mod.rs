@@ -1,9 +1,6 @@
-//! How good a mask is as an eye would see it: a display's viewing geometry
-//! (`display`) and the contrast sensitivity there (`csf`), the perceptual filter (`eye`),
+//! How good a mask is as an eye would see it: the perceptual filter (`eye`),
 //! the animated integrands it is judged on (`integrands`), a mask's perceived
 //! error (`perceived`) and the relative errors of a render (`metric`).
-pub mod csf;
-pub mod display;
 pub mod eye;
 pub mod integrands;
 pub mod metric;

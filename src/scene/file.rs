@@ -231,7 +231,7 @@ fn viewing(
         ));
     }
     let on = |ppd: f64, span: Range<usize>, what: String| -> std::result::Result<(Spatial, String), String> {
-        let ppd = crate::quality::display::check_ppd(ppd).map_err(|e| at(span, e.to_string()))?;
+        let ppd = crate::core::display::check_ppd(ppd).map_err(|e| at(span, e.to_string()))?;
         Ok((Spatial::Display { ppd }, format!("{what}: {ppd:.1} pixels per degree")))
     };
     if let Some(s) = &d.sigma {
@@ -245,14 +245,13 @@ fn viewing(
         return on(*p.get_ref(), p.span(), "the display".into());
     }
     if let Some(n) = &d.name {
-        let ppd =
-            crate::quality::display::preset_ppd(n.get_ref()).map_err(|e| at(n.span(), e.to_string()))?;
+        let ppd = crate::core::display::preset_ppd(n.get_ref()).map_err(|e| at(n.span(), e.to_string()))?;
         return on(ppd, n.span(), format!("display {}", n.get_ref()));
     }
     match (&d.resolution, &d.diagonal, &d.distance) {
         (None, None, None) => Ok(Display::default_viewing()),
         (Some(r), Some(g), Some(s)) => {
-            let ppd = crate::quality::display::pixels_per_degree(*r.get_ref(), *g.get_ref(), *s.get_ref())
+            let ppd = crate::core::display::pixels_per_degree(*r.get_ref(), *g.get_ref(), *s.get_ref())
                 .map_err(|e| at(r.span(), e.to_string()))?;
             let [w, h] = *r.get_ref();
             on(ppd, r.span(), format!("a {w} x {h} display of {} in at {} m", g.get_ref(), s.get_ref()))
@@ -270,8 +269,8 @@ fn viewing(
 
 impl Display {
     fn default_viewing() -> (Spatial, String) {
-        let name = crate::quality::display::DEFAULT_DISPLAY;
-        let ppd = crate::quality::display::preset_ppd(name).expect("the default display is a preset"); // ok: a constant
+        let name = crate::core::display::DEFAULT_DISPLAY;
+        let ppd = crate::core::display::preset_ppd(name).expect("the default display is a preset"); // ok: a constant
         (Spatial::Display { ppd }, format!("display {name} (the default): {ppd:.1} pixels per degree"))
     }
 }

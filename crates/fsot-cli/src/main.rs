@@ -306,7 +306,7 @@ impl KernelArgs {
 }
 
 /// The kernel of `name`: a Gaussian of `sigma` pixels when given, else the eye
-/// on `display` (by default `fsot::quality::display::DEFAULT_DISPLAY`).
+/// on `display` (by default `fsot::core::display::DEFAULT_DISPLAY`).
 fn kernel_spec(
     name: &str,
     display: Option<&str>,
@@ -318,9 +318,8 @@ fn kernel_spec(
     let spec = KernelSpec::from_name(name, sigma.unwrap_or(DEFAULT_SIGMA), sigma_t, alpha, fps)?;
     match sigma {
         Some(_) => Ok(spec),
-        None => spec.on_display(fsot::quality::display::parse(
-            display.unwrap_or(fsot::quality::display::DEFAULT_DISPLAY),
-        )?),
+        None => spec
+            .on_display(fsot::core::display::parse(display.unwrap_or(fsot::core::display::DEFAULT_DISPLAY))?),
     }
 }
 

@@ -10,7 +10,7 @@ use fsot_cli::eval::suite::{run_eval, to_json, to_markdown, EvalSize, METHODS};
 /// The eye of the evaluation's display, which `fsot-planned` plans for.
 fn judged_on() -> fsot::core::kernel::Spatial {
     fsot::core::kernel::Spatial::Display {
-        ppd: fsot::quality::display::preset_ppd(fsot_cli::eval::jod::DISPLAY).unwrap(),
+        ppd: fsot::core::display::preset_ppd(fsot_cli::eval::jod::DISPLAY).unwrap(),
     }
 }
 
@@ -313,9 +313,9 @@ fn a_run_measures_only_the_methods_named_and_dissects_their_error_when_asked() {
 #[test]
 fn fsots_display_geometry_gives_colorvideovdps_pixels_per_degree() {
     // An independent reference: ColorVideoVDP's own display models.
-    for (name, ..) in fsot::quality::display::PRESETS {
+    for (name, ..) in fsot::core::display::PRESETS {
         let theirs = colorvideovdp::DisplayModel::from_name(name).unwrap().geometry.pixels_per_degree();
-        let ours = fsot::quality::display::preset_ppd(name).unwrap();
+        let ours = fsot::core::display::preset_ppd(name).unwrap();
         assert!((ours - theirs).abs() <= 0.005 + 1e-9, "{name}: {ours} against {theirs}");
     }
 }

@@ -25,6 +25,10 @@ use rayon::prelude::*;
 use crate::core::rng::{derive, Stream};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
+use crate::optimize::backend::BackendChoice;
+#[cfg(feature = "vulkan")]
+use crate::optimize::run::has_context;
+use crate::optimize::run::RunOptions;
 
 pub mod cpu;
 #[cfg(feature = "vulkan")]
@@ -318,6 +322,47 @@ impl SwapDevice {
             SwapDevice::Vulkan(ctx) => vulkan::swap_search(ctx, energy, values, schedule, key, on_pass),
         }
     }
+}
+
+/// Where the peers' swap searches run under `options`, by the rule of a run:
+/// `cpu`, `vulkan` (an error without a device), or `auto` (a GPU, or a device
+/// named or handed in, else the CPU). Returns the device and the choice in words.
+#[cfg(not(feature = "vulkan"))]
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    match options.backend {
+        BackendChoice::Vulkan => Err(crate::optimize::run::without_vulkan()),
+        _ => Ok((SwapDevice::Cpu, SwapDevice::Cpu.describe())),
+    }
+}
+
+/// Where the peers' swap searches run (see above).
+#[cfg(feature = "vulkan")]
+pub fn swap_device(options: &RunOptions) -> Result<(SwapDevice, String)> {
+    let device = match options.backend {
+        BackendChoice::Cpu => SwapDevice::Cpu,
+        BackendChoice::Vulkan => SwapDevice::Vulkan(crate::optimize::run::context_for(options, false)?),
+        BackendChoice::Auto => {
+            let usable =
+                crate::optimize::run::context_for(options, options.device.is_none() && !has_context(options))
+                    .and_then(|ctx| match ctx.info().int64_atomics {
+                        true => Ok(ctx),
+                        false => Err(Error::VulkanUnavailable(format!(
+                            "{} lacks 64-bit buffer atomics",
+                            ctx.info().name
+                        ))),
+                    });
+            match usable {
+                Ok(ctx) => SwapDevice::Vulkan(ctx),
+                Err(e) => {
+                    let cpu = SwapDevice::Cpu;
+                    let note = format!("{} (no Vulkan GPU used: {e})", cpu.describe());
+                    return Ok((cpu, note));
+                }
+            }
+        }
+    };
+    let note = device.describe();
+    Ok((device, note))
 }
 
 /// Checks a search's values and starts its report (the energy summed); true

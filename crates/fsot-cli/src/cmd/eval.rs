@@ -100,7 +100,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     let planned_measured = args.methods.is_empty() || args.methods.iter().any(|m| m == "fsot-planned");
     if size.planned && planned_measured {
         for d in &size.displays {
-            fsot::quality::display::preset_ppd(d).map_err(|_| {
+            fsot::core::display::preset_ppd(d).map_err(|_| {
                 Error::invalid(format!(
                     "fsot-planned needs the geometry of display {d:?}, which fsot does not know"
                 ))

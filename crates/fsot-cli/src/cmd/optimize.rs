@@ -279,7 +279,7 @@ pub(crate) fn make_baseline(
     // The swap searches go where --backend says, as fsot's runs do; white noise
     // and void-and-cluster are made on the CPU.
     let device = if method.swaps(&tile) {
-        let (device, note) = fsot::optimize::run::swap_device(&run_options(args)?)?;
+        let (device, note) = fsot::peers::swap::swap_device(&run_options(args)?)?;
         eprintln!("backend: {note}");
         device
     } else {

@@ -110,7 +110,7 @@ pub fn run_robustness(
     let seeds = size.seeds as usize;
     // fsot-planned as planned for the run's first display.
     let first = size.displays.first().ok_or_else(|| fsot::error::Error::invalid("no display to judge on"))?;
-    let viewing = fsot::core::kernel::Spatial::Display { ppd: fsot::quality::display::preset_ppd(first)? };
+    let viewing = fsot::core::kernel::Spatial::Display { ppd: fsot::core::display::preset_ppd(first)? };
     // Each method's masks, read once (none for fsot-planned: its masks are per scene).
     let masks: Vec<Vec<Mask>> = methods
         .iter()

@@ -541,9 +541,7 @@ pub fn run_eval(
     let every: Vec<usize> = (0..judges.len()).collect();
     let flip = size.flip.as_deref().map(Flip::start).transpose()?;
     let ppds: Vec<f64> = match flip {
-        Some(_) => {
-            size.displays.iter().map(|d| fsot::quality::display::preset_ppd(d)).collect::<Result<_>>()?
-        }
+        Some(_) => size.displays.iter().map(|d| fsot::core::display::preset_ppd(d)).collect::<Result<_>>()?,
         None => Vec::new(),
     };
     if size.seeds == 0 {
@@ -645,7 +643,7 @@ fn planned_records(
     let (scene, size) = (judging.scene, judging.size);
     let mut records = Vec::new();
     for (d, display) in size.displays.iter().enumerate() {
-        let viewing = Spatial::Display { ppd: fsot::quality::display::preset_ppd(display)? };
+        let viewing = Spatial::Display { ppd: fsot::core::display::preset_ppd(display)? };
         let mut any_shares = false;
         for share in [true, false] {
             if !(share || any_shares && size.planned_unshared) {
