@@ -76,12 +76,10 @@ fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
     let scene = Scene::parse(text, "together").unwrap();
     let plan = Plan::new(&scene, &CostModel { seconds_per_point: 1e-6, backend: "test".into() }).unwrap();
-    let options = RunOptions {
-        backend: BackendChoice::Vulkan,
-        context: Some(ctx.clone()),
-        vulkan: VulkanOptions::default().deterministic(true),
-        ..RunOptions::default()
-    };
+    let options = RunOptions::default()
+        .backend(BackendChoice::Vulkan)
+        .context(Some(ctx.clone()))
+        .vulkan(VulkanOptions::default().deterministic(true));
     let straight = tempfile::tempdir().unwrap();
     plan.execute(straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
 

@@ -30,14 +30,11 @@ fn settings(until: Until) -> Settings {
 }
 
 fn options(ctx: &Context, host_rule: bool) -> RunOptions {
-    RunOptions {
-        backend: BackendChoice::Vulkan,
-        context: Some(ctx.clone()),
-        vulkan: VulkanOptions::default()
+    RunOptions::default().backend(BackendChoice::Vulkan).context(Some(ctx.clone())).vulkan(
+        VulkanOptions::default()
             .deterministic(true)
             .hooks(VulkanHooks { host_stopping_rule: host_rule, ..VulkanHooks::default() }),
-        ..RunOptions::default()
-    }
+    )
 }
 
 fn tile() -> Tile {
@@ -99,7 +96,7 @@ fn a_run_resumed_inside_a_window_hands_the_device_the_rule_where_it_stood() {
     // Stopped at 45: inside a window (7) and a batch (32), after the first halvings.
     let with_checkpoint = |resume| {
         let checkpoint = Some(Checkpointing { path: path.clone(), every: 45, resume });
-        let o = RunOptions { checkpoint, ..options(&ctx, false) };
+        let o = options(&ctx, false).checkpoint(checkpoint);
         Run::start(tile(), settings(Until::Plateau(QUICK)), None, o).unwrap()
     };
     let mut first = with_checkpoint(false);

@@ -185,10 +185,7 @@ fn a_plan_folder_reads_into_a_sampler_plan_and_a_bad_one_is_refused() {
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"4x4x2\"\n\
                 [[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n";
     let scene = fsot::scene::file::Scene::parse(text, "s").unwrap();
-    let options = fsot::optimize::run::RunOptions {
-        backend: fsot::optimize::backend::BackendChoice::Cpu,
-        ..fsot::optimize::run::RunOptions::default()
-    };
+    let options = fsot::RunOptions::default().backend(fsot::BackendChoice::Cpu);
     let plan = fsot::scene::plan::Plan::new(&scene, &fsot::scene::plan::CostModel::unmeasured()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     plan.execute(dir.path(), &options, 100, false, &fsot::optimize::run::CancelFlag::new(), &mut |_| {})

@@ -151,7 +151,7 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
                 [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
                 [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
     let scene = Scene::parse(text, "small").unwrap();
-    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
     let plan = Plan::new(&scene, &CostModel::calibrate(&options).unwrap()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let mut done = Vec::new();
@@ -204,7 +204,7 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
     let scene = Scene::parse(text, "resumable").unwrap();
-    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
     let plan = Plan::new(&scene, &model()).unwrap();
     let straight = tempfile::tempdir().unwrap();
     plan.execute(straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();

@@ -83,7 +83,7 @@ fn interrupted_then_resumed(tile: Tile, s: Settings, options: RunOptions, stop: 
 
 fn checkpointed(options: RunOptions, dir: &tempfile::TempDir) -> RunOptions {
     let checkpoint = Checkpointing { path: dir.path().join("run.ckpt"), every: 7, resume: false };
-    RunOptions { checkpoint: Some(checkpoint), ..options }
+    options.checkpoint(Some(checkpoint))
 }
 
 #[test]
@@ -91,7 +91,7 @@ fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
     let _others = others();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let s = settings(60);
-    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let cpu = RunOptions::default().backend(BackendChoice::Cpu);
     let reference = straight(tile, s, cpu.clone());
     let dir = tempfile::tempdir().unwrap();
     let (stopped, resumed) = interrupted_then_resumed(tile, s, checkpointed(cpu, &dir), 25);
@@ -107,12 +107,10 @@ fn a_cancelled_and_resumed_deterministic_vulkan_run_equals_an_uninterrupted_one(
     let ctx = common::gpu_context();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let s = settings(60);
-    let vulkan = RunOptions {
-        backend: BackendChoice::Vulkan,
-        context: Some(ctx.clone()),
-        vulkan: VulkanOptions::default().deterministic(true),
-        ..RunOptions::default()
-    };
+    let vulkan = RunOptions::default()
+        .backend(BackendChoice::Vulkan)
+        .context(Some(ctx.clone()))
+        .vulkan(VulkanOptions::default().deterministic(true));
     let reference = straight(tile, s, vulkan.clone());
     let dir = tempfile::tempdir().unwrap();
     let (stopped, resumed) = interrupted_then_resumed(tile, s, checkpointed(vulkan, &dir), 25);
@@ -133,8 +131,7 @@ fn a_vulkan_run_steps_one_iteration_first_then_whole_batches_where_iterations_ar
     let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
     let ctx = common::gpu_context();
     let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
-    let options =
-        RunOptions { backend: BackendChoice::Vulkan, context: Some(ctx.clone()), ..RunOptions::default() };
+    let options = RunOptions::default().backend(BackendChoice::Vulkan).context(Some(ctx.clone()));
     let mut run = Run::start(tile, settings(80), None, options).unwrap();
     let mut seen = Vec::new();
     let outcome = run
@@ -164,7 +161,7 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
         assert_eq!(run.backend().kind(), BackendKind::Cpu);
         assert!(run.note().starts_with("cpu"), "{}", run.note());
     }
-    let handed = RunOptions { context: Some(ctx.clone()), ..RunOptions::default() };
+    let handed = RunOptions::default().context(Some(ctx.clone()));
     for dims in [2, 3, 8] {
         let on_gpu =
             Run::start(Tile::new(8, 8, 2, 1, dims).unwrap(), settings(5), None, handed.clone()).unwrap();
@@ -173,7 +170,7 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
     // A device without shaderFloat64 takes d >= 3 too (the float32-pair targets).
     let guest =
         fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
-    let handed = RunOptions { context: Some(guest.clone()), ..RunOptions::default() };
+    let handed = RunOptions::default().context(Some(guest.clone()));
     let taken = Run::start(tile, settings(5), None, handed).unwrap();
     assert_eq!(taken.backend().kind(), BackendKind::Vulkan, "{}", taken.note());
     drop((taken, guest));
@@ -184,13 +181,8 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
 fn a_run_without_checkpoints_stops_on_the_flag_and_writes_nothing() {
     let _others = others();
     let tile = Tile::new(8, 8, 2, 1, 2).unwrap();
-    let mut run = Run::start(
-        tile,
-        settings(40),
-        None,
-        RunOptions { backend: BackendChoice::Cpu, ..Default::default() },
-    )
-    .unwrap();
+    let mut run =
+        Run::start(tile, settings(40), None, RunOptions::default().backend(BackendChoice::Cpu)).unwrap();
     let cancel = CancelFlag::new();
     cancel.cancel();
     let outcome = run.run(&cancel, &mut |_| panic!("no iteration after the flag")).unwrap();
@@ -205,8 +197,8 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     // A quick rule: 8-iteration windows.
     let rule = Plateau { window: 8, ..Plateau::DEFAULT };
-    let s = Settings { until: Until::Plateau(rule), iterations: 5000, ..settings(5000) };
-    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let s = settings(5000).until(Until::Plateau(rule)).iterations(5000);
+    let cpu = RunOptions::default().backend(BackendChoice::Cpu);
     let mut run = Run::start(tile, s, None, cpu.clone()).unwrap();
     assert_eq!(run.run(&CancelFlag::new(), &mut |_| {}).unwrap(), Outcome::Reached);
     let stopped_at = run.iteration();
@@ -218,7 +210,7 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
     // Cancelled mid-window (checkpoints every 5, windows of 8), then resumed.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("p.ckpt");
-    let mut options = RunOptions { checkpoint: Some(Checkpointing { path, every: 5, resume: false }), ..cpu };
+    let mut options = cpu.checkpoint(Some(Checkpointing { path, every: 5, resume: false }));
     let cancel = CancelFlag::new();
     let mut first = Run::start(tile, s, None, options.clone()).unwrap();
     let stop = stopped_at / 2 + 3;
@@ -243,7 +235,7 @@ fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
     let _others = others();
     use fsot::optimize::settings::Until;
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
-    let cpu = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let cpu = RunOptions::default().backend(BackendChoice::Cpu);
     // Where a plateau run's objective estimate goes, then a target short of it.
     let mut probe = Run::start(tile, settings(64), None, cpu.clone()).unwrap();
     let mut costs = Vec::new();
@@ -255,7 +247,7 @@ fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
         })
         .unwrap();
     let target = costs[..32].iter().sum::<f64>() / 32.0 * 0.8;
-    let s = Settings { until: Until::Objective(target), iterations: 5000, ..settings(5000) };
+    let s = settings(5000).until(Until::Objective(target)).iterations(5000);
     let mut run = Run::start(tile, s, None, cpu).unwrap();
     let mut windows = Vec::new();
     let mut window = Vec::new();

@@ -35,8 +35,15 @@ pub struct Checkpointing {
     pub resume: bool,
 }
 
-/// How a run is made.
+/// How a run is made. Built from the default with the setters:
+///
+/// ```
+/// use fsot::{BackendChoice, RunOptions};
+/// let options = RunOptions::default().backend(BackendChoice::Cpu).validation(false);
+/// assert_eq!(options.backend, BackendChoice::Cpu);
+/// ```
 #[derive(Clone, Default)]
+#[non_exhaustive]
 pub struct RunOptions {
     pub backend: BackendChoice,
     /// The Vulkan device: its index or part of its name [default: the first
@@ -51,6 +58,46 @@ pub struct RunOptions {
     #[cfg(feature = "vulkan")]
     pub vulkan: VulkanOptions,
     pub checkpoint: Option<Checkpointing>,
+}
+
+impl RunOptions {
+    /// Where the run may go.
+    pub fn backend(mut self, backend: BackendChoice) -> Self {
+        self.backend = backend;
+        self
+    }
+
+    /// The Vulkan device by index or part of its name.
+    pub fn device(mut self, device: Option<String>) -> Self {
+        self.device = device;
+        self
+    }
+
+    /// Work on this context (a renderer's wrapped device) instead of making one.
+    #[cfg(feature = "vulkan")]
+    pub fn context(mut self, context: Option<Context>) -> Self {
+        self.context = context;
+        self
+    }
+
+    /// Vulkan's validation layer on or off.
+    pub fn validation(mut self, on: bool) -> Self {
+        self.validation = on;
+        self
+    }
+
+    /// How a Vulkan run works.
+    #[cfg(feature = "vulkan")]
+    pub fn vulkan(mut self, vulkan: VulkanOptions) -> Self {
+        self.vulkan = vulkan;
+        self
+    }
+
+    /// Checkpoints of the run, or none.
+    pub fn checkpoint(mut self, checkpoint: Option<Checkpointing>) -> Self {
+        self.checkpoint = checkpoint;
+        self
+    }
 }
 
 /// What a run tells its observer.

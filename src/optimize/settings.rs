@@ -16,7 +16,16 @@ pub const DEFAULT_ITERATIONS: u32 = 1000;
 /// A cap on the iterations of a run that stops by a rule.
 pub const DEFAULT_CAP: u32 = 10_000;
 
+/// What defines a run, whatever runs it. `Settings::new` and the setters:
+///
+/// ```
+/// use fsot::{KernelSpec, Settings, Until};
+/// let s = Settings::new(KernelSpec::named("taa")?, 7).iterations(200).until(Until::Iterations);
+/// assert_eq!((s.iterations, s.seed), (200, 7));
+/// # Ok::<(), fsot::Error>(())
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct Settings {
     pub kernel: KernelSpec,
     /// The run's length (`Until::Iterations`) or its cap (the other rules).
@@ -61,6 +70,42 @@ impl Settings {
             rule: StepRule::DEFAULT,
             until: Until::Iterations,
         }
+    }
+
+    /// The kernel the error is filtered by.
+    pub fn kernel(mut self, kernel: KernelSpec) -> Self {
+        self.kernel = kernel;
+        self
+    }
+
+    /// The run's length, or its cap where it stops by a rule.
+    pub fn iterations(mut self, iterations: u32) -> Self {
+        self.iterations = iterations;
+        self
+    }
+
+    /// Slices per iteration (None: enough for DEFAULT_HITS hits per sample).
+    pub fn slices(mut self, slices: Option<u32>) -> Self {
+        self.slices = slices;
+        self
+    }
+
+    /// The seed every draw derives from.
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.seed = seed;
+        self
+    }
+
+    /// How displacements become moves.
+    pub fn rule(mut self, rule: StepRule) -> Self {
+        self.rule = rule;
+        self
+    }
+
+    /// When the run ends.
+    pub fn until(mut self, until: Until) -> Self {
+        self.until = until;
+        self
     }
 }
 

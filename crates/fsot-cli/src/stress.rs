@@ -76,13 +76,10 @@ fn start(
     vulkan: VulkanOptions,
 ) -> Result<Run> {
     let options = match ctx {
-        Some(c) => RunOptions {
-            backend: BackendChoice::Vulkan,
-            context: Some(c.clone()),
-            vulkan,
-            ..RunOptions::default()
-        },
-        None => RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() },
+        Some(c) => {
+            RunOptions::default().backend(BackendChoice::Vulkan).context(Some(c.clone())).vulkan(vulkan)
+        }
+        None => RunOptions::default().backend(BackendChoice::Cpu),
     };
     Run::start(tile, s, init, options)
 }

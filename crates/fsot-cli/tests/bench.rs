@@ -20,7 +20,7 @@ fn converge(backends: &[BackendChoice]) {
     let mut last_objective = Vec::new();
     for &choice in backends {
         // With the validation layer on, any message makes `convergence` fail.
-        let base = RunOptions { validation: true, ..RunOptions::default() };
+        let base = RunOptions::default().validation(true);
         let points = convergence(choice, &base, tile, spec, 3, &[5, 20, 40], &judge).unwrap();
         let iterations: Vec<u32> = points.iter().map(|p| p.iteration).collect();
         assert_eq!(iterations, vec![0, 5, 20, 40], "{choice:?}");

@@ -161,7 +161,7 @@ pub fn convergence(
     settings.iterations = last;
     // Profiled: timestamps around every pass give the GPU's own time.
     let vulkan = VulkanOptions::default().profile(true);
-    let options = RunOptions { backend: choice, vulkan, ..base.clone() };
+    let options = base.clone().backend(choice).vulkan(vulkan);
     // An untimed warm-up of the same problem first, so that one-time costs are
     // not counted as the optimisation's: llvmpipe compiles each shader at its
     // first dispatch (8 s of 8.3 in a first quick run after a build), and the

@@ -25,7 +25,7 @@ pub struct Scale {
 pub fn measure(tile: Tile, iterations: u32) -> Result<(u32, f64)> {
     let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0)?, 1);
     settings.iterations = iterations.max(1);
-    let options = RunOptions { backend: BackendChoice::Cpu, ..RunOptions::default() };
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
     let mut run = Run::start(tile, settings, None, options)?;
     let start = Instant::now();
     run.run(&CancelFlag::new(), &mut |_| {})?;

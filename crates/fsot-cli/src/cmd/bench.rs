@@ -166,11 +166,7 @@ fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
         args.out.display()
     );
     let judge = SceneJudge::new(tile, Some(&args.out.join("cache")))?;
-    let base = RunOptions {
-        device: super::env::device(None),
-        validation: super::env::validation(),
-        ..RunOptions::default()
-    };
+    let base = RunOptions::default().device(super::env::device(None)).validation(super::env::validation());
     let mut points = Vec::new();
     let mut notes = Vec::new();
     for choice in [BackendChoice::Cpu, BackendChoice::Vulkan] {

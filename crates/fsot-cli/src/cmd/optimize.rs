@@ -155,14 +155,12 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
     };
     let backend = args.backend.choice();
     let vulkan = VulkanOptions::default().deterministic(args.deterministic).profile(args.profile);
-    Ok(RunOptions {
-        backend,
-        device: env::device(args.device.clone()),
-        context: None,
-        validation: env::validation(),
-        vulkan,
-        checkpoint,
-    })
+    Ok(RunOptions::default()
+        .backend(backend)
+        .device(env::device(args.device.clone()))
+        .validation(env::validation())
+        .vulkan(vulkan)
+        .checkpoint(checkpoint))
 }
 
 /// The progress bar of a run (hidden when stderr is not a terminal).

@@ -7,12 +7,10 @@ use fsot::scene::plan::{CostModel, Plan, PlanEvent};
 
 pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
     let scene = Scene::read(&args.scene)?;
-    let options = RunOptions {
-        backend: args.backend.choice(),
-        device: env::device(args.device.clone()),
-        validation: env::validation(),
-        ..RunOptions::default()
-    };
+    let options = RunOptions::default()
+        .backend(args.backend.choice())
+        .device(env::device(args.device.clone()))
+        .validation(env::validation());
     let cost = CostModel::calibrate(&options)?;
     let plan = Plan::new(&scene, &cost)?;
     if args.json {
@@ -96,13 +94,11 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         return Err(Error::invalid("--checkpoint-every must be at least 1"));
     }
     let scene = Scene::read(path)?;
-    let options = RunOptions {
-        backend: args.backend.choice(),
-        device: env::device(args.device.clone()),
-        validation: env::validation(),
-        vulkan: VulkanOptions::default().deterministic(args.deterministic),
-        ..RunOptions::default()
-    };
+    let options = RunOptions::default()
+        .backend(args.backend.choice())
+        .device(env::device(args.device.clone()))
+        .validation(env::validation())
+        .vulkan(VulkanOptions::default().deterministic(args.deterministic));
     let cost = CostModel::calibrate(&options)?;
     let plan = Plan::new(&scene, &cost)?;
     eprint!("{}", describe(&plan));
