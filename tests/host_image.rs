@@ -344,3 +344,63 @@ fn a_host_records_the_sort_into_its_own_command_buffer() {
     drop(ctx);
     host.assert_silent();
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_sort_sorts_a_hosts_own_buffers_in_place_and_refuses_ones_it_cannot_use() {
+    // The renderer's buffers, filled through fsot's host-buffer fill, sorted
+    // in place by a sort recorded into the renderer's command buffer, read back
+    // by the renderer: by 32 bits (four passes) and by 24 (three: the odd pass
+    // copied back into the host's buffers), each the CPU's stable sort.
+    let host = Host::new(true);
+    let ctx = host.fsot();
+    let n = 3000u32;
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST;
+    let (kb, km) = host.buffer(4 * n as u64, usage);
+    let (vb, vm) = host.buffer(4 * n as u64, usage);
+    let target = |buffer| BufferTarget { buffer, size: 4 * n as u64, usage, offset: 0 };
+    let mut sort = fsot::vk::RadixSort::with_storage_reads(&ctx, n, fsot::vk::SortCount::Host).unwrap();
+    sort.set_count(n).unwrap();
+    // SAFETY: both buffers outlive the sort (freed after it below), on its
+    // device; nothing is pending.
+    unsafe { sort.bind_pairs(&target(kb), &target(vb)) }.unwrap();
+    for bits in [32u32, 24] {
+        let keys: Vec<u32> = (0..n).map(|i| i.wrapping_mul(2_654_435_761) >> (32 - bits)).collect();
+        let vals: Vec<u32> = (0..n).map(|i| i ^ 0x55).collect();
+        fsot::vk::buffer::fill_buffer(&ctx, &target(kb), bytemuck::cast_slice(&keys)).unwrap();
+        fsot::vk::buffer::fill_buffer(&ctx, &target(vb), bytemuck::cast_slice(&vals)).unwrap();
+        host.run(|cmd| {
+            // SAFETY: the host's command buffer, begun on the device `ctx`
+            // wraps, recorded only here; `run` waits before anything goes.
+            sort.record(unsafe { fsot::vk::Recording::new(&ctx, cmd) }, bits, Some(n));
+        });
+        let read =
+            |memory| -> Vec<u32> { bytemuck::cast_slice(&host.read_memory(memory, 4 * n as usize)).to_vec() };
+        let got: Vec<(u32, u32)> = read(km).into_iter().zip(read(vm)).collect();
+        let mut expected: Vec<(u32, u32)> = keys.into_iter().zip(vals).collect();
+        expected.sort_by_key(|&(k, _)| k);
+        assert!(got == expected, "{bits} bits: the host's buffers are not the stable sort");
+    }
+    assert!(sort.sort_pairs(&[1], &[2]).unwrap_err().to_string().contains("host's buffers"));
+    // A sort that reads through texel views, and buffers it cannot use, are
+    // refused before anything is bound.
+    let mut viewed = fsot::vk::RadixSort::new(&ctx, n, fsot::vk::SortCount::Host).unwrap();
+    // SAFETY: refused before binding anything.
+    let err = unsafe { viewed.bind_pairs(&target(kb), &target(vb)) }.unwrap_err().to_string();
+    assert!(err.contains("with_storage_reads"), "{err}");
+    let mut other = fsot::vk::RadixSort::with_storage_reads(&ctx, n, fsot::vk::SortCount::Host).unwrap();
+    let small = BufferTarget { size: 4, ..target(kb) };
+    let no_copy = BufferTarget { usage: vk::BufferUsageFlags::STORAGE_BUFFER, ..target(kb) };
+    for (bad, says) in [(small, "must hold"), (no_copy, "usage")] {
+        // SAFETY: refused before binding anything.
+        let err = unsafe { other.bind_pairs(&bad, &target(vb)) }.unwrap_err().to_string();
+        assert!(err.contains(says), "{err}");
+    }
+    drop((sort, viewed, other));
+    drop(ctx);
+    host.free_buffer(kb, km);
+    host.free_buffer(vb, vm);
+    host.assert_silent();
+}

@@ -172,9 +172,16 @@ pub fn barrier(cmd: Recording<'_>) {
 
 /// Copies the first `bytes` bytes of `src` to `dst` at `dst_offset`.
 pub fn copy(cmd: Recording<'_>, src: &Buffer, dst: &Buffer, bytes: u64, dst_offset: u64) {
+    copy_raw(cmd, src.raw, dst.raw, bytes, dst_offset)
+}
+
+/// As `copy`, between buffer handles (a host's among them), which the caller
+/// keeps alive with TRANSFER_SRC and TRANSFER_DST usage until the commands run.
+pub(crate) fn copy_raw(cmd: Recording<'_>, src: vk::Buffer, dst: vk::Buffer, bytes: u64, dst_offset: u64) {
     let region = [vk::BufferCopy::default().size(bytes).dst_offset(dst_offset)];
-    // SAFETY: `cmd` is being recorded; both buffers are alive and have TRANSFER usage.
-    unsafe { cmd.context().device().cmd_copy_buffer(cmd.raw(), src.raw, dst.raw, &region) };
+    // SAFETY: `cmd` is being recorded; both buffers are alive and have TRANSFER
+    // usage (the callers' promise).
+    unsafe { cmd.context().device().cmd_copy_buffer(cmd.raw(), src, dst, &region) };
 }
 
 /// Sets every byte of `buffer` from `offset` for `bytes` bytes (vk::WHOLE_SIZE: to the end) to zero.

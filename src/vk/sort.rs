@@ -24,9 +24,8 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use super::buffer::{Buffer, Location};
-use super::commands::Recording;
-use super::commands::{barrier, copy, zero};
+use super::buffer::{Buffer, BufferTarget, Location};
+use super::commands::{barrier, copy_raw, zero, Recording};
 use super::context::Context;
 use super::error::{Error, Result};
 use super::pipeline::{ComputeDesc, ComputePipeline};
@@ -278,6 +277,9 @@ pub struct RadixSort {
     /// The texel views of `keys` and `vals` per descriptor set (the lanes
     /// path's reads), where the device holds them.
     _views: Option<[[TexelView; 2]; 2]>,
+    /// A host's key and payload buffers in place of `keys[0]` and `vals[0]`
+    /// (`bind_pairs`).
+    host_pairs: Option<[vk::Buffer; 2]>,
     ctx: Context,
 }
 
@@ -493,6 +495,7 @@ impl RadixSort {
             partials,
             look_back,
             _views: views,
+            host_pairs: None,
             ctx: ctx.clone(),
         })
     }
@@ -729,10 +732,71 @@ impl RadixSort {
     /// copied back to the first.
     fn finish_odd(&self, cmd: Recording<'_>, passes: u32) {
         if passes % 2 == 1 {
-            copy(cmd, &self.keys[1], &self.keys[0], self.keys[1].size, 0);
-            copy(cmd, &self.vals[1], &self.vals[0], self.vals[1].size, 0);
+            let [keys, vals] = self.host_pairs.unwrap_or([self.keys[0].raw, self.vals[0].raw]);
+            copy_raw(cmd, self.keys[1].raw, keys, self.keys[1].size, 0);
+            copy_raw(cmd, self.vals[1].raw, vals, self.vals[1].size, 0);
             barrier(cmd);
         }
+    }
+
+    /// Sorts the host's `keys` and `vals` in place from now on, instead of the
+    /// sort's own `keys[0]` and `vals[0]` (which it then leaves alone): the
+    /// count, bits and result as `record`. The sort must read its input as
+    /// storage (`RadixSort::with_storage_reads`: a host's buffer need not allow
+    /// texel views), and each buffer needs STORAGE_BUFFER, TRANSFER_SRC and
+    /// TRANSFER_DST usage and room for the sort's capacity from offset 0.
+    /// `sort_pairs` is refused from then on (the pairs are the host's).
+    ///
+    /// # Safety
+    /// The host keeps both buffers alive, on this sort's device, for as long as
+    /// the sort may record or its recorded commands may run; and no submission
+    /// that uses the sort is pending when this is called (it rewrites the
+    /// sort's descriptor sets).
+    pub unsafe fn bind_pairs(&mut self, keys: &BufferTarget, vals: &BufferTarget) -> Result<()> {
+        if self._views.is_some() {
+            return Err(Error::invalid(
+                "a sort on a host's buffers reads them as storage: make it with RadixSort::with_storage_reads",
+            ));
+        }
+        let need = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        let bytes = self.capacity as u64 * 4;
+        for (what, t) in [("keys", keys), ("payloads", vals)] {
+            if t.buffer == vk::Buffer::null() {
+                return Err(Error::invalid(format!("the host's {what} buffer handle is null")));
+            }
+            if !t.usage.contains(need) {
+                return Err(Error::invalid(format!(
+                    "the host's {what} buffer lacks STORAGE_BUFFER, TRANSFER_SRC or TRANSFER_DST usage"
+                )));
+            }
+            if t.offset != 0 || t.size < bytes {
+                return Err(Error::invalid(format!(
+                    "the host's {what} buffer must hold the sort's {} pairs ({bytes} bytes) from offset 0; it has {} from {}",
+                    self.capacity, t.size, t.offset
+                )));
+            }
+        }
+        for p in [
+            &self.histogram,
+            &self.scan_reduce,
+            &self.scan_apply,
+            &self.scatter,
+            &self.histogram_tail,
+            &self.single,
+            &self.digits,
+            &self.onesweep,
+            &self.lanes.histogram,
+            &self.lanes.scan_reduce,
+            &self.lanes.scan_apply,
+            &self.lanes.scatter,
+        ] {
+            p.bind_raw(0, &[(binding::KEYS_IN, keys.buffer), (binding::VALS_IN, vals.buffer)])?;
+            p.bind_raw(1, &[(binding::KEYS_OUT, keys.buffer), (binding::VALS_OUT, vals.buffer)])?;
+        }
+        self.host_pairs = Some([keys.buffer, vals.buffer]);
+        Ok(())
     }
 
     /// Uploads pairs, sorts them by all 32 bits, reads them back.
@@ -745,6 +809,9 @@ impl RadixSort {
     pub fn sort_pairs_by(&mut self, keys: &[u32], vals: &[u32], bits: u32) -> Result<(Vec<u32>, Vec<u32>)> {
         if keys.len() != vals.len() {
             return Err(Error::invalid(format!("{} keys but {} payloads", keys.len(), vals.len())));
+        }
+        if self.host_pairs.is_some() {
+            return Err(Error::invalid("this sort works on a host's buffers (bind_pairs): record it there"));
         }
         let n = u32::try_from(keys.len()).map_err(|_| Error::invalid("too many pairs"))?;
         self.set_count(n)?;
