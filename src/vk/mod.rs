@@ -59,8 +59,9 @@ pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 #[doc(hidden)]
 pub use pipeline::{ComputeDesc, ComputePipeline};
 pub use requirements::{missing, requirements, Requirement, API_VERSION};
+pub use sort::{RadixSort, SortCount};
 #[doc(hidden)]
-pub use sort::{RadixSort, SortCount, SortPath};
+pub use sort::SortPath;
 #[doc(hidden)]
 pub use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes};
 #[doc(hidden)]

@@ -248,9 +248,17 @@ struct LanePasses {
     args: Option<(ComputePipeline, Buffer)>,
 }
 
+/// A reusable, stable radix sort of 32-bit keys with 32-bit payloads, on the
+/// device: `sort_pairs` from the host, or `record` into a command buffer
+/// (yours through `Recording`), on the sort's own buffers (`keys[0]`,
+/// `vals[0]`) or a host's (`bind_pairs`). Its passes follow the device and
+/// the count (one workgroup, a tail scan, block passes, or a run a lane on CPU
+/// implementations); the result is the same whichever.
 pub struct RadixSort {
+    /// The most pairs one sort takes.
     pub capacity: u32,
-    /// Which passes `record` uses.
+    /// Which passes `record` uses (forced by tests and benchmarks).
+    #[doc(hidden)]
     pub path: SortPath,
     shape: SortShape,
     blocks: u32,
@@ -258,6 +266,7 @@ pub struct RadixSort {
     host_count: Option<Buffer>,
     /// Ping-pong key and payload buffers; input and result are in index 0.
     pub keys: [Buffer; 2],
+    /// The payloads beside `keys`, likewise.
     pub vals: [Buffer; 2],
     histogram: ComputePipeline,
     scan_reduce: ComputePipeline,
@@ -500,6 +509,8 @@ impl RadixSort {
         })
     }
 
+    /// The launch shape chosen for the device.
+    #[doc(hidden)]
     pub fn shape(&self) -> SortShape {
         self.shape
     }
