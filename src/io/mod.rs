@@ -1,7 +1,7 @@
 //! Mask files: OpenEXR (the primary format), KTX2 array textures, C headers and
 //! 16-bit PNG slices, all written through a temporary file renamed into place.
 pub mod atomic;
-pub mod c_header;
+pub(crate) mod c_header;
 pub mod exr;
 pub mod ktx2;
 pub mod png;

@@ -2,6 +2,6 @@
 //! the animated integrands it is judged on (`integrands`), a mask's perceived
 //! error (`perceived`) and the relative errors of a render (`metric`).
 pub mod eye;
-pub mod integrands;
+pub(crate) mod integrands;
 pub mod metric;
 pub mod perceived;

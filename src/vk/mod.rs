@@ -28,27 +28,19 @@
 pub mod buffer;
 #[doc(hidden)]
 pub mod commands;
-#[doc(hidden)]
-pub mod context;
-#[doc(hidden)]
-pub mod device;
+pub(crate) mod context;
+pub(crate) mod device;
 mod error;
 pub(crate) mod fault;
-#[doc(hidden)]
-pub mod image;
-#[doc(hidden)]
-pub mod instance;
-#[doc(hidden)]
-pub mod pipeline;
+pub(crate) mod image;
+pub(crate) mod instance;
+pub(crate) mod pipeline;
 mod requirements;
 #[doc(hidden)]
 pub mod sort;
-#[doc(hidden)]
-pub mod sort_choice;
-#[doc(hidden)]
-pub mod texel_view;
-#[doc(hidden)]
-pub mod timer;
+pub(crate) mod sort_choice;
+pub(crate) mod texel_view;
+pub(crate) mod timer;
 
 pub use buffer::{Buffer, BufferTarget, Location};
 pub use commands::Recording;
@@ -59,9 +51,9 @@ pub use image::{Image, ImageDesc, ImageTarget, Sampler};
 #[doc(hidden)]
 pub use pipeline::{ComputeDesc, ComputePipeline};
 pub use requirements::{missing, requirements, Requirement, API_VERSION};
-pub use sort::{RadixSort, SortCount};
 #[doc(hidden)]
 pub use sort::SortPath;
+pub use sort::{RadixSort, SortCount};
 #[doc(hidden)]
 pub use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes};
 #[doc(hidden)]

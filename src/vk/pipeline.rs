@@ -35,6 +35,7 @@ pub struct ComputeDesc<'a> {
     pub sets: u32,
 }
 
+/// A compute pipeline with its layout and descriptor sets (`ComputeDesc`).
 pub struct ComputePipeline {
     ctx: Context,
     module: vk::ShaderModule,
@@ -42,12 +43,14 @@ pub struct ComputePipeline {
     layout: vk::PipelineLayout,
     pool: vk::DescriptorPool,
     sets: Vec<vk::DescriptorSet>,
+    /// The pipeline handle.
     pub raw: vk::Pipeline,
     kinds: Vec<vk::DescriptorType>,
     push_bytes: u32,
 }
 
 impl ComputePipeline {
+    /// The pipeline `desc` describes, with its descriptor sets.
     pub fn new(ctx: &Context, desc: &ComputeDesc) -> Result<Self> {
         let device = ctx.device();
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv))

@@ -23,10 +23,12 @@ const ROUNDS: u32 = 3;
 pub struct PathTimes {
     /// Pairs sorted, by their low `bits` bits.
     pub n: u32,
+    /// The key bits sorted by.
     pub bits: u32,
     /// `SortPath::Auto` without the look-back path: one workgroup per pass, the
     /// histogram's tail scan or the block passes, by size.
     pub blocks_ms: f64,
+    /// The decoupled look-back path.
     pub look_back_ms: f64,
 }
 
@@ -44,6 +46,7 @@ impl PathTimes {
 /// A sort path and how it was chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathChoice {
+    /// The path.
     pub path: SortPath,
     /// The times it was chosen by; None where nothing was timed (a CPU
     /// implementation, a device without timestamps, or a path the caller set).

@@ -11,8 +11,10 @@ use super::check;
 use super::context::Context;
 use super::error::{Error, Result};
 
+/// A buffer viewed as texels of one format (a uniform texel buffer).
 pub struct TexelView {
     ctx: Context,
+    /// The view handle.
     pub raw: vk::BufferView,
     /// Texels the view holds: the whole buffer over the texel's size.
     pub texels: u64,

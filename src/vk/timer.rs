@@ -7,6 +7,7 @@ use super::commands::Recording;
 use super::context::Context;
 use super::error::Result;
 
+/// A pool of timestamp queries.
 pub struct Timer {
     ctx: Context,
     pool: vk::QueryPool,
@@ -14,6 +15,7 @@ pub struct Timer {
 }
 
 impl Timer {
+    /// A pool of `count` timestamps.
     pub fn new(ctx: &Context, count: u32) -> Result<Self> {
         let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(count);
         // SAFETY: a valid create info.

@@ -4,11 +4,11 @@
 //! (`run`, `VulkanRun`, one implementation of `backend::Backend`) and the
 //! stopping rule on the device (`rule`).
 
-pub mod buffers;
+pub(crate) mod buffers;
 pub mod layout;
-pub mod pipelines;
+pub(crate) mod pipelines;
 pub mod rule;
-pub mod run;
+pub(crate) mod run;
 pub mod shape;
 
 pub use run::{LaneOrder, LaneTier, VulkanRun};

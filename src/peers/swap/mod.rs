@@ -30,7 +30,7 @@ use crate::optimize::backend::BackendChoice;
 use crate::optimize::run::has_context;
 use crate::optimize::run::RunOptions;
 
-pub mod cpu;
+pub(crate) mod cpu;
 #[cfg(feature = "vulkan")]
 pub mod vulkan;
 
