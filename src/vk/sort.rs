@@ -285,7 +285,7 @@ pub struct RadixSort {
     look_back: Buffer,
     /// The texel views of `keys` and `vals` per descriptor set (the lanes
     /// path's reads), where the device holds them.
-    _views: Option<[[TexelView; 2]; 2]>,
+    views: Option<[[TexelView; 2]; 2]>,
     /// A host's key and payload buffers in place of `keys[0]` and `vals[0]`
     /// (`bind_pairs`).
     host_pairs: Option<[vk::Buffer; 2]>,
@@ -503,7 +503,7 @@ impl RadixSort {
             _hist: hist,
             partials,
             look_back,
-            _views: views,
+            views,
             host_pairs: None,
             ctx: ctx.clone(),
         })
@@ -764,7 +764,7 @@ impl RadixSort {
     /// that uses the sort is pending when this is called (it rewrites the
     /// sort's descriptor sets).
     pub unsafe fn bind_pairs(&mut self, keys: &BufferTarget, vals: &BufferTarget) -> Result<()> {
-        if self._views.is_some() {
+        if self.views.is_some() {
             return Err(Error::invalid(
                 "a sort on a host's buffers reads them as storage: make it with RadixSort::with_storage_reads",
             ));

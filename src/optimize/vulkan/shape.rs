@@ -44,7 +44,7 @@ pub const DEFER_GROUPS: u32 = 65535;
 /// microseconds (its lanes' private arrays among it), yet more than one, so
 /// that the threads end together. 1 to 4 a thread were alike and 8 to 16
 /// slower at 32x32x16 `taa` on this project's 2-core machine
-/// (bench/results/issue16-lane-chunks.txt).
+/// (bench/results/lane-chunks.txt).
 pub const LANE_CHUNKS_PER_THREAD: u32 = 4;
 /// Loop iterations of one round of the per-lane transport besides the slice's
 /// sort and targets (`lane_cost`): the rounds' loop and the slice's draw (over
@@ -151,8 +151,8 @@ impl TransportShape {
             // only when every class fits the lane: there the limit is small (the
             // targets budgeted at their worst), and on lavapipe the large-class
             // stage costs more than the workgroup transport saves
-            // (bench/results/issue16-lane-dims.txt), also with the sort's lanes
-            // path (issue16-lane-dims-sort-lanes.txt: 74 to 78 ms an iteration
+            // (bench/results/lane-dims.txt), also with the sort's lanes
+            // path (lane-dims-sort-lanes.txt: 74 to 78 ms an iteration
             // against 53 at d = 3, 118 to 123 against 67 at d = 4).
             None => {
                 let limit = Self::lane_limit(dims);
