@@ -2,20 +2,30 @@
 
 use std::path::PathBuf;
 
+/// The crate's result type, with [`Error`] as its default error.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// What can go wrong in any fsot call.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
     /// A parameter or input that the user can fix.
     #[error("{0}")]
     Invalid(String),
-    /// A mask file that cannot be used.
+    /// A file (a mask, a scene or a checkpoint) that cannot be used.
     #[error("{path}: {reason}")]
-    BadFile { path: PathBuf, reason: String },
+    BadFile {
+        /// The file.
+        path: PathBuf,
+        /// Why it cannot be used, in words.
+        reason: String,
+    },
+    /// A file or folder operation failed.
     #[error("{context}: {source}")]
     Io {
+        /// What was being done, in words (the path and the operation).
         context: String,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
@@ -29,6 +39,7 @@ pub enum Error {
     /// A checkpoint is in the way of a run that does not resume it.
     #[error("checkpoint {} exists: continue it, or remove it to start over", .0.display())]
     CheckpointExists(PathBuf),
+    /// The work was cancelled before it finished.
     #[error("interrupted")]
     Interrupted,
 }
@@ -54,12 +65,15 @@ impl Error {
         matches!(self, Error::VulkanUnavailable(_))
     }
 
+    /// An `Invalid` error with this message.
     pub fn invalid(msg: impl Into<String>) -> Self {
         Error::Invalid(msg.into())
     }
+    /// A `BadFile` error: the file at `path` cannot be used, for `reason`.
     pub fn bad_file(path: impl Into<PathBuf>, reason: impl Into<String>) -> Self {
         Error::BadFile { path: path.into(), reason: reason.into() }
     }
+    /// An `Io` error: `source` happened while doing `context`.
     pub fn io(context: impl Into<String>, source: std::io::Error) -> Self {
         Error::Io { context: context.into(), source }
     }

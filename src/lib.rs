@@ -91,7 +91,11 @@
 //! - `build-shaders`: compile `glsl/` with shaderc at build time instead of
 //!   embedding the committed SPIR-V (needs shaderc's libraries, or cmake and a
 //!   C++ compiler to build them).
+//! - `internals`: makes the modules behind the items above public, for fsot's
+//!   own command line and tests. They carry no stability promise; without the
+//!   feature they are private to the crate.
 #![warn(missing_docs)]
+#![warn(unnameable_types)]
 
 /// The bytes of one embedded SPIR-V file: committed under `spirv/` (made from
 /// `glsl/` by `scripts/spirv.sh`), or compiled into OUT_DIR at build time with
@@ -122,35 +126,72 @@ macro_rules! spirv_module {
     };
 }
 
-#[doc(hidden)]
-pub mod core;
-#[doc(hidden)]
-pub mod error;
-#[doc(hidden)]
-pub mod io;
-#[doc(hidden)]
-pub mod optimize;
-#[doc(hidden)]
-pub mod peers;
-#[doc(hidden)]
-pub mod quality;
-#[doc(hidden)]
-pub mod render;
-#[doc(hidden)]
-pub mod scene;
+/// Declares modules (and re-exports) that are public to fsot's own command line
+/// and tests, with the `internals` feature, and private to the crate otherwise:
+/// a renderer that depends on fsot sees the items re-exported below and `vk`.
+macro_rules! internal {
+    ($(mod $name:ident;)*) => {$(
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        pub mod $name;
+        #[cfg(not(feature = "internals"))]
+        #[allow(dead_code, unused_imports)]
+        pub(crate) mod $name;
+    )*};
+    (mod $name:ident { $($body:tt)* }) => {
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        pub mod $name { $($body)* }
+        #[cfg(not(feature = "internals"))]
+        #[allow(dead_code, unused_imports)]
+        pub(crate) mod $name { $($body)* }
+    };
+    ($(#[$meta:meta])* fn $($rest:tt)*) => {
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        $(#[$meta])*
+        pub fn $($rest)*
+        #[cfg(not(feature = "internals"))]
+        $(#[$meta])*
+        pub(crate) fn $($rest)*
+    };
+    (use $($tree:tt)*) => {
+        #[cfg(feature = "internals")]
+        #[doc(hidden)]
+        pub use $($tree)*;
+        #[cfg(not(feature = "internals"))]
+        #[allow(unused_imports)]
+        pub(crate) use $($tree)*;
+    };
+}
+
+internal! {
+    mod core;
+    mod error;
+    mod io;
+    mod optimize;
+    mod peers;
+    mod quality;
+    mod render;
+    mod scene;
+}
 #[cfg(feature = "vulkan")]
 pub mod vk;
 
-pub use crate::core::kernel::KernelSpec;
+pub use crate::core::kernel::{KernelSpec, Spatial, Temporal};
 pub use crate::core::mask::Mask;
+pub use crate::core::step_rule::{Plateau, StepRule};
 pub use crate::core::tile::Tile;
 pub use error::{Error, Result};
-pub use optimize::backend::BackendChoice;
+pub use io::ktx2::Format as TexelFormat;
+pub use optimize::backend::{BackendChoice, BackendKind, Profile, Report};
 pub use optimize::run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 pub use optimize::settings::{Settings, Until};
-pub use render::sampler::SamplerPlan;
-pub use scene::file::Scene;
-pub use scene::plan::{CostModel, Plan, PlanEvent, PlannedMask};
+pub use render::sampler::{SamplerPart, SamplerPlan};
+pub use scene::file::{Display as SceneDisplay, Group as SceneGroup, Reading, Scene};
+pub use scene::plan::{
+    CostModel, Made as MadeMask, Part as PlannedPart, Plan, PlanEvent, PlannedGroup, PlannedMask,
+};
 
 #[cfg(feature = "vulkan")]
 pub use ash;

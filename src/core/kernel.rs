@@ -22,22 +22,42 @@ pub enum Temporal {
     /// Frames independent: Salaün et al. 2022 applied per frame.
     Spatial,
     /// Symmetric Gaussian over time, exp(-dt^2 / sigma_t^2) (akin to STBN).
-    Gaussian { sigma_t: f64 },
+    Gaussian {
+        /// Width in frames, in (0, 64].
+        sigma_t: f64,
+    },
     /// TAA: exponential moving average, weight alpha (1 - alpha)^k at lag k.
-    Taa { alpha: f64 },
+    Taa {
+        /// Blend weight of the current frame, in (0, 1].
+        alpha: f64,
+    },
     /// FovVideoVDP sustained + transient temporal response at `fps`.
-    Perceptual { fps: f64 },
+    Perceptual {
+        /// Frame rate in frames per second, in [8, 1000].
+        fps: f64,
+    },
     /// TAA then the eye: the two filters convolved (the paper's full model).
-    PerceptualTaa { fps: f64, alpha: f64 },
+    PerceptualTaa {
+        /// Frame rate in frames per second, in [8, 1000].
+        fps: f64,
+        /// TAA's blend weight of the current frame, in (0, 1].
+        alpha: f64,
+    },
 }
 
 /// The spatial part of a kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Spatial {
     /// exp(-(dx^2 + dy^2) / sigma^2), pixels (no factor 2, as in the paper).
-    Gaussian { sigma: f64 },
+    Gaussian {
+        /// Width in pixels, in (0, 64].
+        sigma: f64,
+    },
     /// The eye's contrast sensitivity on a display of `ppd` pixels per degree.
-    Display { ppd: f64 },
+    Display {
+        /// The display's pixels per degree of visual angle, in [5, 500].
+        ppd: f64,
+    },
 }
 
 impl Spatial {
@@ -78,7 +98,9 @@ impl Spatial {
 /// Everything that defines a kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct KernelSpec {
+    /// The filter over pixels of one frame.
     pub spatial: Spatial,
+    /// The filter over frames.
     pub temporal: Temporal,
     /// Offsets whose weight is below `tolerance` x the largest weight are dropped.
     /// Such offsets belong only to classes of levels below that fraction of the
@@ -104,7 +126,10 @@ pub const MIN_MEAN_CLASS: f64 = 20.0;
 pub const KERNEL_NAMES: [&str; 5] = ["spatial", "gaussian", "taa", "perceptual", "perceptual-taa"];
 
 impl KernelSpec {
-    /// The kernel of that name (one of [`KERNEL_NAMES`]) with the default eye
+    /// Kernel names as the command line and files spell them.
+    pub const NAMES: [&'static str; 5] = KERNEL_NAMES;
+
+    /// The kernel of that name (one of [`KernelSpec::NAMES`]) with the default eye
     /// (sigma 2.1 pixels) and display (TAA alpha 0.1 at 60 fps).
     ///
     /// ```
@@ -175,6 +200,7 @@ impl KernelSpec {
         Ok(Self { spatial: Spatial::Display { ppd }, ..self })
     }
 
+    /// The kernel's name (one of [`KernelSpec::NAMES`]), set by its temporal filter.
     pub fn name(&self) -> &'static str {
         match self.temporal {
             Temporal::Spatial => "spatial",

@@ -3,8 +3,12 @@
 use crate::core::rng::{derive, seed_key, Stream};
 use crate::core::tile::Tile;
 
+/// A tile's samples: `tile.spp` samples of `tile.dims` coordinates for each
+/// pixel of each frame. Saved and opened by `save` and `open`; written into a
+/// renderer's image by the `vulkan` feature's calls.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mask {
+    /// The tile's size, samples per pixel and dimensions.
     pub tile: Tile,
     /// `tile.values()` coordinates in [0, 1), laid out as `tile` documents.
     pub samples: Vec<f32>,
@@ -30,10 +34,12 @@ impl Mask {
         &self.samples[i..i + self.tile.dims]
     }
 
+    /// The provenance value under `key` (for example `kernel`, `seed`, `iterations`).
     pub fn meta(&self, key: &str) -> Option<&str> {
         self.meta.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
     }
 
+    /// Sets the provenance value under `key`, replacing an earlier one.
     pub fn set_meta(&mut self, key: &str, value: impl Into<String>) {
         let value = value.into();
         match self.meta.iter_mut().find(|(k, _)| k == key) {

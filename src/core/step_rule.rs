@@ -6,14 +6,29 @@
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StepRule {
     /// Momentum on the mean displacement: m = beta m + (1 - beta) g; x += step m.
-    Momentum { step: f32, beta: f32 },
+    Momentum {
+        /// Distance moved per unit of momentum at full scale (the factor on m).
+        step: f32,
+        /// Weight of the previous momentum in each update.
+        beta: f32,
+    },
     /// Adam with bias correction; `lr` is a distance per iteration.
-    Adam { lr: f32, beta1: f32, beta2: f32, eps: f32 },
+    Adam {
+        /// Distance moved per iteration at full scale.
+        lr: f32,
+        /// Decay of the running mean of the displacement (first moment).
+        beta1: f32,
+        /// Decay of the running mean of its square (second moment).
+        beta2: f32,
+        /// Added to the second moment's square root, keeping the step finite.
+        eps: f32,
+    },
 }
 
 impl StepRule {
     /// The default rule (chosen by measurement, see BENCHMARKS.md).
     pub const DEFAULT: StepRule = StepRule::Momentum { step: 2.0, beta: 0.8 };
+    /// Adam with lr 0.01, beta1 0.9, beta2 0.99 and eps 1e-8.
     pub const DEFAULT_ADAM: StepRule = StepRule::Adam { lr: 1e-2, beta1: 0.9, beta2: 0.99, eps: 1e-8 };
 }
 
@@ -40,7 +55,11 @@ pub struct Plateau {
     /// Iterations per window (the Vulkan backend's batch, so that both backends
     /// decide at the same iterations).
     pub window: u32,
+    /// Relative gain on the previous window below which the step is multiplied
+    /// by `factor`.
     pub decay_below: f64,
+    /// Relative gain on the previous window below which a run at the smallest
+    /// step scale ends.
     pub stop_below: f64,
     /// What the step is multiplied by when a window does not pay.
     pub factor: f32,

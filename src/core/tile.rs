@@ -14,12 +14,19 @@ pub const MAX_SPP: usize = 64;
 /// Largest number of points in one tile (keeps every index in u32 and memory sane).
 pub const MAX_POINTS: usize = 1 << 28;
 
+/// The shape of a tile: W x H pixels x T frames, wrapping in x, y and t, with
+/// `spp` samples of `dims` coordinates per pixel and frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tile {
+    /// W: pixels per row, at least 1.
     pub width: usize,
+    /// H: rows, at least 1.
     pub height: usize,
+    /// T: frames, at least 1.
     pub frames: usize,
+    /// Samples per pixel and frame, 1 to `MAX_SPP`.
     pub spp: usize,
+    /// Coordinates per sample, 1 to `MAX_DIMS`.
     pub dims: usize,
 }
 
@@ -64,12 +71,15 @@ impl Tile {
         Ok((v[0], v[1], v[2]))
     }
 
+    /// Pixels over every frame: W x H x T.
     pub fn pixels(&self) -> usize {
         self.width * self.height * self.frames
     }
+    /// Samples in the tile: pixels x spp.
     pub fn points(&self) -> usize {
         self.pixels() * self.spp
     }
+    /// Coordinates in the tile: points x dims.
     pub fn values(&self) -> usize {
         self.points() * self.dims
     }
@@ -78,6 +88,7 @@ impl Tile {
     pub fn pixel_index(&self, x: usize, y: usize, t: usize) -> usize {
         (t * self.height + y) * self.width + x
     }
+    /// A one-line description, e.g. "64x64x16, 1 spp, d = 2".
     pub fn describe(&self) -> String {
         format!("{}x{}x{}, {} spp, d = {}", self.width, self.height, self.frames, self.spp, self.dims)
     }

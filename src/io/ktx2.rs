@@ -20,18 +20,28 @@ use crate::io::atomic::AtomicFile;
 /// The formats fsot writes, with their Vulkan `VkFormat` numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// One 8-bit UNORM channel (`VK_FORMAT_R8_UNORM`, 9).
     R8Unorm,
+    /// Two 8-bit UNORM channels (`VK_FORMAT_R8G8_UNORM`, 16).
     R8G8Unorm,
+    /// Four 8-bit UNORM channels (`VK_FORMAT_R8G8B8A8_UNORM`, 37).
     R8G8B8A8Unorm,
+    /// One 16-bit UNORM channel (`VK_FORMAT_R16_UNORM`, 70).
     R16Unorm,
+    /// Two 16-bit UNORM channels (`VK_FORMAT_R16G16_UNORM`, 77).
     R16G16Unorm,
+    /// Four 16-bit UNORM channels (`VK_FORMAT_R16G16B16A16_UNORM`, 91).
     R16G16B16A16Unorm,
+    /// One 32-bit float channel (`VK_FORMAT_R32_SFLOAT`, 100).
     R32Sfloat,
+    /// Two 32-bit float channels (`VK_FORMAT_R32G32_SFLOAT`, 103).
     R32G32Sfloat,
+    /// Four 32-bit float channels (`VK_FORMAT_R32G32B32A32_SFLOAT`, 109).
     R32G32B32A32Sfloat,
 }
 
 impl Format {
+    /// Every format fsot writes.
     pub const ALL: [Format; 9] = [
         Format::R8Unorm,
         Format::R8G8Unorm,
@@ -44,6 +54,7 @@ impl Format {
         Format::R32G32B32A32Sfloat,
     ];
 
+    /// The format's name as options and errors spell it, e.g. "r16g16_unorm".
     pub fn name(self) -> &'static str {
         match self {
             Format::R8Unorm => "r8_unorm",
@@ -58,6 +69,7 @@ impl Format {
         }
     }
 
+    /// The format of that name (see `name`); an error lists the names.
     pub fn parse(name: &str) -> Result<Self> {
         Self::ALL.into_iter().find(|f| f.name() == name).ok_or_else(|| {
             let names: Vec<&str> = Self::ALL.iter().map(|f| f.name()).collect();
@@ -80,6 +92,7 @@ impl Format {
         }
     }
 
+    /// Channels per texel: 1, 2 or 4.
     pub fn channels(self) -> usize {
         match self {
             Format::R8Unorm | Format::R16Unorm | Format::R32Sfloat => 1,
@@ -97,6 +110,7 @@ impl Format {
         }
     }
 
+    /// True for the 32-bit SFLOAT formats, which hold values exactly.
     pub fn is_float(self) -> bool {
         self.bits() == 32
     }

@@ -40,11 +40,64 @@ impl MaskFile {
         Ok(kind)
     }
 
+    /// Writes `mask` in this kind of file.
     pub fn write(self, mask: &Mask, out: atomic::AtomicFile) -> Result<()> {
         match self {
             MaskFile::Exr => exr::write(mask, out),
             MaskFile::Ktx2(f) => ktx2::write(mask, f, out),
             MaskFile::CHeader => c_header::write(mask, out),
         }
+    }
+}
+
+impl Mask {
+    /// Saves the mask by the file's extension: `.exr` (exact, 32-bit float, the
+    /// format `open` reads), `.ktx2` (an array texture, 16-bit UNORM with the
+    /// fewest channels that hold its dimensions: `Mask::ktx2` for another
+    /// format) or `.h` (a C header); any other extension is written as EXR. The
+    /// file is written beside the target and renamed into place, so a failed save
+    /// leaves what was there.
+    ///
+    /// ```
+    /// let mask = fsot::Mask::white(fsot::Tile::new(8, 8, 2, 1, 2)?, 1);
+    /// let dir = std::env::temp_dir().join(format!("fsot-save-{}", std::process::id()));
+    /// std::fs::create_dir_all(&dir)?;
+    /// mask.save(dir.join("mask.exr"))?;
+    /// assert_eq!(fsot::Mask::open(dir.join("mask.exr"))?, mask);
+    /// # std::fs::remove_dir_all(&dir)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        let kind = MaskFile::for_path(path, self.tile.dims, None)?;
+        kind.write(self, atomic::AtomicFile::create(path)?)
+    }
+
+    /// The mask as the bytes of a KTX2 array texture (layer = frame * spp +
+    /// sample) in `format`, or by default the format that holds its dimensions;
+    /// what an engine embeds or uploads.
+    ///
+    /// ```
+    /// let mask = fsot::Mask::white(fsot::Tile::new(8, 8, 2, 1, 2)?, 1);
+    /// let bytes = mask.ktx2(None)?;
+    /// assert_eq!(&bytes[..12], b"\xABKTX 20\xBB\r\n\x1A\n");
+    /// assert!(mask.ktx2(Some(fsot::TexelFormat::R8Unorm)).is_err()); // one channel cannot hold d = 2
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn ktx2(&self, format: Option<ktx2::Format>) -> Result<Vec<u8>> {
+        let format = match format {
+            Some(f) => {
+                f.check_holds(self.tile.dims)?;
+                f
+            }
+            None => ktx2::Format::default_for(self.tile.dims)?,
+        };
+        ktx2::encode(self, format)
+    }
+
+    /// Opens a mask saved as EXR, checking its layout and that every value is
+    /// finite and in [0, 1).
+    pub fn open(path: impl AsRef<Path>) -> Result<Mask> {
+        exr::read(path.as_ref())
     }
 }

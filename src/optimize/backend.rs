@@ -16,18 +16,24 @@ pub enum BackendChoice {
     /// else the CPU path; a GPU that fails mid-run hands over to the CPU.
     #[default]
     Auto,
+    /// The CPU path.
     Cpu,
+    /// A Vulkan device of any type (a CPU implementation included); an error
+    /// where there is none, and no hand-over to the CPU when it fails.
     Vulkan,
 }
 
 /// Which backend a run is on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BackendKind {
+    /// The CPU path.
     Cpu,
+    /// A Vulkan device.
     Vulkan,
 }
 
 impl BackendKind {
+    /// The backend's name: "cpu" or "vulkan".
     pub fn name(&self) -> &'static str {
         match self {
             BackendKind::Cpu => "cpu",
@@ -39,15 +45,22 @@ impl BackendKind {
 /// GPU time per pass, from timestamp queries (nanoseconds, summed).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Profile {
+    /// The first transport pass (with the slice order's passes).
     pub transport_ns: f64,
+    /// The classes too large for the first transport pass: its second pass and
+    /// the large-class stage.
     pub large_ns: f64,
+    /// The update pass, which moves the samples.
     pub update_ns: f64,
+    /// Iterations profiled (the times sum over them).
     pub iterations: u32,
     /// The least bytes each pass must move per iteration (a model: see
     /// `vulkan::run::VulkanRun::pass_bytes`), so a pass's distance to the memory
     /// bandwidth's floor can be read off its time.
     pub transport_bytes: f64,
+    /// The large-class stage's least bytes per iteration, by the same model.
     pub large_bytes: f64,
+    /// The update pass's least bytes per iteration, by the same model.
     pub update_bytes: f64,
 }
 

@@ -29,6 +29,7 @@ pub struct Checkpointing {
     /// The checkpoint file: written atomically every `every` iterations and when
     /// the run is cancelled, removed when the run completes.
     pub path: PathBuf,
+    /// Iterations between checkpoints, at least 1.
     pub every: u32,
     /// Continue from the checkpoint at `path` (which must be this very run's).
     /// Without it an existing file at `path` is refused, never overwritten.
@@ -45,6 +46,7 @@ pub struct Checkpointing {
 #[derive(Clone, Default)]
 #[non_exhaustive]
 pub struct RunOptions {
+    /// Where the run may go [default: `Auto`].
     pub backend: BackendChoice,
     /// The Vulkan device: its index or part of its name [default: the first
     /// discrete GPU]. A device named here is taken by `Auto` whatever its type.
@@ -55,8 +57,10 @@ pub struct RunOptions {
     pub context: Option<Context>,
     /// Vulkan's validation layer on (its messages in `Backend::report`).
     pub validation: bool,
+    /// How a Vulkan run works.
     #[cfg(feature = "vulkan")]
     pub vulkan: VulkanOptions,
+    /// Checkpoints of the run; None: no checkpoints.
     pub checkpoint: Option<Checkpointing>,
 }
 
@@ -105,12 +109,35 @@ impl RunOptions {
 #[non_exhaustive]
 pub enum Event<'a> {
     /// Iterations done; the objective estimate of the last one.
-    Progress { iteration: u32, iterations: u32, objective: Option<f64> },
+    Progress {
+        /// Iterations done.
+        iteration: u32,
+        /// The run's length, or its cap under a stopping rule.
+        iterations: u32,
+        /// The last iteration's objective estimate; None when the step gave none.
+        objective: Option<f64>,
+    },
     /// A checkpoint was written.
-    Checkpoint { iteration: u32, path: &'a Path },
+    Checkpoint {
+        /// Iterations done when it was written.
+        iteration: u32,
+        /// The checkpoint file.
+        path: &'a Path,
+    },
     /// The GPU failed at iteration `at`; the run goes on on `backend` from
     /// iteration `from` (its checkpoint's, or 0).
-    FellBack { error: &'a Error, at: u32, backend: &'a str, from: u32, checkpoint: Option<&'a Path> },
+    FellBack {
+        /// The GPU's error.
+        error: &'a Error,
+        /// Iterations done when the GPU failed.
+        at: u32,
+        /// The backend the run goes on on, in words.
+        backend: &'a str,
+        /// The iteration the run goes on from.
+        from: u32,
+        /// The checkpoint it goes on from; None: from iteration 0.
+        checkpoint: Option<&'a Path>,
+    },
 }
 
 /// How `Run::advance` ended.
@@ -121,7 +148,12 @@ pub enum Outcome {
     Reached,
     /// The cancel flag was set: stopped between iterations, the state saved to
     /// `saved` when checkpointing.
-    Cancelled { iteration: u32, saved: Option<PathBuf> },
+    Cancelled {
+        /// Iterations done when it stopped.
+        iteration: u32,
+        /// The checkpoint the state was saved to; None without checkpoints.
+        saved: Option<PathBuf>,
+    },
 }
 
 /// A flag the caller sets to stop a run between iterations (a renderer wires its
@@ -130,12 +162,15 @@ pub enum Outcome {
 pub struct CancelFlag(Arc<AtomicBool>);
 
 impl CancelFlag {
+    /// A flag not yet set.
     pub fn new() -> Self {
         Self::default()
     }
+    /// Sets the flag (for every clone): a run given it stops between iterations.
     pub fn cancel(&self) {
         self.0.store(true, Ordering::SeqCst);
     }
+    /// Whether the flag is set.
     pub fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::SeqCst)
     }
@@ -237,18 +272,25 @@ impl Run {
     pub fn resumed_from(&self) -> Option<u32> {
         self.resumed_from
     }
-    pub fn backend(&self) -> &dyn Backend {
-        self.backend.as_ref()
+    internal! {
+        fn backend(&self) -> &dyn Backend {
+            self.backend.as_ref()
+        }
     }
-    pub fn backend_mut(&mut self) -> &mut dyn Backend {
-        self.backend.as_mut()
+    internal! {
+        fn backend_mut(&mut self) -> &mut dyn Backend {
+            self.backend.as_mut()
+        }
     }
+    /// The tile being optimized.
     pub fn tile(&self) -> &Tile {
         &self.tile
     }
+    /// The settings the run was started with.
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
+    /// Iterations done.
     pub fn iteration(&self) -> u32 {
         self.backend.iteration()
     }
@@ -434,11 +476,13 @@ impl Run {
         Ok(mask)
     }
 
-    /// Where the run stands (the backend's state and the schedule's).
-    pub fn state(&self) -> Result<RunState> {
-        let mut state = self.backend.state()?;
-        state.plateau = self.plateau.map(|(_, s)| s);
-        Ok(state)
+    internal! {
+        /// Where the run stands (the backend's state and the schedule's).
+        fn state(&self) -> Result<RunState> {
+            let mut state = self.backend.state()?;
+            state.plateau = self.plateau.map(|(_, s)| s);
+            Ok(state)
+        }
     }
 
     /// Writes a checkpoint when checkpointing; where it went.

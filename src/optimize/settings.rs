@@ -27,13 +27,17 @@ pub const DEFAULT_CAP: u32 = 10_000;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Settings {
+    /// The kernel the error is filtered by.
     pub kernel: KernelSpec,
     /// The run's length (`Until::Iterations`) or its cap (the other rules).
     pub iterations: u32,
     /// Slices per iteration; `None`: enough for DEFAULT_HITS hits per sample.
     pub slices: Option<u32>,
+    /// The seed every draw derives from.
     pub seed: u64,
+    /// How displacements become moves.
     pub rule: StepRule,
+    /// When the run ends.
     pub until: Until,
 }
 
@@ -61,6 +65,8 @@ impl Until {
 }
 
 impl Settings {
+    /// Settings for `kernel` and `seed`: DEFAULT_ITERATIONS iterations, the
+    /// default slices and step rule, ending after exactly those iterations.
     pub fn new(kernel: KernelSpec, seed: u64) -> Self {
         Self {
             kernel,

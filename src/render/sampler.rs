@@ -43,16 +43,23 @@ pub struct PlanHead {
 /// One read of the plan: which mask, where, how shifted.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SamplerPart {
+    /// Index of the mask it reads in `SamplerPlan::masks`.
     pub mask: usize,
+    /// Dimensions it reads, at most the mask's (and at most 4).
     pub dims: usize,
+    /// Pixel x, y and frame offset at which it reads the mask.
     pub offset: [u32; 3],
+    /// Toroidal shift added to each dimension it reads (`dims` values).
     pub shift: Vec<f32>,
 }
 
 /// A plan ready to bind.
 #[derive(Clone, Debug)]
 pub struct SamplerPlan {
+    /// The masks, in the order the parts first read them; all share W, H, T
+    /// and spp.
     pub masks: Vec<Mask>,
+    /// The reads, in the order the renderer consumes them.
     pub parts: Vec<SamplerPart>,
 }
 

@@ -39,6 +39,7 @@ use crate::error::{Error, Result};
 /// How the renderer's frames are shown and seen.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Display {
+    /// Frame rate in frames per second, in (0, 1000] [default: 60].
     pub fps: f64,
     /// TAA's blend weight of the current frame; None: no TAA.
     pub taa_alpha: Option<f64>,
@@ -54,8 +55,11 @@ pub struct Display {
 /// One sampling decision of the renderer.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Group {
+    /// Unique in the scene, [a-z0-9_].
     pub name: String,
+    /// Dimensions of the decision, 1 to `MAX_DIMS`.
     pub dims: usize,
+    /// Samples per pixel and frame, 1 to `MAX_SPP` [default: 1].
     pub spp: usize,
     /// False: its error is not seen directly (deep bounces, roulette).
     pub visible: bool,
@@ -77,6 +81,7 @@ pub enum Reading {
 pub struct Scene {
     /// The file's stem.
     pub name: String,
+    /// How its frames are shown and seen.
     pub display: Display,
     /// W, H, T when the file gives them.
     pub size: Option<(usize, usize, usize)>,

@@ -54,12 +54,17 @@ pub const EXPECTED_ITERATIONS: u32 = 660;
 pub struct PlannedMask {
     /// File name in the output folder.
     pub file: String,
+    /// Dimensions per sample.
     pub dims: usize,
+    /// Samples per pixel and frame.
     pub spp: usize,
     /// White noise (nothing optimized).
     pub white: bool,
+    /// The mask's seed, derived from the scene's and the file's names.
     pub seed: u64,
+    /// Iterations the plateau rule is expected to take (0 for white noise).
     pub estimated_iterations: u32,
+    /// Seconds making the mask is expected to take, by the cost model.
     pub estimated_seconds: f64,
 }
 
@@ -70,6 +75,7 @@ pub struct Part {
     pub mask: String,
     /// The decision's dimensions this part covers, from `first`.
     pub first: usize,
+    /// How many of the decision's dimensions it covers.
     pub dims: usize,
     /// Pixel and frame offset at which the decision reads the mask.
     pub offset: [u32; 3],
@@ -82,33 +88,49 @@ pub struct Part {
 /// One sampling decision's plan.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PlannedGroup {
+    /// The scene group's name.
     pub name: String,
+    /// Dimensions of the decision.
     pub dims: usize,
+    /// Samples per pixel and frame.
     pub spp: usize,
+    /// Its parts, in dimension order.
     pub parts: Vec<Part>,
     /// Why nothing is optimized for it, when nothing is.
     pub skipped: Option<String>,
+    /// Why it is planned so, in words.
     pub reason: String,
 }
 
 /// A scene's plan.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Plan {
+    /// The scene's name.
     pub scene: String,
+    /// W, H, T of every mask.
     pub tile: [usize; 3],
+    /// Why the tile has that size, in words.
     pub tile_reason: String,
     /// "scalar" or "vector", and why.
     pub reading: String,
+    /// Why that reading, in words.
     pub reading_reason: String,
+    /// The kernel's description (`KernelSpec::describe`).
     pub kernel: String,
+    /// Why that kernel, in words.
     pub kernel_reason: String,
     /// The kernel itself (`kernel` is its description).
     #[serde(skip)]
     pub spec: KernelSpec,
+    /// The backend the cost model was measured on, in words.
     pub backend: String,
+    /// The scene's decisions, in the order the renderer consumes them.
     pub groups: Vec<PlannedGroup>,
+    /// Every mask file to make.
     pub masks: Vec<PlannedMask>,
+    /// Seconds making every mask is expected to take, by the cost model.
     pub estimated_seconds: f64,
+    /// How the estimates were made, in words.
     pub cost_model: String,
 }
 
@@ -177,6 +199,8 @@ const SPP_FACTOR: [(usize, f64); 5] = [(1, 1.0), (2, 0.73), (4, 0.60), (8, 0.58)
 pub struct CostModel {
     /// Seconds per point and iteration at d = 2, spp 1 (the calibration tile's).
     pub seconds_per_point: f64,
+    /// The backend it was measured on, in words ("not measured" without a
+    /// calibration).
     pub backend: String,
 }
 
@@ -428,18 +452,43 @@ impl Plan {
 #[non_exhaustive]
 pub enum PlanEvent<'a> {
     /// Mask `index` of the plan's masks starts (`iteration` when it resumes).
-    Start { index: usize, file: &'a str, iteration: u32 },
+    Start {
+        /// Index in `Plan::masks`.
+        index: usize,
+        /// The mask's file name.
+        file: &'a str,
+        /// The iteration its run starts from (0 unless it resumes).
+        iteration: u32,
+    },
     /// Its run's event.
-    Run { index: usize, event: Event<'a> },
+    Run {
+        /// Index in `Plan::masks`.
+        index: usize,
+        /// The event of the mask's run.
+        event: Event<'a>,
+    },
     /// It is written.
-    Done { index: usize, file: &'a str, iterations: u32, seconds: f64 },
+    Done {
+        /// Index in `Plan::masks`.
+        index: usize,
+        /// The mask's file name.
+        file: &'a str,
+        /// Iterations its run did in all.
+        iterations: u32,
+        /// Seconds spent stepping its run (a step shared with other runs counts
+        /// in full for each).
+        seconds: f64,
+    },
 }
 
 /// What a made mask took.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Made {
+    /// The mask's file name.
     pub file: String,
+    /// Iterations the mask took (0 for white noise).
     pub iterations: u32,
+    /// Seconds spent stepping its run (0 for white noise and masks already made).
     pub seconds: f64,
 }
 

@@ -24,10 +24,11 @@
 //! this layer's own `vk::Error` (fsot's `Error` converts from it); `FSOT_FAULT`
 //! injects failures for tests (`fault`). Nothing here imports the rest of fsot.
 
-#[doc(hidden)]
-pub mod buffer;
-#[doc(hidden)]
-pub mod commands;
+internal! {
+    mod buffer;
+    mod commands;
+    mod sort;
+}
 pub(crate) mod context;
 pub(crate) mod device;
 mod error;
@@ -36,8 +37,6 @@ pub(crate) mod image;
 pub(crate) mod instance;
 pub(crate) mod pipeline;
 mod requirements;
-#[doc(hidden)]
-pub mod sort;
 pub(crate) mod sort_choice;
 pub(crate) mod texel_view;
 pub(crate) mod timer;
@@ -48,23 +47,19 @@ pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
 pub use error::{Error, Result};
 pub use image::{Image, ImageDesc, ImageTarget, Sampler};
-#[doc(hidden)]
-pub use pipeline::{ComputeDesc, ComputePipeline};
+internal!(use pipeline::{ComputeDesc, ComputePipeline});
 pub use requirements::{missing, requirements, Requirement, API_VERSION};
-#[doc(hidden)]
-pub use sort::SortPath;
+internal!(use sort::SortPath);
 pub use sort::{RadixSort, SortCount};
-#[doc(hidden)]
-pub use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes};
-#[doc(hidden)]
-pub use texel_view::TexelView;
-#[doc(hidden)]
-pub use timer::Timer;
+internal!(use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes});
+internal!(use texel_view::TexelView);
+internal!(use timer::Timer);
 
-#[doc(hidden)]
-pub mod shaders {
-    //! SPIR-V of `glsl/sort/*.comp`, embedded from `spirv/sort/`.
-    spirv_module!("sort");
+internal! {
+    mod shaders {
+        //! SPIR-V of `glsl/sort/*.comp`, embedded from `spirv/sort/`.
+        spirv_module!("sort");
+    }
 }
 
 use ash::vk;

@@ -210,6 +210,7 @@ impl ComputePipeline {
 
     /// Points a combined image-sampler binding of set `set` at an image view
     /// (in `layout` when the pass runs) and a sampler.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))]
     pub fn bind_image(
         &self,
         set: usize,

@@ -258,8 +258,11 @@ pub struct RadixSort {
     /// The most pairs one sort takes.
     pub capacity: u32,
     /// Which passes `record` uses (forced by tests and benchmarks).
+    #[cfg(feature = "internals")]
     #[doc(hidden)]
     pub path: SortPath,
+    #[cfg(not(feature = "internals"))]
+    pub(crate) path: SortPath,
     shape: SortShape,
     blocks: u32,
     /// The host-written count (`SortCount::Host`).
@@ -311,10 +314,12 @@ impl RadixSort {
         Self::with_shape(ctx, capacity, count, shape)
     }
 
-    /// A sort of a chosen shape (experiments, tests): refused where the device
-    /// cannot run it (`SortShape::fits`) or its scan cannot cover `capacity`.
-    pub fn with_shape(ctx: &Context, capacity: u32, count: SortCount, shape: SortShape) -> Result<Self> {
-        Self::build(ctx, capacity, count, shape, true)
+    internal! {
+        /// A sort of a chosen shape (experiments, tests): refused where the device
+        /// cannot run it (`SortShape::fits`) or its scan cannot cover `capacity`.
+        fn with_shape(ctx: &Context, capacity: u32, count: SortCount, shape: SortShape) -> Result<Self> {
+            Self::build(ctx, capacity, count, shape, true)
+        }
     }
 
     /// A sort in the device's shape whose lanes path reads its input as
@@ -509,10 +514,11 @@ impl RadixSort {
         })
     }
 
-    /// The launch shape chosen for the device.
-    #[doc(hidden)]
-    pub fn shape(&self) -> SortShape {
-        self.shape
+    internal! {
+        /// The launch shape chosen for the device.
+        fn shape(&self) -> SortShape {
+            self.shape
+        }
     }
 
     /// Sets the element count (`SortCount::Host` sorts).
@@ -532,7 +538,7 @@ impl RadixSort {
     /// `known`: the element count when the host knows it (smaller dispatches);
     /// None: the count is only on the GPU.
     pub fn record(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>) {
-        self.record_timed(cmd, bits, known, None)
+        self.record_stamped(cmd, bits, known, None)
     }
 
     /// Does a sort of `known` pairs take the single-workgroup pass?
@@ -552,12 +558,18 @@ impl RadixSort {
         wanted && blocks <= TAIL_MAX_BLOCKS
     }
 
-    /// As `record`; with a timer, stamps 0..=4 x passes: before the first
-    /// dispatch, then after each of a pass's histogram, scan reduce, scan apply
-    /// and scatter (with the tail scan, the three after the histogram: the scan
-    /// counts in it; on the single-workgroup path, the three before its one
-    /// dispatch: all its time counts as scatter).
-    pub fn record_timed(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
+    internal! {
+        /// As `record`; with a timer, stamps 0..=4 x passes: before the first
+        /// dispatch, then after each of a pass's histogram, scan reduce, scan apply
+        /// and scatter (with the tail scan, the three after the histogram: the scan
+        /// counts in it; on the single-workgroup path, the three before its one
+        /// dispatch: all its time counts as scatter).
+        fn record_timed(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
+            self.record_stamped(cmd, bits, known, timer)
+        }
+    }
+
+    fn record_stamped(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
         let stamp = |i: u32| {
             if let Some(t) = timer {
                 t.stamp(cmd, i);

@@ -17,6 +17,7 @@ pub struct TexelView {
     /// The view handle.
     pub raw: vk::BufferView,
     /// Texels the view holds: the whole buffer over the texel's size.
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))]
     pub texels: u64,
 }
 

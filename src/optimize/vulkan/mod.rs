@@ -46,8 +46,11 @@ pub struct VulkanOptions {
     /// Time each pass with timestamp queries (`Report::profile`).
     pub profile: bool,
     /// Paths forced for tests, in place of the device's choice.
+    #[cfg(feature = "internals")]
     #[doc(hidden)]
     pub hooks: VulkanHooks,
+    #[cfg(not(feature = "internals"))]
+    pub(crate) hooks: VulkanHooks,
 }
 
 impl VulkanOptions {
@@ -64,6 +67,7 @@ impl VulkanOptions {
     }
 
     /// With paths forced for tests.
+    #[cfg(feature = "internals")]
     #[doc(hidden)]
     pub fn hooks(mut self, hooks: VulkanHooks) -> Self {
         self.hooks = hooks;
