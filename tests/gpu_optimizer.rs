@@ -33,9 +33,12 @@ fn refused_here(ctx: &fsot::vk::Context, transport: TransportKind) -> bool {
     true
 }
 
+/// Settings that start from white noise: these tests give both backends the
+/// same start (`VulkanRun` and `CpuRun` themselves start from it).
 fn settings(kernel: &str, iterations: u32, seed: u64) -> Settings {
     let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
     s.iterations = iterations;
+    s.start = fsot::Start::White;
     s
 }
 

@@ -269,3 +269,72 @@ fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
         "it went on past the target: {windows:?}"
     );
 }
+
+/// A run under a time budget on `backend`: (seconds from before `Run::start`
+/// to the mask, iterations done, the slowest iteration's seconds as paced).
+fn budget_run(backend: BackendChoice, budget: f64) -> (f64, u32, f64, Mask) {
+    let tile = Tile::new(32, 32, 8, 1, 2).unwrap();
+    let s = settings(100_000).until(fsot::Until::Seconds(budget));
+    let begun = std::time::Instant::now();
+    let mut run = Run::start(tile, s, None, RunOptions::default().backend(backend)).unwrap();
+    let mut slowest = 0.0f64;
+    let mut last = (begun, 0u32);
+    run.run(&CancelFlag::new(), &mut |e| {
+        if let Event::Progress { iteration, .. } = e {
+            let now = std::time::Instant::now();
+            let per = now.duration_since(last.0).as_secs_f64() / (iteration - last.1).max(1) as f64;
+            slowest = slowest.max(per);
+            last = (now, iteration);
+        }
+    })
+    .unwrap();
+    let iterations = run.iteration();
+    let mask = run.finish().unwrap();
+    (begun.elapsed().as_secs_f64(), iterations, slowest, mask)
+}
+
+#[test]
+fn a_run_under_a_time_budget_ends_within_about_one_iteration_of_it_with_its_iterations_said() {
+    let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
+    let budget = 0.6;
+    let (seconds, iterations, slowest, mask) = budget_run(BackendChoice::Cpu, budget);
+    assert!(iterations > 0 && iterations < 100_000, "{iterations} iterations");
+    // One iteration past it, and a margin for a busy machine's scheduling.
+    assert!(
+        seconds <= budget + slowest + 0.2,
+        "{seconds} s for a budget of {budget} s ({slowest} s an iteration)"
+    );
+    assert!(seconds >= 0.5 * budget, "{seconds} s: the budget was not used");
+    assert_eq!(mask.meta("budget_seconds"), Some("0.6"));
+    assert_eq!(mask.meta("iterations"), Some(iterations.to_string().as_str()));
+    assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+}
+
+#[cfg(feature = "vulkan")]
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_vulkan_run_under_a_time_budget_ends_within_about_one_iteration_of_it() {
+    let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
+    let budget = 1.5;
+    let (seconds, iterations, slowest, _) = budget_run(BackendChoice::Vulkan, budget);
+    assert!(iterations > 0, "{iterations} iterations");
+    assert!(
+        seconds <= budget + slowest + 0.3,
+        "{seconds} s for a budget of {budget} s ({slowest} s an iteration)"
+    );
+}
+
+#[test]
+fn a_time_budget_that_is_not_a_positive_time_or_that_asks_for_checkpoints_is_refused() {
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e9] {
+        let s = settings(100).until(fsot::Until::Seconds(bad));
+        let e = Run::start(tile, s, None, RunOptions::default().backend(BackendChoice::Cpu)).err().unwrap();
+        assert!(matches!(e, Error::Invalid(_)) && e.to_string().contains("time budget"), "{bad}: {e}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let s = settings(100).until(fsot::Until::Seconds(1.0));
+    let options = checkpointed(RunOptions::default().backend(BackendChoice::Cpu), &dir);
+    let e = Run::start(tile, s, None, options).err().unwrap();
+    assert!(e.to_string().contains("takes no checkpoints"), "{e}");
+}

@@ -85,9 +85,24 @@ fn profile_response(p: &[f64], f: f64) -> f64 {
 }
 
 /// The mixture's weights on `LADDER` (summing to 1) for a display of `ppd`
-/// pixels per degree: non-negative least squares of the separable responses
-/// against `target` on a 33 x 33 grid of frequencies in [0, 0.5]^2 cycles per pixel.
+/// pixels per degree (`fit`), fitted once per `ppd` in a process: a kernel's
+/// construction asks for it several times.
 pub fn mixture(ppd: f64) -> Vec<(f64, f64)> {
+    type Fitted = Vec<(u64, Vec<(f64, f64)>)>;
+    static FITTED: std::sync::Mutex<Fitted> = std::sync::Mutex::new(Vec::new());
+    let key = ppd.to_bits();
+    if let Some((_, m)) = FITTED.lock().unwrap_or_else(|e| e.into_inner()).iter().find(|(k, _)| *k == key) {
+        return m.clone();
+    }
+    let m = fit(ppd);
+    FITTED.lock().unwrap_or_else(|e| e.into_inner()).push((key, m.clone()));
+    m
+}
+
+/// Non-negative least squares of the separable responses of `LADDER`'s
+/// profiles against `target` at `ppd` on a 33 x 33 grid of frequencies in
+/// [0, 0.5]^2 cycles per pixel; weights summing to 1.
+fn fit(ppd: f64) -> Vec<(f64, f64)> {
     let n = 33;
     let freqs: Vec<f64> = (0..n).map(|k| 0.5 * k as f64 / (n - 1) as f64).collect();
     let responses: Vec<Vec<f64>> =

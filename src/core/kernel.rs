@@ -200,6 +200,20 @@ impl KernelSpec {
         Ok(Self { spatial: Spatial::Display { ppd }, ..self })
     }
 
+    /// The same kernel with the eye of a display given as the command line's
+    /// `--display` takes it: a display model's name (`standard_fhd`,
+    /// `standard_4k`, ... as ColorVideoVDP names them), pixels per degree, or
+    /// `WxH:DIAGONALin:DISTANCEm`.
+    ///
+    /// ```
+    /// let k = fsot::KernelSpec::named("perceptual-taa")?.on_display_named("standard_fhd")?;
+    /// assert_eq!(k.spatial, fsot::Spatial::Display { ppd: 37.84 });
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn on_display_named(self, display: &str) -> Result<Self> {
+        self.on_display(crate::core::display::parse(display)?)
+    }
+
     /// The kernel's name (one of [`KernelSpec::NAMES`]), set by its temporal filter.
     pub fn name(&self) -> &'static str {
         match self.temporal {

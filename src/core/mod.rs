@@ -6,6 +6,7 @@
 //! rule of one slice (`transport`), the objective on fixed slices (`objective`)
 //! and the update step (`step_rule`).
 pub(crate) mod csf;
+pub mod animate;
 pub mod display;
 pub mod kernel;
 pub mod mask;

@@ -20,6 +20,7 @@ pub fn score_slices(kernel: &Kernel, tile: &crate::core::tile::Tile, count: u32)
     (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()
 }
 
+/// A mask's objective on a fixed set of slices, beside white noise's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Score {
     /// The mask's objective (mean squared transport distance; lower is better).
@@ -29,11 +30,30 @@ pub struct Score {
 }
 
 impl Score {
+    /// The objective as a fraction of white noise's (lower is better).
     pub fn ratio(&self) -> f64 {
         self.objective / self.white
     }
 }
 
+impl Mask {
+    /// The mask's objective under `kernel` on `SCORE_SLICES` fixed slices (the
+    /// same for every mask of the tile), beside white noise's: a measure of how
+    /// far the optimization got that does not depend on the run.
+    ///
+    /// ```
+    /// use fsot::{KernelSpec, Mask, Tile};
+    /// let kernel = KernelSpec::named("taa")?;
+    /// let white = Mask::white(Tile::new(8, 8, 4, 1, 1)?, 3).score(kernel);
+    /// assert!((0.5..2.0).contains(&white.ratio()));
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn score(&self, kernel: KernelSpec) -> Score {
+        score(self, kernel, SCORE_SLICES)
+    }
+}
+
+/// `Mask::score` on `count` slices.
 pub fn score(mask: &Mask, spec: KernelSpec, count: u32) -> Score {
     let kernel = Kernel::new(spec, &mask.tile);
     let slices = score_slices(&kernel, &mask.tile, count);

@@ -41,7 +41,14 @@ pub fn schedule(iteration: u32, iterations: u32) -> f32 {
     if iterations <= 1 {
         return 1.0;
     }
-    let x = iteration as f32 / (iterations - 1) as f32;
+    schedule_at(iteration as f32 / (iterations - 1) as f32)
+}
+
+/// The cosine schedule at `progress` in [0, 1] of the run (clamped): 1 at the
+/// start, `FINAL_FRACTION` at the end. A run under a time budget takes its
+/// progress from the clock.
+pub fn schedule_at(progress: f32) -> f32 {
+    let x = progress.clamp(0.0, 1.0);
     FINAL_FRACTION + (1.0 - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
 }
 

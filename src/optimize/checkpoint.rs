@@ -21,6 +21,7 @@ const MAGIC: &[u8; 8] = b"FSOTCKP1";
 
 /// What a checkpoint must match to be resumed: the tile and every setting that
 /// changes the run's iterations (kernel, iterations, slices, seed, step rule).
+/// The start is not: a checkpoint holds the samples the start led to.
 /// The backend is not part of it: a run may resume on the other backend.
 pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     let s = settings;

@@ -8,16 +8,19 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
+use crate::core::animate::animate;
+use crate::core::kernel::{KernelSpec, Temporal};
 use crate::core::mask::Mask;
-use crate::core::step_rule::{Plateau, PlateauState};
+use crate::core::step_rule::{schedule_at, Plateau, PlateauState};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::backend::{Backend, BackendChoice};
 use crate::optimize::checkpoint;
 use crate::optimize::cpu::CpuRun;
-use crate::optimize::settings::{RunState, Settings, Until};
+use crate::optimize::settings::{RunState, Settings, Start, Until, SPATIAL_BUDGET_SHARE, SPATIAL_ITERATIONS};
 #[cfg(feature = "vulkan")]
 use crate::optimize::vulkan::{VulkanOptions, VulkanRun};
 #[cfg(feature = "vulkan")]
@@ -182,6 +185,12 @@ impl CancelFlag {
 /// A GPU's batch (32 iterations) lasts far less.
 const STEP_SECONDS: f64 = 0.5;
 
+/// A time budget's scale is updated at least this many times over it.
+const BUDGET_STEPS: f64 = 32.0;
+
+/// The longest time budget a run takes (a day).
+const MAX_BUDGET_SECONDS: f64 = 86_400.0;
+
 /// An optimization in progress, on whichever backend it was given.
 pub struct Run {
     tile: Tile,
@@ -206,17 +215,46 @@ pub struct Run {
     /// Seconds per iteration of the last step; None before the first step,
     /// which then takes one iteration.
     pace: Option<f64>,
+    /// Under `Until::Seconds`: when the budget ends, and when the first
+    /// iteration began (the schedule's time runs from there to the deadline).
+    deadline: Option<Instant>,
+    iterating_since: Option<Instant>,
+    /// When `Run::start` began.
+    begun: Instant,
 }
 
 impl Run {
     /// Starts a run: checks the checkpoint rules (before any long work), picks the
     /// backend, and resumes from the checkpoint when asked.
     pub fn start(tile: Tile, settings: Settings, init: Option<&Mask>, options: RunOptions) -> Result<Self> {
+        let begun = Instant::now();
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
+        let deadline = match settings.until {
+            Until::Seconds(s) if !(s.is_finite() && s > 0.0 && s <= MAX_BUDGET_SECONDS) => {
+                return Err(Error::invalid(format!(
+                    "a time budget must be more than 0 and at most {MAX_BUDGET_SECONDS} seconds, got {s}"
+                )))
+            }
+            Until::Seconds(_) if options.checkpoint.is_some() => {
+                return Err(Error::invalid(
+                    "a run under a time budget takes no checkpoints: it is made again within its budget",
+                ))
+            }
+            Until::Seconds(s) => Some(begun + Duration::from_secs_f64(s)),
+            _ => None,
+        };
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
+        let animated;
+        let init = match (init, &saved, settings.start) {
+            (None, None, Start::Animated) if tile.frames > 1 => {
+                animated = animated_start(tile, &settings)?;
+                Some(&animated)
+            }
+            _ => init,
+        };
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
         if let Some(state) = &saved {
             backend.restore(state)?;
@@ -240,6 +278,9 @@ impl Run {
             rule_on_backend: false,
             busy: 0.0,
             pace: None,
+            deadline,
+            iterating_since: None,
+            begun,
         };
         run.hand_over_rule()?;
         Ok(run)
@@ -314,6 +355,10 @@ impl Run {
     pub fn advance(&mut self, to: u32, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
         let to = to.min(self.settings.iterations);
         while self.iteration() < to && !self.stopped {
+            if self.out_of_time() {
+                self.stopped = true;
+                break;
+            }
             if cancel.is_cancelled() {
                 let saved = self.save()?;
                 return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
@@ -341,10 +386,46 @@ impl Run {
         self.stepped(&costs, on)
     }
 
+    /// Wall time since `Run::start` began (its set-up and an animated start
+    /// included), in seconds: what a time budget counts.
+    pub fn elapsed(&self) -> f64 {
+        self.begun.elapsed().as_secs_f64()
+    }
+
     /// Seconds spent stepping this run (a step shared with other runs, in
     /// `run_together`, counts in full for each).
     pub fn seconds(&self) -> f64 {
         self.busy
+    }
+
+    /// Under a time budget: whether the next iteration, at the pace so far, would
+    /// end past the budget (before the first: whether the budget is spent).
+    fn out_of_time(&self) -> bool {
+        match self.deadline {
+            Some(deadline) => Instant::now() + Duration::from_secs_f64(self.pace.unwrap_or(0.0)) > deadline,
+            None => false,
+        }
+    }
+
+    /// Under a time budget: sets the step scale the cosine schedule gives at the
+    /// time reached, and caps `count` at the iterations that fit in the budget
+    /// and at a `BUDGET_STEPS`th of it, so the scale follows the clock.
+    fn budget_step(&mut self, count: u32) -> u32 {
+        let Some(deadline) = self.deadline else { return count };
+        let now = Instant::now();
+        let since = *self.iterating_since.get_or_insert(now);
+        let span = deadline.saturating_duration_since(since).as_secs_f64();
+        let progress = if span > 0.0 { now.duration_since(since).as_secs_f64() / span } else { 1.0 };
+        self.backend.set_scale(Some(schedule_at(progress as f32)));
+        match self.pace {
+            Some(pace) if pace > 0.0 => {
+                let left = deadline.saturating_duration_since(now).as_secs_f64();
+                let fit = (left / pace).floor().max(1.0);
+                let slice = (span / BUDGET_STEPS / pace).floor().max(1.0);
+                count.min(fit.min(slice) as u32)
+            }
+            _ => count,
+        }
     }
 
     /// Notes the pace of a step of `iterations` that took `seconds`.
@@ -373,7 +454,8 @@ impl Run {
             }
             None => {}
         }
-        stop.saturating_sub(self.iteration()).max(1).min(paced_iterations(self.pace))
+        let count = stop.saturating_sub(self.iteration()).max(1).min(paced_iterations(self.pace));
+        self.budget_step(count)
     }
 
     /// After a step that gave `costs`: the stopping rule, progress, and the
@@ -423,6 +505,9 @@ impl Run {
     ) -> Result<Outcome> {
         let mut reported = vec![false; runs.len()];
         loop {
+            for run in runs.iter_mut() {
+                run.stopped |= run.out_of_time();
+            }
             for (r, run) in runs.iter().enumerate() {
                 if run.finished() && !reported[r] {
                     reported[r] = true;
@@ -522,9 +607,6 @@ impl Run {
     }
 }
 
-/// The iterations a step may take at `pace` seconds per iteration (the last
-/// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
-/// known.
 /// Of the open runs, those whose backends share the first grouped open run's
 /// group (`Backend::group`), so can step in one submission (empty where none
 /// is grouped).
@@ -578,12 +660,35 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
     Ok(())
 }
 
+/// The iterations a step may take at `pace` seconds per iteration (the last
+/// step's) to last about `STEP_SECONDS`: at least one; one before the pace is
+/// known.
 fn paced_iterations(pace: Option<f64>) -> u32 {
     match pace {
         Some(pace) if pace > 0.0 => (STEP_SECONDS / pace).clamp(1.0, u32::MAX as f64) as u32,
         Some(_) => u32::MAX,
         None => 1,
     }
+}
+
+/// The samples of `Start::Animated`: one frame of the tile optimized under the
+/// kernel's spatial filter, set in motion over the frames. On the CPU whatever
+/// the run's backend: one frame is small, and a device that fails later hands
+/// the run over from the same start.
+fn animated_start(tile: Tile, settings: &Settings) -> Result<Mask> {
+    let flat = Tile::new(tile.width, tile.height, 1, tile.spp, tile.dims)?;
+    let until = match settings.until {
+        Until::Seconds(budget) => Until::Seconds(budget * SPATIAL_BUDGET_SHARE),
+        _ => Until::Iterations,
+    };
+    let spatial = Settings::new(KernelSpec { temporal: Temporal::Spatial, ..settings.kernel }, settings.seed)
+        .iterations(SPATIAL_ITERATIONS.min(settings.iterations))
+        .rule(settings.rule)
+        .until(until)
+        .start(Start::White);
+    let mut run = Run::start(flat, spatial, None, RunOptions::default().backend(BackendChoice::Cpu))?;
+    run.run(&CancelFlag::new(), &mut |_| {})?;
+    animate(&run.finish()?, tile.frames)
 }
 
 /// The end-agnostic schedule of a run that stops by a rule: where a saved state

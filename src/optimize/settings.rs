@@ -16,6 +16,12 @@ pub const DEFAULT_ITERATIONS: u32 = 1000;
 /// A cap on the iterations of a run that stops by a rule.
 pub const DEFAULT_CAP: u32 = 10_000;
 
+/// Iterations of the one-frame run an animated start makes (`Start::Animated`).
+pub const SPATIAL_ITERATIONS: u32 = 200;
+
+/// The share of a time budget the one-frame run of an animated start may take.
+pub const SPATIAL_BUDGET_SHARE: f64 = 0.15;
+
 /// What defines a run, whatever runs it. `Settings::new` and the setters:
 ///
 /// ```
@@ -39,10 +45,27 @@ pub struct Settings {
     pub rule: StepRule,
     /// When the run ends.
     pub until: Until,
+    /// Where the run starts when it is given no initial mask.
+    pub start: Start,
+}
+
+/// Where a run starts when it is given no initial mask.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Start {
+    /// Independent uniform samples drawn from the seed.
+    White,
+    /// One frame optimized under the kernel's spatial filter alone
+    /// (`SPATIAL_ITERATIONS`, or `SPATIAL_BUDGET_SHARE` of a time budget), then
+    /// set in motion over the frames by the R_d sequence: each pixel's samples
+    /// over time are a low-discrepancy sequence, each frame keeps the spatial
+    /// structure. A tile of one frame starts white.
+    Animated,
 }
 
 /// When a run ends.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum Until {
     /// After exactly `iterations` iterations, with the cosine schedule over them.
     Iterations,
@@ -51,13 +74,20 @@ pub enum Until {
     /// When a window's mean objective estimate is at most this (or the plateau
     /// schedule stops first).
     Objective(f64),
+    /// When this many seconds of wall time have passed since `Run::start` began
+    /// (setting up the backend included). The step scale follows the cosine
+    /// schedule over the time left after set-up, and no iteration starts that
+    /// the pace so far says would end past the budget, so a run ends past it by
+    /// at most about one iteration. `iterations` caps it. How far it gets
+    /// depends on the machine, so it is not reproducible bit for bit.
+    Seconds(f64),
 }
 
 impl Until {
     /// The end-agnostic schedule the rule runs, if any.
     pub fn plateau(&self) -> Option<Plateau> {
         match self {
-            Until::Iterations => None,
+            Until::Iterations | Until::Seconds(_) => None,
             Until::Plateau(p) => Some(*p),
             Until::Objective(_) => Some(Plateau::DEFAULT),
         }
@@ -75,6 +105,7 @@ impl Settings {
             seed,
             rule: StepRule::DEFAULT,
             until: Until::Iterations,
+            start: Start::Animated,
         }
     }
 
@@ -113,6 +144,12 @@ impl Settings {
         self.until = until;
         self
     }
+
+    /// Where the run starts when it is given no initial mask.
+    pub fn start(mut self, start: Start) -> Self {
+        self.start = start;
+        self
+    }
 }
 
 /// Where a run stands after some iterations: enough to continue it exactly
@@ -148,9 +185,18 @@ impl RunState {
     }
 }
 
-/// The starting samples: `init` (checked against the tile) or white noise drawn
+/// The starting samples: `init` (checked against the tile; a one-frame mask of
+/// the tile's size is animated over its frames, `animate`) or white noise drawn
 /// from the seed.
 pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) -> Result<Vec<f32>> {
+    let animated;
+    let init = match init {
+        Some(m) if m.tile.frames == 1 && tile.frames > 1 => {
+            animated = crate::core::animate::animate(m, tile.frames)?;
+            Some(&animated)
+        }
+        other => other,
+    };
     match init {
         Some(mask) if mask.tile != *tile => Err(Error::invalid(format!(
             "the initial mask is {} but the run asks for {}",
@@ -185,6 +231,12 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
         ("step".to_string(), format!("{:?}", s.rule)),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
+    if s.start == Start::Animated && tile.frames > 1 {
+        meta.push(("start".to_string(), "animated".to_string()));
+    }
+    if let Until::Seconds(budget) = s.until {
+        meta.push(("budget_seconds".to_string(), budget.to_string()));
+    }
     meta.sort();
     Mask { tile: *tile, samples, meta }
 }

@@ -230,6 +230,15 @@ impl KernelName {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum StartArg {
+    /// One frame optimized under the kernel's spatial filter, set in motion over
+    /// the frames by the R_d sequence (a low-discrepancy sequence at each pixel).
+    Animated,
+    /// White noise.
+    White,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Method {
     /// fsot's optimizer (filtered sliced optimal transport) under --kernel.
     Fsot,
@@ -351,6 +360,16 @@ struct OptimizeArgs {
     /// estimate is at most X).
     #[arg(long)]
     until: Option<String>,
+    /// The best mask reachable in this wall time (`1s`, `500ms`, `2.5s`, `1m`),
+    /// counted from the run's start (setting up the backend included): the step
+    /// size follows the cosine schedule over the time, and the run ends at most
+    /// about one iteration past it. --iterations caps it [default: 10000].
+    #[arg(long, conflicts_with = "until", allow_negative_numbers = true)]
+    budget: Option<String>,
+    /// Where the optimizer starts without --init (--init takes a mask of the
+    /// tile, or of one frame of it, which is then set in motion as `animated` does).
+    #[arg(long, value_enum, default_value = "animated")]
+    start: StartArg,
     /// Slices per iteration [default: enough for each sample to be in 16 classes
     /// per iteration].
     #[arg(long, allow_negative_numbers = true)]

@@ -102,6 +102,12 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--backend", "vulkan", "--device", "no-such-gpu"], "no device matches"),
         (&["--until", "sometimes"], "--until must be"),
         (&["--until", "objective:-1"], "--until must be"),
+        (&["--budget", "soon"], "--budget must be a time"),
+        (&["--budget", "0s"], "--budget must be a time"),
+        (&["--budget", "-1"], "--budget must be a time"),
+        (&["--budget", "1e9"], "at most 86400 seconds"),
+        (&["--budget", "1s", "--until", "plateau"], "cannot be used with"),
+        (&["--budget", "1s", "--checkpoint", "c.ckpt"], "takes no checkpoints"),
     ];
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.

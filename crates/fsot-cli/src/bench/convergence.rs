@@ -157,7 +157,9 @@ pub fn convergence(
     judge: &SceneJudge,
 ) -> Result<Vec<Point>> {
     let last = *checkpoints.iter().max().unwrap_or(&1);
-    let mut settings = Settings::new(spec, seed);
+    // From white noise: the backends are compared on the optimizer's own
+    // iterations, which an animated start's one-frame run would blur.
+    let mut settings = Settings::new(spec, seed).start(fsot::Start::White);
     settings.iterations = last;
     // Profiled: timestamps around every pass give the GPU's own time.
     let vulkan = VulkanOptions::default().profile(true);

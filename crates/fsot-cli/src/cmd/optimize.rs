@@ -17,7 +17,10 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
     let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
     let tile = Tile::new(w, h, t, spp, dims)?;
-    let until = parse_until(args.until.as_deref())?;
+    let until = match &args.budget {
+        Some(text) => Until::Seconds(parse_seconds(text)?),
+        None => parse_until(args.until.as_deref())?,
+    };
     let iterations = args.iterations.unwrap_or(match until {
         Until::Iterations => fsot::optimize::settings::DEFAULT_ITERATIONS,
         _ => fsot::optimize::settings::DEFAULT_CAP,
@@ -44,6 +47,10 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     settings.iterations = iterations;
     settings.until = until;
     settings.slices = args.slices;
+    settings.start = match args.start {
+        StartArg::Animated => fsot::Start::Animated,
+        StartArg::White => fsot::Start::White,
+    };
     let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
     eprintln!("backend: {}", run.note());
     if let (Some(from), Some(p)) = (run.resumed_from(), &args.checkpoint) {
@@ -55,6 +62,8 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         Until::Objective(x) => {
             format!("until the objective is at most {x:e} (at most {iterations} iterations)")
         }
+        Until::Seconds(s) => format!("for {s} s (at most {iterations} iterations)"),
+        _ => format!("at most {iterations} iterations"),
     };
     eprintln!(
         "optimizing {} for kernel {}: {length} x {} slices",
@@ -104,6 +113,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         return Err(Error::Interrupted);
     }
     let seconds = start.elapsed().as_secs_f64();
+    let since_start = run.elapsed();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let mask = run.finish()?;
     let after = score(&mask, spec, SCORE_SLICES);
@@ -122,6 +132,12 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         after.objective,
         after.ratio()
     );
+    if let Until::Seconds(budget) = until {
+        println!(
+            "budget {budget} s: the run ended {since_start:.3} s after it started ({:+.3} s), set-up and start included",
+            since_start - budget
+        );
+    }
     backend_report(&report)
 }
 
@@ -135,6 +151,23 @@ fn parse_until(text: Option<&str>) -> Result<Until> {
         Some(Ok(x)) if x.is_finite() && x > 0.0 => Ok(Until::Objective(x)),
         _ => Err(Error::invalid(format!(
             "--until must be `plateau` or `objective:X` with X > 0, got {text:?}"
+        ))),
+    }
+}
+
+/// `--budget`: a wall time, `1s`, `500ms`, `2.5` (seconds) or `1m`.
+fn parse_seconds(text: &str) -> Result<f64> {
+    let t = text.trim();
+    let (number, unit) = match () {
+        _ if t.ends_with("ms") => (&t[..t.len() - 2], 1e-3),
+        _ if t.ends_with('s') => (&t[..t.len() - 1], 1.0),
+        _ if t.ends_with('m') => (&t[..t.len() - 1], 60.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * unit),
+        _ => Err(Error::invalid(format!(
+            "--budget must be a time above zero such as 1s, 500ms or 2m, got {text:?}"
         ))),
     }
 }

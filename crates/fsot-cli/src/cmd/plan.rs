@@ -80,6 +80,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             args.iterations.is_some() || args.until.is_some(),
             "--iterations and --until (each mask stops when iterations no longer pay)",
         ),
+        (args.budget.is_some(), "--budget (a time budget is for one mask)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));
