@@ -5,12 +5,13 @@
 //! kernel is `perceptual-taa` with the eye at `--display` (default
 //! `standard_fhd`), as `fsot optimize` makes it. Prints the wall time from the
 //! start of `main` to the texture's bytes and the iterations the budget
-//! allowed, then (outside the timed part) the mask's objective as a fraction of
-//! white noise's. `--out` names a `.ktx2` file (the texture) or another file
+//! allowed, then with `--score` (outside the timed part) the mask's objective
+//! as a fraction of white noise's. `--out` names a `.ktx2` file (the texture) or another file
 //! `Mask::save` writes (`.exr`, as `fsot eval --mask` reads).
 //!
 //! cargo run --release --example startup_mask -- [--budget SECONDS] [--size WxHxT]
-//!     [--dims D] [--display NAME|PPD] [--backend cpu|vulkan|auto] [--seed N] [--out FILE.ktx2]
+//!     [--dims D] [--display NAME|PPD] [--backend cpu|vulkan|auto] [--seed N] [--score]
+//!     [--out FILE.ktx2]
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -24,6 +25,7 @@ struct Args {
     backend: BackendChoice,
     seed: u64,
     display: String,
+    score: bool,
     out: PathBuf,
 }
 
@@ -35,6 +37,7 @@ fn parse() -> Result<Args, String> {
         backend: BackendChoice::Cpu,
         seed: 1,
         display: "standard_fhd".to_string(),
+        score: false,
         out: PathBuf::from("startup-mask.ktx2"),
     };
     let mut it = std::env::args().skip(1);
@@ -58,6 +61,7 @@ fn parse() -> Result<Args, String> {
             "--seed" => args.seed = value()?.parse().map_err(|e| format!("--seed: {e}"))?,
             "--out" => args.out = PathBuf::from(value()?),
             "--display" => args.display = value()?,
+            "--score" => args.score = true,
             "--backend" => {
                 args.backend = match value()?.as_str() {
                     "cpu" => BackendChoice::Cpu,
@@ -101,12 +105,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         texture.len(),
         args.budget
     );
-    let score = mask.score(kernel);
-    println!(
-        "objective {:.4e}, {:.3} x white noise; wrote {}",
-        score.objective,
-        score.ratio(),
-        args.out.display()
-    );
+    if args.score {
+        let score = mask.score(kernel);
+        println!("objective {:.4e}, {:.3} x white noise", score.objective, score.ratio());
+    }
+    println!("wrote {}", args.out.display());
     Ok(())
 }

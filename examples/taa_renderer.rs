@@ -10,7 +10,7 @@
 //! sigma 2.1 at 60 fps, the frames after a 48-frame warm-up).
 //!
 //! cargo run --release --example taa_renderer -- [--frames N] [--size WxH]
-//!     [--mask FILE|DIR] [--iterations N] [--seed N] [--out DIR] [--json FILE] [--no-validation]
+//!     [--mask FILE|DIR] [--iterations N | --budget SECONDS] [--seed N] [--out DIR] [--json FILE] [--no-validation]
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -61,6 +61,10 @@ struct Args {
     /// Iterations of the mask made on the device (32x32x16, d = 2, perceptual-taa).
     #[arg(long, default_value_t = 500)]
     iterations: u32,
+    /// Make the mask on the device within this many seconds instead of a count
+    /// of iterations (`Until::Seconds`).
+    #[arg(long)]
+    budget: Option<f64>,
     /// Seed of the mask made on the device.
     #[arg(long, default_value_t = 7)]
     seed: u64,
@@ -170,6 +174,9 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     let mut settings =
         Settings::new(KernelSpec::from_name("perceptual-taa", SIGMA, None, 0.1, FPS)?, args.seed);
     settings.iterations = args.iterations;
+    if let Some(budget) = args.budget {
+        settings = settings.iterations(100_000).until(fsot::Until::Seconds(budget));
+    }
     let mut image = mask_image(ctx, &tile, 1, "fsot-mask")?;
     let target = image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     let start = Instant::now();
@@ -187,7 +194,7 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     let what = format!(
         "32x32x16 perceptual-taa, seed {}, {} iterations made on the device in {:.1} s",
         args.seed,
-        args.iterations,
+        mask.meta("iterations").unwrap_or("?"),
         start.elapsed().as_secs_f64()
     );
     let plan = SamplerPlan::single(mask)?;

@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Quality against wall time on this machine, for the three reference problems:
+# masks made by NEW_FSOT under time budgets (--budget) and by OLD_FSOT with
+# fixed iteration counts (its only way), each process timed whole from its
+# start (/usr/bin/time; the command line's scores of the start and of the mask
+# are inside both), then every mask judged by `fsot eval --quick` beside white
+# noise and the published FAST and STBN masks.
+#
+#   bench/convergence/time-quality.sh NEW_FSOT OLD_FSOT OUT_DIR [PEERS_DIR]
+#
+# OUT_DIR/runs.tsv: problem, binary, what (budget or iterations), process
+# seconds, iterations, objective x white noise, seconds past the budget.
+# OUT_DIR/eval-PROBLEM.{log,json}: the judge's tables.
+set -euo pipefail
+new=$1 old=$2 out=$3 peers=${4:-../shared/data/peer-masks}
+mkdir -p "$out"
+tsv="$out/runs.tsv"
+printf 'problem\tbinary\twhat\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
+
+run() { # problem binary what args...
+  local problem=$1 binary=$2 what=$3; shift 3
+  local log="$out/$problem-$binary-$what.log"
+  /usr/bin/time -f 'process %e s' "$@" --out "$out/$problem-$binary-$what.exr" >"$log" 2>&1
+  local secs its ratio past
+  secs=$(sed -n 's/^process \([0-9.]*\) s$/\1/p' "$log")
+  its=$(sed -n 's/.*, \([0-9]*\) iterations in .*/\1/p' "$log")
+  ratio=$(sed -n 's/.*(\([0-9.]*\) x white noise).*/\1/p' "$log")
+  past=$(sed -n 's/.*s after it started (\([-+0-9.]*\) s).*/\1/p' "$log")
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$problem" "$binary" "$what" "$secs" "$its" "$ratio" "${past:--}" | tee -a "$tsv"
+}
+
+# problem: size, dims, kernel; old iteration counts spanning the new budgets; the
+# budget that is a quarter of the old binary's 1000-iteration time.
+problems=(
+  "64x64x32-d2-perceptual-taa|64x64x32|2|perceptual-taa|1 4 13 40 135 1000|18"
+  "128x128x64-d1-perceptual-taa|128x128x64|1|perceptual-taa|1 2 6 20 1000|126"
+  "32x32x16-d2-taa|32x32x16|2|taa|20 60 200 600 1000|1.2"
+)
+for p in "${problems[@]}"; do
+  IFS='|' read -r name size dims kernel counts quarter <<<"$p"
+  common=(optimize --size "$size" --dims "$dims" --kernel "$kernel" --seed 1 --backend cpu)
+  for b in 0.1 0.3 1 3 10 $quarter; do
+    run "$name" new "budget-${b}s" "$new" "${common[@]}" --budget "${b}s"
+  done
+  for n in $counts; do
+    run "$name" old "iterations-$n" "$old" "${common[@]}" --iterations "$n"
+  done
+  masks=() methods=white,published-fast,published-stbn
+  for f in "$out/$name"-*.exr; do
+    m=$(basename "$f" .exr); m=${m#"$name"-}
+    masks+=(--mask "$m=$f"); methods+=",$m"
+  done
+  "$new" eval --quick --methods "$methods" --peers "$peers" "${masks[@]}" \
+    --out "$out/eval-$name" --json "$out/eval-$name.json" >"$out/eval-$name.log" 2>&1
+done
