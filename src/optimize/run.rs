@@ -249,7 +249,7 @@ impl Run {
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         let animated;
         let init = match (init, &saved, settings.start) {
-            (None, None, Start::Animated) if tile.frames > 1 => {
+            (None, None, start) if start.animates(settings.until, &tile) => {
                 animated = animated_start(tile, &settings)?;
                 Some(&animated)
             }

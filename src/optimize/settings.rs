@@ -61,6 +61,21 @@ pub enum Start {
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
     Animated,
+    /// `Animated` under a time budget (`Until::Seconds`), where the short run
+    /// gains most from it, `White` otherwise: the default.
+    Auto,
+}
+
+impl Start {
+    /// Whether a run of these settings on `tile` starts animated.
+    pub fn animates(self, until: Until, tile: &Tile) -> bool {
+        let on = match self {
+            Start::White => false,
+            Start::Animated => true,
+            Start::Auto => matches!(until, Until::Seconds(_)),
+        };
+        on && tile.frames > 1
+    }
 }
 
 /// When a run ends.
@@ -105,7 +120,7 @@ impl Settings {
             seed,
             rule: StepRule::DEFAULT,
             until: Until::Iterations,
-            start: Start::Animated,
+            start: Start::Auto,
         }
     }
 
@@ -231,7 +246,7 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
         ("step".to_string(), format!("{:?}", s.rule)),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
-    if s.start == Start::Animated && tile.frames > 1 {
+    if s.start.animates(s.until, tile) {
         meta.push(("start".to_string(), "animated".to_string()));
     }
     if let Until::Seconds(budget) = s.until {

@@ -231,6 +231,8 @@ impl KernelName {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum StartArg {
+    /// `animated` with --budget, `white` otherwise.
+    Auto,
     /// One frame optimized under the kernel's spatial filter, set in motion over
     /// the frames by the R_d sequence (a low-discrepancy sequence at each pixel).
     Animated,
@@ -368,7 +370,7 @@ struct OptimizeArgs {
     budget: Option<String>,
     /// Where the optimizer starts without --init (--init takes a mask of the
     /// tile, or of one frame of it, which is then set in motion as `animated` does).
-    #[arg(long, value_enum, default_value = "animated")]
+    #[arg(long, value_enum, default_value = "auto")]
     start: StartArg,
     /// Slices per iteration [default: enough for each sample to be in 16 classes
     /// per iteration].

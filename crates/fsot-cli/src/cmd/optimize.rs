@@ -48,6 +48,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     settings.until = until;
     settings.slices = args.slices;
     settings.start = match args.start {
+        StartArg::Auto => fsot::Start::Auto,
         StartArg::Animated => fsot::Start::Animated,
         StartArg::White => fsot::Start::White,
     };
