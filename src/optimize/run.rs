@@ -134,7 +134,7 @@ pub enum Event<'a> {
         error: &'a Error,
         /// Iterations done when the GPU failed.
         at: u32,
-        /// The backend the run goes on on, in words.
+        /// The backend the run continues on, in words.
         backend: &'a str,
         /// The iteration the run goes on from.
         from: u32,
@@ -215,9 +215,8 @@ pub struct Run {
     /// Seconds per iteration of the last step; None before the first step,
     /// which then takes one iteration.
     pace: Option<f64>,
-    /// Under `Until::Seconds`: when the budget ends, and when the first
-    /// iteration began (the schedule's time runs from there to the deadline).
-    deadline: Option<Instant>,
+    /// Under `Until::Seconds`: when the first iteration began (the schedule's
+    /// time runs from there to the deadline).
     iterating_since: Option<Instant>,
     /// When `Run::start` began.
     begun: Instant,
@@ -231,7 +230,7 @@ impl Run {
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
-        let deadline = match settings.until {
+        match settings.until {
             Until::Seconds(s) if !(s.is_finite() && s > 0.0 && s <= MAX_BUDGET_SECONDS) => {
                 return Err(Error::invalid(format!(
                     "a time budget must be more than 0 and at most {MAX_BUDGET_SECONDS} seconds, got {s}"
@@ -242,9 +241,8 @@ impl Run {
                     "a run under a time budget takes no checkpoints: it is made again within its budget",
                 ))
             }
-            Until::Seconds(s) => Some(begun + Duration::from_secs_f64(s)),
-            _ => None,
-        };
+            _ => {}
+        }
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         let animated;
@@ -278,7 +276,6 @@ impl Run {
             rule_on_backend: false,
             busy: 0.0,
             pace: None,
-            deadline,
             iterating_since: None,
             begun,
         };
@@ -398,10 +395,18 @@ impl Run {
         self.busy
     }
 
+    /// When a time budget ends (`Until::Seconds`).
+    fn deadline(&self) -> Option<Instant> {
+        match self.settings.until {
+            Until::Seconds(s) => Some(self.begun + Duration::from_secs_f64(s)),
+            _ => None,
+        }
+    }
+
     /// Under a time budget: whether the next iteration, at the pace so far, would
     /// end past the budget (before the first: whether the budget is spent).
     fn out_of_time(&self) -> bool {
-        match self.deadline {
+        match self.deadline() {
             Some(deadline) => Instant::now() + Duration::from_secs_f64(self.pace.unwrap_or(0.0)) > deadline,
             None => false,
         }
@@ -411,7 +416,7 @@ impl Run {
     /// time reached, and caps `count` at the iterations that fit in the budget
     /// and at a `BUDGET_STEPS`th of it, so the scale follows the clock.
     fn budget_step(&mut self, count: u32) -> u32 {
-        let Some(deadline) = self.deadline else { return count };
+        let Some(deadline) = self.deadline() else { return count };
         let now = Instant::now();
         let since = *self.iterating_since.get_or_insert(now);
         let span = deadline.saturating_duration_since(since).as_secs_f64();
