@@ -72,7 +72,7 @@ fn png_slices_hold_16_bit_quantised_values() {
     let dir = tempfile::tempdir().unwrap();
     let tile = Tile::new(6, 5, 2, 1, 2).unwrap();
     let mask = Mask::white(tile, 4);
-    let files = png_io::write(&mask, dir.path()).unwrap();
+    let files = png_io::write(&mask, dir.path(), 16).unwrap();
     assert_eq!(files, ["frame0000.png", "frame0001.png"]);
     let decoder = ::png::Decoder::new(std::fs::File::open(dir.path().join("frame0001.png")).unwrap());
     let mut reader = decoder.read_info().unwrap();
@@ -94,7 +94,7 @@ fn png_slices_hold_16_bit_quantised_values() {
     }
     // Layouts beyond RGBA get one file per sample and group of four dimensions.
     let wide = Mask::white(Tile::new(2, 2, 1, 2, 5).unwrap(), 4);
-    let files = png_io::write(&wide, &dir.path().join("wide")).unwrap();
+    let files = png_io::write(&wide, &dir.path().join("wide"), 16).unwrap();
     assert_eq!(
         files,
         [
@@ -104,6 +104,26 @@ fn png_slices_hold_16_bit_quantised_values() {
             "frame0000_s01_d4-4.png"
         ]
     );
+}
+
+#[test]
+fn png_slices_hold_8_bit_values_read_at_the_centre_of_their_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let mask = Mask::white(Tile::new(7, 3, 1, 1, 1).unwrap(), 9);
+    png_io::write(&mask, dir.path(), 8).unwrap();
+    let decoder = ::png::Decoder::new(std::fs::File::open(dir.path().join("frame0000.png")).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.bit_depth, info.color_type), (::png::BitDepth::Eight, ::png::ColorType::Grayscale));
+    for y in 0..3 {
+        for x in 0..7 {
+            let v = mask.sample(x, y, 0, 0)[0] as f64;
+            let read = (buf[y * 7 + x] as f64 + 0.5) / 256.0;
+            assert!((read - v).abs() <= 0.5 / 256.0 + 1e-9, "{read} against {v}");
+        }
+    }
+    assert!(png_io::write(&mask, &dir.path().join("b"), 12).is_err());
 }
 
 #[test]

@@ -1,7 +1,7 @@
-//! Masks as 16-bit PNG slices, one file per frame like the published STBN masks.
+//! Masks as PNG slices, one file per frame like the published STBN masks.
 //!
-//! Value v in [0, 1) is stored as floor(v * 65536) (at most 65535); a reader takes
-//! (stored + 0.5) / 65536. With spp = 1 and d <= 4, `frameTTTT.png` holds
+//! With b bits (16 or 8), value v in [0, 1) is stored as floor(v * 2^b) (at most
+//! 2^b - 1); a reader takes (stored + 0.5) / 2^b. With spp = 1 and d <= 4, `frameTTTT.png` holds
 //! dimensions 0..d as grey (d = 1), RGB (d = 2, blue 0; d = 3) or RGBA (d = 4).
 //! Otherwise each frame has one file per sample and group of up to four
 //! dimensions: `frameTTTT_sSS_dA-B.png` (RGBA, unused channels 0).
@@ -14,11 +14,23 @@ use crate::io::atomic::AtomicFile;
 
 /// Quantises one value to 16 bits.
 pub fn quantize(v: f32) -> u16 {
-    ((v as f64 * 65536.0).floor() as i64).clamp(0, 65535) as u16
+    quantize_bits(v, 16) as u16
 }
 
-/// Writes the slices into `dir` (created if missing). Returns the file names.
-pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
+/// Quantises one value to `bits` bits (1 to 16): floor(v 2^bits), clamped.
+pub fn quantize_bits(v: f32, bits: u32) -> u32 {
+    let levels = (1u64 << bits) as f64;
+    ((v as f64 * levels).floor() as i64).clamp(0, levels as i64 - 1) as u32
+}
+
+/// Writes the slices into `dir` (created if missing) with `bits` bits per
+/// channel, 8 or 16. Returns the file names.
+pub fn write(mask: &Mask, dir: &Path, bits: u32) -> Result<Vec<String>> {
+    let depth = match bits {
+        8 => png::BitDepth::Eight,
+        16 => png::BitDepth::Sixteen,
+        _ => return Err(Error::invalid(format!("PNG slices hold 8 or 16 bits per channel, not {bits}"))),
+    };
     crate::io::atomic::make_folder(dir)?;
     let tile = mask.tile;
     let simple = tile.spp == 1 && tile.dims <= 4;
@@ -41,13 +53,17 @@ pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
                 } else {
                     format!("frame{t:04}_s{s:02}_d{}-{}.png", dims[0], dims[dims.len() - 1])
                 };
-                let mut data = Vec::with_capacity(tile.width * tile.height * channels * 2);
+                let mut data = Vec::with_capacity(tile.width * tile.height * channels * bits as usize / 8);
                 for y in 0..tile.height {
                     for x in 0..tile.width {
                         let sample = mask.sample(x, y, t, s);
                         for c in 0..channels {
-                            let v = dims.get(c).map(|&k| quantize(sample[k])).unwrap_or(0);
-                            data.extend_from_slice(&v.to_be_bytes());
+                            let v = dims.get(c).map(|&k| quantize_bits(sample[k], bits)).unwrap_or(0);
+                            if bits == 8 {
+                                data.push(v as u8);
+                            } else {
+                                data.extend_from_slice(&(v as u16).to_be_bytes());
+                            }
                         }
                     }
                 }
@@ -55,7 +71,7 @@ pub fn write(mask: &Mask, dir: &Path) -> Result<Vec<String>> {
                 {
                     let mut encoder = png::Encoder::new(&mut bytes, tile.width as u32, tile.height as u32);
                     encoder.set_color(color);
-                    encoder.set_depth(png::BitDepth::Sixteen);
+                    encoder.set_depth(depth);
                     let mut writer = encoder
                         .write_header()
                         .map_err(|e| Error::invalid(format!("PNG encoding failed: {e}")))?;

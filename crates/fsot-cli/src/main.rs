@@ -436,15 +436,22 @@ struct OptimizeArgs {
     /// folder.
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
+    /// Also write the same mask to this file, by its extension as --out; repeatable
+    /// (e.g. --out m.ktx2 --also m.exr keeps the exact values beside the texture).
+    #[arg(long, value_name = "FILE")]
+    also: Vec<PathBuf>,
     /// KTX2 format: r8_unorm, r8g8_unorm, r8g8b8a8_unorm, r16_unorm, r16g16_unorm,
     /// r16g16b16a16_unorm, r32_sfloat, r32g32_sfloat, r32g32b32a32_sfloat or auto
     /// [default: auto, 16-bit UNORM with channels for d]. With --scene: also write
     /// NAME.ktx2 beside each NAME.exr.
     #[arg(long)]
     ktx2_format: Option<String>,
-    /// Also write 16-bit PNG slices into this folder.
+    /// Also write PNG slices into this folder.
     #[arg(long)]
     png: Option<PathBuf>,
+    /// Bits per channel of the PNG slices: 16, or 8 (the published masks' depth).
+    #[arg(long, default_value_t = 16, value_parser = parse_png_bits)]
+    png_bits: u32,
 }
 
 #[derive(Args)]
@@ -533,4 +540,12 @@ fn set_threads(threads: Option<usize>) -> Result<()> {
             .map_err(|e| Error::invalid(format!("cannot start {n} threads: {e}")))?;
     }
     Ok(())
+}
+
+fn parse_png_bits(text: &str) -> std::result::Result<u32, String> {
+    match text {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("PNG slices hold 8 or 16 bits per channel, not {text}")),
+    }
 }

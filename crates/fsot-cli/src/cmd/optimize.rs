@@ -32,6 +32,15 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     // a format that cannot hold d fails now.
     let file_kind = MaskFile::for_path(&args.out, dims, args.ktx2_format.as_deref())?;
     let out = AtomicFile::create(&args.out)?;
+    let also = args
+        .also
+        .iter()
+        .map(|p| {
+            let ktx2 = p.extension().is_some_and(|e| e == "ktx2");
+            let format = args.ktx2_format.as_deref().filter(|_| ktx2);
+            Ok((MaskFile::for_path(p, dims, format)?, AtomicFile::create(p)?))
+        })
+        .collect::<Result<Vec<_>>>()?;
     if let Some(dir) = &args.png {
         if dir.exists() && !dir.is_dir() {
             return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
@@ -41,7 +50,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         if args.checkpoint.is_some() || args.resume {
             return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
         }
-        return make_baseline(&args, tile, spec, file_kind, out);
+        return make_baseline(&args, tile, spec, file_kind, out, also);
     }
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = iterations;
@@ -119,8 +128,11 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let mask = run.finish()?;
     let after = score(&mask, spec, SCORE_SLICES);
     file_kind.write(&mask, out)?;
+    for (kind, file) in also {
+        kind.write(&mask, file)?;
+    }
     if let Some(dir) = &args.png {
-        let files = fsot::io::png::write(&mask, dir)?;
+        let files = fsot::io::png::write(&mask, dir, args.png_bits)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
     println!(
@@ -282,6 +294,7 @@ pub(crate) fn make_baseline(
     spec: KernelSpec,
     kind: MaskFile,
     out: AtomicFile,
+    also: Vec<(MaskFile, AtomicFile)>,
 ) -> Result<()> {
     let swaps = args.method == Method::Fast || (args.method == Method::Stbn && tile.dims > 1);
     if swaps && !(1..=100_000).contains(&args.passes) {
@@ -334,8 +347,11 @@ pub(crate) fn make_baseline(
     let seconds = start.elapsed().as_secs_f64();
     let s = score(&mask, spec, SCORE_SLICES);
     kind.write(&mask, out)?;
+    for (kind, file) in also {
+        kind.write(&mask, file)?;
+    }
     if let Some(dir) = &args.png {
-        let files = fsot::io::png::write(&mask, dir)?;
+        let files = fsot::io::png::write(&mask, dir, args.png_bits)?;
         eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
     println!(

@@ -81,6 +81,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             "--iterations and --until (each mask stops when iterations no longer pay)",
         ),
         (args.budget.is_some(), "--budget (a time budget is for one mask)"),
+        (!args.also.is_empty(), "--also (each mask is written into the folder --out)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));
