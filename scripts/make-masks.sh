@@ -9,6 +9,7 @@
 #   MASKS_PEERS  folder of the published masks for the comparison
 #                [default: ../shared/data/peer-masks, skipped when missing]
 #   MASKS_EVAL=0 makes the files only (no evaluation, no manifest)
+#   MASKS_MAKE=0 evaluates the masks made before (in MASKS_WORK) and writes the manifest
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${MASKS_WORK:-target/masks}
@@ -29,7 +30,7 @@ masks=(
 wanted=("$@")
 for entry in "${masks[@]}"; do
   IFS='|' read -r name format flags <<<"$entry"
-  if ((${#wanted[@]})) && [[ ! " ${wanted[*]} " == *" $name "* ]]; then
+  if [[ ${MASKS_MAKE:-1} == 0 ]] || { ((${#wanted[@]})) && [[ ! " ${wanted[*]} " == *" $name "* ]]; }; then
     continue
   fi
   echo "== $name"
@@ -44,7 +45,7 @@ if [[ ${MASKS_EVAL:-1} == 0 ]]; then
   exit 0
 fi
 args=()
-methods=()
+methods=(white)
 for entry in "${masks[@]}"; do
   name=${entry%%|*}
   [[ -f $work/$name.exr ]] || { echo "missing $work/$name.exr: run without names first" >&2; exit 1; }
@@ -55,8 +56,30 @@ if [[ -d $peers ]]; then
   args+=(--peers "$peers")
   methods+=(published-stbn published-fast)
 fi
-eval_cmd=("$fsot" eval --quick --out "$work/eval" --methods "$(IFS=,; echo "${methods[*]}")" "${args[@]}")
+eval_cmd=("$fsot" eval --quick --display standard_fhd,standard_4k --out "$work/eval" --methods "$(IFS=,; echo "${methods[*]}")" "${args[@]}")
 echo "== ${eval_cmd[*]}"
+mkdir -p "$work/eval"
+echo "fsot eval --quick --display standard_fhd,standard_4k --methods $(IFS=,; echo "${methods[*]}") ${args[*]}" \
+  | sed "s|$work/||g; s|$peers|PEERS|" > "$work/eval/command.txt"
 "${eval_cmd[@]}"
 python3 scripts/masks-manifest.py "$work" "${masks[@]}" > masks/manifest.json
-echo "wrote masks/manifest.json"
+# The judge's raw tables, the summary and the verdicts the README quotes.
+made=$(sed -n 3p "$work/eval/results.md")
+cp "$work/eval/results.md" bench/results/masks-eval.md
+{
+  echo "# bench/eval/summary.py of the shipped masks' fsot eval --quick (scripts/make-masks.sh), $made"
+  echo "# $(cat "$work/eval/command.txt")"
+  echo
+  python3 bench/eval/summary.py "$work/eval/results.json"
+} > bench/results/masks-summary.md
+{
+  echo "# fsot eval --quick of the shipped masks (scripts/make-masks.sh), $made"
+  for entry in "${masks[@]}"; do
+    name=${entry%%|*}
+    echo
+    echo "## $name (bench/eval/compare.py results.json $name published-stbn published-fast)"
+    echo
+    python3 bench/eval/compare.py "$work/eval/results.json" "$name" published-stbn published-fast
+  done
+} > bench/results/masks-verdicts.md
+echo "wrote masks/manifest.json, bench/results/masks-{eval,summary,verdicts}.md"

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# The time the peers' generators take for the published masks' shape (128x128x64,
+# scalar), with fsot's own implementations on this machine's CPU: STBN's
+# void-and-cluster in full, FAST's swap search for one pass (its default is 32
+# passes of the same cost each).
+# Usage: bench/peer-generators.sh OUT_FILE
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:?usage: bench/peer-generators.sh OUT_FILE}
+cargo build --release --quiet -p fsot-cli
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+{
+  echo "# commit $(git rev-parse --short HEAD), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+  for flags in "--method stbn" "--method fast --passes 1"; do
+    echo "\$ fsot optimize --backend cpu --size 128x128x64 --dims 1 $flags --seed 1"
+    # shellcheck disable=SC2086
+    /usr/bin/time -f "wall %e s" target/release/fsot optimize --backend cpu --size 128x128x64 --dims 1 \
+      $flags --seed 1 --out "$work/m.exr" 2>&1 | grep -v '^optimizing\|^backend'
+  done
+} > "$out"
+cat "$out"
