@@ -165,6 +165,11 @@ macro_rules! internal {
     };
 }
 
+/// The README's Rust code blocks, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeCodeBlocks;
+
 internal! {
     mod core;
     mod error;
