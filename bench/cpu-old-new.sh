@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The CPU path's time per iteration, an old build against this one in one run, on
-# the two problems issue 16 names (32x32x16 and 64x64x16, d = 2, taa, all cores):
+# two problems (32x32x16 and 64x64x16, d = 2, taa, all cores):
 # three alternating runs of each binary per problem, the median, and whether the
 # two binaries' masks are bit-identical (examples/same_samples.rs).
 # BACKEND=vulkan times the Vulkan path instead (deterministic mode, so that the

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The example renderer (examples/taa_renderer.rs) on this machine's Vulkan device
 # (lavapipe here), with the validation layer on:
-# 1. the issue's command as is: `cargo run --release --example taa_renderer --
+# 1. the example's own command: `cargo run --release --example taa_renderer --
 #    --json r.json` (its mask made on the device), timed from the shell too;
 # 2. the same renderer reading a mask made by `fsot optimize` on the CPU (the
 #    quick evaluation's ours-perceptual-taa settings: 32x32x16, d = 2,

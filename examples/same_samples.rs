@@ -1,5 +1,5 @@
 //! Compares two mask files: bit-identical samples or not, and their metadata
-//! side by side (how the redesign's "no mask changed" was checked).
+//! side by side (whether a change to the code changed any mask).
 //!
 //! cargo run --release --example same_samples -- A.exr B.exr
 use std::process::ExitCode;

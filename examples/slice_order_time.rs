@@ -1,8 +1,8 @@
 //! How long one iteration's slice order takes on the device (the per-lane
 //! transport's ordering passes, for CPU implementations of Vulkan): the mean
 //! of 300 `VulkanRun::slice_order` calls, each one submission of the passes
-//! for one iteration and the download of its order (so a fixed cost of about
-//! 0.1 ms on lavapipe is in every figure), after 5 untimed calls.
+//! for one iteration and the download of its order (so a submission's fixed
+//! cost is in every figure), after 5 untimed calls.
 //!
 //! cargo run --release --example slice_order_time -- [WxHxT] [KERNEL]
 //! (defaults: 32x32x16 taa; d = 2, 1 spp, seed 7)

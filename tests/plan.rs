@@ -90,22 +90,22 @@ fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_a
         "other spp and share = false: masks of their own"
     );
     let reads: Vec<&fsot::scene::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
-    let lent: Vec<&&fsot::scene::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
-    assert_eq!(lent.len(), 4, "light, bsdf and quad's two pairs");
+    let shared: Vec<&&fsot::scene::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
+    assert_eq!(shared.len(), 4, "light, bsdf and quad's two pairs");
     assert_eq!(
-        (lent[0].offset, lent[0].shift.as_slice(), &lent[0].shares),
+        (shared[0].offset, shared[0].shift.as_slice(), &shared[0].shares),
         ([0; 3], &[0.0f32, 0.0][..], &None)
     );
-    for (k, p) in lent.iter().enumerate().skip(1) {
+    for (k, p) in shared.iter().enumerate().skip(1) {
         assert_eq!(p.offset, share_offset(k as u32, [128, 128, 64]));
         assert_eq!(p.shift, share_shift(k as u32, 2));
         assert_eq!(p.shares.as_deref(), Some("light"));
     }
     // Readers spread over the tile: no two at the same offset or shift.
-    for i in 0..lent.len() {
+    for i in 0..shared.len() {
         for j in 0..i {
-            assert_ne!(lent[i].offset, lent[j].offset);
-            assert_ne!(lent[i].shift, lent[j].shift);
+            assert_ne!(shared[i].offset, shared[j].offset);
+            assert_ne!(shared[i].shift, shared[j].shift);
         }
     }
     assert!(plan.groups[1].reason.contains("sharing light.exr"), "{}", plan.groups[1].reason);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Prepares what bench/gpu/run-lent-gpu.sh carries to a lent GPU machine, on the
-# development machine (no GPU needed), so that the lent time goes to measuring:
+# Prepares what bench/gpu/run-lent-gpu.sh carries to a GPU machine, on the
+# development machine (no GPU needed), so that the GPU's time goes to measuring:
 #   .gl/*.deb          the Vulkan loader, vulkaninfo and the validation layer
 # packed in .gl/bin.tar.gz:
 #   .gl/bin/fsot       this build's command line (and .gl/bin/fsot-NAME for other

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU measurements recorded in BENCHMARKS.md, in one run on a lent NVIDIA machine
+# The GPU measurements recorded in BENCHMARKS.md, in one run on an NVIDIA machine
 # (see ../shared/gpu/README.md). On the development machine first:
 #   bench/gpu/prepare.sh     # the loader, the validation layer, fsot and the GPU
 #                            # test binaries into .gl/ (checks the 64 MiB limit)
@@ -81,7 +81,7 @@ optimize() {
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
 
   if want sort; then
-    # Issue 16, item 4: 20 G pairs/s at 16M, fixed cost under 0.05 ms at 64k; the
+    # The sort's targets: 20 G pairs/s at 16M, fixed cost under 0.05 ms at 64k; the
     # device's copy bandwidth is measured in the same run.
     for n in 16777216 65536; do
       for v in $B/fsot $B/fsot-*; do [ -x "$v" ] && step "$v" bench sort --n $n --repeats 30; done
@@ -93,7 +93,7 @@ optimize() {
   fi
 
   if want optimize; then
-    # Issue 16, item 5: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
+    # The full-run targets: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
     optimize gpu-128x128x30-ptaa --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     # The same with the other builds carried (.gl/bin/fsot-NAME), to compare.
     for v in $B/fsot-*; do

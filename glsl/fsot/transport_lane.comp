@@ -158,7 +158,7 @@ void transport_rank(uint rank) {
         // down past the larger keys (the same moves as one insertion loop: a
         // key's predecessors are in order when its turn comes). About a fifth
         // of the keys are listed, so the loop with the moves runs a fifth as
-        // often (bench/results/branch-free-lane-transport.txt).
+        // often.
         uint64_t last = sorted[0];
         uint listed = 0u;
         for (uint i = 1u; i < n; ++i) {

@@ -32,8 +32,8 @@ shared uint s_stage_k[BLOCK];
 shared uint s_stage_v[BLOCK];
 
 // Lanes of the subgroup whose (valid) digit equals this lane's: eight ballots,
-// on one word where the subgroup fits in 32 lanes. (One subgroupPartitionNV
-// instead measured slower on an H100.)
+// on one word where the subgroup fits in 32 lanes (portable, where
+// subgroupPartitionNV is an NVIDIA extension).
 uvec4 same_digit(uint digit, bool valid) {
     if (gl_SubgroupSize <= 32u) {
         uint same = subgroupBallot(valid).x;

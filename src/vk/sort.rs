@@ -85,10 +85,9 @@ const ARG_CHUNKS: u64 = 16;
 
 /// Most blocks whose histogram the last histogram workgroup scans itself
 /// (256 x 32 entries, four scan chunks of 2048: 65536 pairs in 2048-pair blocks).
-/// The small sort (64k pairs) is within it, and the one workgroup's scan
-/// stays at four chunks. Lavapipe cannot decide the limit: its runs spread by
-/// half (the block passes took 29.5 to 45.9 ms at 128k pairs); there the tail
-/// scan won at 32 blocks in three runs of five and lost at 64 in all four.
+/// A small sort of 64k pairs is within it, and the one workgroup's scan
+/// stays at four chunks. The limit is set where the tail scan stops paying on
+/// the implementations measured (BENCHMARKS.md, the radix sort).
 pub const TAIL_MAX_BLOCKS: u32 = 32;
 
 /// Which passes a sort records.
@@ -161,8 +160,8 @@ impl SortShape {
     /// 4 (128-bit vectors, as on ARM64): 2048-pair blocks either way. Larger
     /// blocks mean fewer blocks, a smaller histogram and scan, and less fixed
     /// work per pair, but only pay when there are enough pairs to fill the
-    /// device (on an H100: 7.1 against 6.45 G pairs/s at 16M, 3.9 against 4.7
-    /// at 1M), so 4096-pair blocks are for capacities from 4M.
+    /// device, so 4096-pair blocks are for capacities from 4M (BENCHMARKS.md,
+    /// the radix sort).
     pub fn for_device(ctx: &Context, capacity: u32) -> Result<Self> {
         let info = ctx.info();
         Self::for_limits(info.subgroup_size, info.max_workgroup_invocations, info.max_shared_memory, capacity)
@@ -687,10 +686,9 @@ impl RadixSort {
     }
 
     /// Does a sort take the lanes path? Asked for, or by default on a CPU
-    /// implementation, whatever the count (on lavapipe, 2 cores: 2048 pairs in
-    /// 0.77 ms where the tail scan took 2.43, 64k in 3.73 against 34.7 ms, 1M
-    /// in 35.9 against 537.2 ms by the block passes;
-    /// `bench/results/sort-lanes-texels.txt`).
+    /// implementation, whatever the count: there one invocation sorting a run
+    /// alone beats the block passes at every size (BENCHMARKS.md, the radix
+    /// sort).
     pub fn lanes_path(&self) -> bool {
         match self.path {
             SortPath::Lanes => true,

@@ -85,7 +85,7 @@ struct EvalArgs {
     /// and references.
     #[arg(long, default_value = "eval-out")]
     out: PathBuf,
-    /// Eye sigmas to evaluate [default: 2.1 and 1.9, the seed's tables; 2.1 with --quick].
+    /// Eye sigmas to evaluate [default: 2.1 and 1.9, as in the tables of Korać et al. 2023; 2.1 with --quick].
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     sigma: Vec<f64>,
     /// Mask seeds per method (each with its own renders) [default: 3 with --quick, else 5].
@@ -456,7 +456,7 @@ struct OptimizeArgs {
 
 #[derive(Args)]
 struct StressArgs {
-    /// CI size (seconds) instead of the (100k-iteration runs, minutes).
+    /// Small sizes (seconds) instead of the full ones (100k-iteration runs, minutes).
     #[arg(long)]
     quick: bool,
     /// CPU only, even where a Vulkan device is present.

@@ -34,7 +34,7 @@ pub struct StressSize {
 }
 
 impl StressSize {
-    /// The sizes: 100k iterations, 10^6 contributions.
+    /// The full sizes: 100k iterations, 10^6 contributions.
     pub fn full() -> Self {
         Self { long_cpu: 100_000, long_gpu: 100_000, accumulate: 1_000_000, extreme: 200 }
     }

@@ -91,10 +91,8 @@ pub const ORDER_BINS: u32 = 256;
 pub const ORDER_BATCH: u32 = super::BATCH;
 /// Slices each invocation of the slice order's first pass draws (at most; 64
 /// invocations a workgroup): a few workgroups an iteration, each of whose
-/// starts costs a CPU implementation a few microseconds (at 32x32x16, 3 where
-/// one a slice took 37: one iteration's ordering, submission and download
-/// included, 0.38-0.44 -> 0.34-0.36 ms, `examples/slice_order_time.rs`,
-/// bench/results/order-workgroups.txt), and well within lavapipe's
+/// starts costs a CPU implementation a few microseconds (`examples/slice_order_time.rs`
+/// times it), and well within lavapipe's
 /// loop cap (a slice's draw and class search loop at most about 110 times).
 pub const ORDER_SLICES_PER_INVOCATION: u32 = 16;
 

@@ -39,9 +39,7 @@ pub const BATCH: u32 = 32;
 pub struct VulkanOptions {
     /// Fixed-point int64 atomics: bit-identical run to run. Otherwise float
     /// atomic add where the device has it, GPUs and CPU implementations
-    /// (lavapipe) alike: faster (on lavapipe about 14% less time a run since the
-    /// texel views: `bench/results/float-atomics-default.txt`), not reproducible
-    /// bit for bit.
+    /// (lavapipe) alike: faster (BENCHMARKS.md), not reproducible bit for bit.
     pub deterministic: bool,
     /// Time each pass with timestamp queries (`Report::profile`).
     pub profile: bool,

@@ -643,8 +643,8 @@ fn transport_shape(
                 info.name, info.max_texel_buffer_elements
             )))
         }
-        // Built for CPU implementations only: an H100's driver (580) refuses its
-        // pipeline at 2048 samples per invocation (bench/results/h100-run.log).
+        // Built for CPU implementations only: GPU drivers may refuse its
+        // pipeline at 2048 samples per invocation.
         Some(TransportKind::PerLane) if !info.is_cpu() => {
             return Err(Error::invalid(format!(
                 "the per-lane transport is for CPU implementations of Vulkan, not {}",

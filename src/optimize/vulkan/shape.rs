@@ -42,9 +42,8 @@ pub const DEFER_GROUPS: u32 = 65535;
 /// where the slices' costs allow (`lane_table`; each tier adds at most one,
 /// its last, partial): few, since each workgroup's start costs llvmpipe a few
 /// microseconds (its lanes' private arrays among it), yet more than one, so
-/// that the threads end together. 1 to 4 a thread were alike and 8 to 16
-/// slower at 32x32x16 `taa` on this project's 2-core machine
-/// (bench/results/lane-chunks.txt).
+/// that the threads end together (fewer chunks leave threads idle at the end,
+/// many more cost their start-up; BENCHMARKS.md, lavapipe).
 pub const LANE_CHUNKS_PER_THREAD: u32 = 4;
 /// Loop iterations of one round of the per-lane transport besides the slice's
 /// sort and targets (`lane_cost`): the rounds' loop and the slice's draw (over
@@ -150,10 +149,8 @@ impl TransportShape {
             // invocations can take the classes past the lane's limit. For d >= 3
             // only when every class fits the lane: there the limit is small (the
             // targets budgeted at their worst), and on lavapipe the large-class
-            // stage costs more than the workgroup transport saves
-            // (bench/results/lane-dims.txt), also with the sort's lanes
-            // path (lane-dims-sort-lanes.txt: 74 to 78 ms an iteration
-            // against 53 at d = 3, 118 to 123 against 67 at d = 4).
+            // stage costs more than the workgroup transport saves, also with
+            // the sort's lanes path (BENCHMARKS.md, lavapipe).
             None => {
                 let limit = Self::lane_limit(dims);
                 info.is_cpu()
@@ -396,9 +393,7 @@ impl TransportShape {
     /// the loop budget (up to about 2600 samples): then the largest rounded up
     /// to a multiple of LANE_STEP, so that no class goes to the large-class
     /// stage, whose three global sorts cost lavapipe more than the whole
-    /// transport at 128x128x30 (0.18% of the slices there pass 2048; the
-    /// stage took 321 ms of an iteration's 555, the transport 226, measured
-    /// before the sort's lanes path and not since). The
+    /// transport at 128x128x30, where a few slices in a thousand pass 2048. The
     /// private arrays grow with it (46 KiB an invocation at 2560), and
     /// llvmpipe zero-fills them at each workgroup's start, so the limit stays
     /// at LANE_MAX where every class fits it.

@@ -1,7 +1,7 @@
 //! Error against run time and iterations, per backend, on one problem and seed:
 //! checkpoints of one run (its schedule planned for the last checkpoint), each
-//! judged by `fsot score`'s objective (ratio to white noise), by the core
-//! issue's independent perceived-error test, and by the pRelMSE
+//! judged by `fsot score`'s objective (ratio to white noise), by the
+//! independent perceived-error test (`quality::perceived`), and by the pRelMSE
 //! of one evaluation scene under TAA (ratio to the mean of four white-noise
 //! masks). Time counts the
 //! optimisation only; judging is done with the clock stopped.
@@ -40,7 +40,7 @@ pub struct Point {
     pub objective_ratio: f64,
     /// pRelMSE of the scene under TAA / white noise's.
     pub prelmse_ratio: f64,
-    /// The independent perceived-error test of the core issue (animated
+    /// The independent perceived-error test (animated
     /// integrands, TAA, the eye; `eval::perceived`) / white noise's.
     pub perceived_ratio: f64,
 }

@@ -220,10 +220,7 @@ fn time_to_quality(points: &[Point]) -> String {
     use fsot_cli::bench::convergence::time_to;
     let mut table = String::from(
         "\n## Time to quality (seconds; - where not reached)\n\n\
-         Quoted, not measured here: the core issue states that the public implementation of the paper \
-         needs about 1000 iterations (9 minutes on 2 cores) to reach about 0.65 x white noise on its own \
-         perceived test, which is not this one.\n\n\
-         | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
+                  | backend | objective 0.8 | 0.6 | 0.5 | pRelMSE 0.6 | 0.4 | 0.3 | perceived 0.65 | 0.55 |\n\
          | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n",
     );
     let backends = backends(points);

@@ -18,8 +18,8 @@ use fsot::error::{Error, Result};
 
 /// The display the evaluation judges on: ColorVideoVDP's own default, a 30-inch
 /// 3840 x 2160 monitor of 200 cd/m^2 seen from 0.75 m (about 75 pixels per
-/// degree); `bench/results/jod-probe.txt` shows the masks separated
-/// on it and on three other displays.
+/// degree); `examples/jod_probe.rs` shows how the masks separate on it and
+/// on other displays.
 pub const DISPLAY: &str = "standard_4k";
 
 /// The version of the colorvideovdp crate (Cargo.lock pins it).
