@@ -169,6 +169,14 @@ macro_rules! internal {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeCodeBlocks;
+/// The Vulkan guide's Rust code blocks, compiled as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../docs/vulkan.md")]
+pub struct VulkanGuideCodeBlocks;
+/// The architecture's Rust code blocks, compiled as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../ARCHITECTURE.md")]
+pub struct ArchitectureCodeBlocks;
 
 internal! {
     mod core;
