@@ -9,7 +9,7 @@
 set -euo pipefail
 old=${1:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}
 new=${2:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}
-scene=${3:-bench/results/issue16-plan-scene.toml}
+scene=${3:-bench/results/plan-scene.toml}
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)

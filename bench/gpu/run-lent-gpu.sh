@@ -106,7 +106,7 @@ optimize() {
     optimize gpu-64x64x16-ptaa-d8 --backend vulkan --size 64x64x16 --dims 8 --kernel perceptual-taa --iterations 300 --profile
     # Item 2: a scene plan in one GPU run (1-D + 2-D + invisible, 64x64x32), and the
     # stopping rule on the GPU.
-    step $B/fsot optimize --scene bench/results/issue13-new-scene.toml --backend vulkan --out "$WORK/scene"
+    step $B/fsot optimize --scene bench/results/new-scene.toml --backend vulkan --out "$WORK/scene"
     optimize gpu-128x128x30-ptaa-plateau --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
     optimize gpu-128x128x30-ptaa-det --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-32x32x16-taa --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile
