@@ -1,0 +1,39 @@
+#!/usr/bin/env python3
+"""Checks that the figures the documents quote are in the documents and in their
+raw files. bench/figures.txt holds one check a line:
+
+    DOC ;; FIGURE ;; RAW_FILE ;; PATTERN
+
+FIGURE must occur in DOC, and RAW_FILE (relative to the repository) must exist and
+contain PATTERN; both are plain substrings (surrounding spaces stripped; the separator is ` ;; ` because tables hold `|`). Lines
+starting with # and empty lines are skipped. Prints each check; exits 1 if any fails.
+
+    python3 bench/check-figures.py [LIST]
+"""
+import sys
+from pathlib import Path
+
+root = Path(__file__).resolve().parent.parent
+listing = Path(sys.argv[1]) if len(sys.argv) > 1 else root / "bench" / "figures.txt"
+failed = 0
+for number, line in enumerate(listing.read_text().splitlines(), 1):
+    if not line.strip() or line.lstrip().startswith("#"):
+        continue
+    parts = [p.strip() for p in line.split(" ;; ")]
+    if len(parts) != 4:
+        print(f"FAIL line {number}: expected DOC ;; FIGURE ;; RAW_FILE ;; PATTERN")
+        failed += 1
+        continue
+    doc, figure, raw, pattern = parts
+    problems = []
+    if figure not in (root / doc).read_text():
+        problems.append(f"{figure!r} not in {doc}")
+    raw_path = root / raw
+    if not raw_path.is_file():
+        problems.append(f"{raw} missing")
+    elif pattern not in raw_path.read_text(errors="replace"):
+        problems.append(f"{pattern!r} not in {raw}")
+    print(("FAIL " if problems else "ok   ") + f"{doc}: {figure} <- {raw}" + (": " + "; ".join(problems) if problems else ""))
+    failed += bool(problems)
+print(f"{failed} of the checks failed" if failed else "every figure found in its raw file")
+sys.exit(1 if failed else 0)
