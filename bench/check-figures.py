@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """Checks that the figures the documents quote are in the documents and in their
-raw files. bench/figures.txt holds one check a line:
+raw files. bench/figures.txt holds one check a line, in either of two forms:
 
+    DOC | FIGURE | RAW_FILE | PATTERN
     DOC ;; FIGURE ;; RAW_FILE ;; PATTERN
 
-FIGURE must occur in DOC, and RAW_FILE (relative to the repository) must exist and
-contain PATTERN; both are plain substrings (surrounding spaces stripped; the separator is ` ;; ` because tables hold `|`). Lines
-starting with # and empty lines are skipped. Prints each check; exits 1 if any fails.
+In the first form the line is split at its first three ` | `, so PATTERN may hold
+`|` (a table row) but FIGURE may not; the second form, used whenever a line holds
+` ;; `, lets FIGURE hold `|` too. DOC and RAW_FILE are relative to the repository.
+FIGURE must occur in DOC, and RAW_FILE must exist and contain PATTERN; both are
+plain substrings, surrounding spaces stripped. Lines starting with # and empty lines
+are skipped. Prints each check as ok or FAIL; exits 1 if any fails.
 
     python3 bench/check-figures.py [LIST]
 """
@@ -19,14 +23,19 @@ failed = 0
 for number, line in enumerate(listing.read_text().splitlines(), 1):
     if not line.strip() or line.lstrip().startswith("#"):
         continue
-    parts = [p.strip() for p in line.split(" ;; ")]
+    if " ;; " in line:
+        parts = [p.strip() for p in line.split(" ;; ")]
+    else:
+        parts = [p.strip() for p in line.split(" | ", 3)]
     if len(parts) != 4:
-        print(f"FAIL line {number}: expected DOC ;; FIGURE ;; RAW_FILE ;; PATTERN")
+        print(f"FAIL line {number}: expected DOC | FIGURE | RAW_FILE | PATTERN")
         failed += 1
         continue
     doc, figure, raw, pattern = parts
     problems = []
-    if figure not in (root / doc).read_text():
+    if not (root / doc).is_file():
+        problems.append(f"{doc} missing")
+    elif figure not in (root / doc).read_text():
         problems.append(f"{figure!r} not in {doc}")
     raw_path = root / raw
     if not raw_path.is_file():
