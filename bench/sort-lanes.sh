@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The radix sort's lanes path on lavapipe against the block passes it replaced
-# there: `fsot bench sort` of the NEW binary at several sizes (its lanes path,
+# The radix sort's lanes path on lavapipe against the block passes:
+# `fsot bench sort` of the NEW binary at several sizes (its lanes path,
 # and the block passes or tail scan on the same pairs), then runs whose time is
 # in the large-class stage (32x32x8 taa, 4 and 16 spp), OLD and NEW alternating,
 # two rounds, with --profile.

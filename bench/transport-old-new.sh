@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The Vulkan transport pass's time per iteration (timestamps, --profile), an old
 # binary against a new one, alternating, six runs each, in both scatter modes
-# (float atomics, and --deterministic's int64 fixed point). Float atomics are
-# lavapipe's default before 8bd64e6 and from 362e244 on; builds between take
-# them with FSOT_FLOAT_ATOMICS=1, which the others ignore:
+# (float atomics, and --deterministic's int64 fixed point). Builds that do not
+# take float atomics on lavapipe by default take them with FSOT_FLOAT_ATOMICS=1,
+# which the others ignore:
 # 32x32x16, d = 2, taa, seed 7, 192 iterations. Medians at the end.
 # Usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE   (lavapipe unless VK_DRIVER_FILES says otherwise)
 set -euo pipefail

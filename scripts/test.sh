@@ -10,7 +10,7 @@ export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo test --release --workspace "$@"
 # The device tests whose shapes follow the subgroup size, again on lavapipe with
 # 128-bit vectors: 4 lanes a subgroup where x86 gives 8, as lavapipe has on ARM64
-# (the sort's blocks, the per-lane transport's chunks). About 2 minutes on 2 cores.
+# (the sort's blocks, the per-lane transport's chunks).
 # (On ARM64 the run above already had 4 lanes.)
 if [ $# -eq 0 ] && [[ "$VK_DRIVER_FILES" == *lvp_icd* ]] && [ "$(uname -m)" = x86_64 ]; then
   echo "test.sh: the device tests again with 4 lanes a subgroup (LP_NATIVE_VECTOR_WIDTH=128)"

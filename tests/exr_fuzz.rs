@@ -99,9 +99,9 @@ fn the_corpus_itself_reads_back() {
     }
 }
 
-/// The exr crate sizes its buffers from the header: a mutated file in a CI run once
-/// made it ask for 61 GB and abort the process. Here a data window grows to
-/// 100000 x 100000 the same way; the reader refuses it from the header alone.
+/// The exr crate sizes its buffers from the header: a mutated file can make it ask
+/// for tens of GB and abort the process. Here a data window grows to
+/// 100000 x 100000 that way; the reader refuses it from the header alone.
 #[test]
 fn a_header_promising_more_pixels_than_the_file_holds_is_refused_before_reading() {
     let mut bytes = corpus()[0].clone();

@@ -291,9 +291,8 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
             options.hooks(VulkanHooks { defer_groups: Some(2), ..options.hooks }),
         );
     }
-    // A first pass of one small subgroup with a small limit, as the GPU
-    // measurement script's shape sweep runs it (FSOT_TRANSPORT=32,1 FSOT_LOCAL_MAX=512 on a
-    // GPU): most classes then take the second pass.
+    // A first pass of one small subgroup with a small limit: most classes then
+    // take the second pass.
     for dims in [2, 3] {
         let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
             transport: Some(TransportKind::Workgroup),

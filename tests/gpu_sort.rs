@@ -186,7 +186,7 @@ fn every_path_sorts_stably_by_any_number_of_low_bits() {
 fn every_block_shape_the_device_runs_sorts_like_the_cpu() {
     // Every workgroup x items the device fits, not only the one it is given:
     // 8 to 64 items an invocation, blocks of 64 to 4096 pairs (a shape's arrays
-    // are sized by its items: a fixed size once broke every shape past 32). Each
+    // are sized by its items: a fixed size would break every shape past 32). Each
     // path, at sizes around one block, several, the tail scan's last and the
     // scan's two levels' limit for the smallest blocks (64 x 64 / 256 x 64).
     let ctx = common::gpu_context();

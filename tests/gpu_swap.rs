@@ -125,8 +125,8 @@ fn the_vulkan_search_goes_as_far_as_the_cpu_search_from_the_same_seed() {
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
-fn fast_and_vector_stbn_masks_made_on_vulkan_pass_the_cpu_masks_bar_under_taa() {
-    // tests/baselines.rs's bar for the CPU path's masks (perceived error under
+fn fast_and_vector_stbn_masks_made_on_vulkan_meet_the_cpu_masks_bound_under_taa() {
+    // tests/baselines.rs's bound for the CPU path's masks (perceived error under
     // TAA against white noise, an independent measure neither search optimizes),
     // held by the masks made on Vulkan from the same seeds.
     let ctx = common::gpu_context();
@@ -139,12 +139,12 @@ fn fast_and_vector_stbn_masks_made_on_vulkan_pass_the_cpu_masks_bar_under_taa() 
     let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, &vulkan, |_, _| {}).unwrap();
     let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
     eprintln!("FAST on Vulkan / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.10, "{ratio}"); // the CPU path's bar (it measured 0.085)
+    assert!(ratio < 0.10, "{ratio}"); // the CPU path's bound (its masks: 0.085)
     let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
     let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, &vulkan, |_, _| {}).unwrap().0;
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);
     eprintln!("vector STBN on Vulkan / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.51, "{ratio}"); // the CPU path's bar (it measured 0.444)
+    assert!(ratio < 0.51, "{ratio}"); // the CPU path's bound (its masks: 0.444)
     common::assert_no_validation_messages(&ctx);
 }
 

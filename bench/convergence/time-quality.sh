@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Quality against wall time on this machine, for the three reference problems:
 # masks made by NEW_FSOT under time budgets (--budget) and by OLD_FSOT with
-# fixed iteration counts (its only way), each process timed whole from its
-# start (/usr/bin/time; the command line's scores of the start and of the mask
-# are inside both), then every mask judged by `fsot eval --quick` beside white
-# noise and the published FAST and STBN masks.
+# fixed iteration counts (a build without --budget runs those alone), each
+# process timed whole from its start (/usr/bin/time; the command line's scores
+# of the start and of the mask are inside both), then every mask judged by
+# `fsot eval --quick` beside white noise and the published FAST and STBN masks.
 #
 #   bench/convergence/time-quality.sh NEW_FSOT OLD_FSOT OUT_DIR [PEERS_DIR]
 #

@@ -8,8 +8,8 @@
 #   .gl/t/deps/NAME    the test binaries that use a device, .gl/t/examples/ the
 #                      example renderer their test runs
 # all stripped, and .gl/commit naming the build. Then it checks that what travels
-# fits the device tool's 64 MiB (the tracked and untracked files, and .gl/) and
-# prints the `run` call to make.
+# to the GPU machine fits its 64 MiB (the tracked and untracked files, and .gl/)
+# and prints the call that runs it there.
 # Usage: [OLD_FSOT="base=/tmp/fsot-base"] bench/gpu/prepare.sh
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -50,5 +50,5 @@ carried=$(du -sb .gl | cut -f1)
 total=$((tracked + carried))
 awk -v a="$total" -v b="$tracked" -v c="$carried" \
   'BEGIN {printf "travels: %.1f MiB (tree %.1f, .gl %.1f) of 64 MiB\n", a / 1048576, b / 1048576, c / 1048576}'
-if [ "$total" -gt $((60 * 1048576)) ]; then echo "prepare: over 60 MiB; the call would be refused" >&2; exit 1; fi
+if [ "$total" -gt $((60 * 1048576)) ]; then echo "prepare: over 60 MiB; too much to carry" >&2; exit 1; fi
 echo 'run: carry [".gl"], command "OUT=$OUT bash bench/gpu/run-lent-gpu.sh", timeout_s 540'

@@ -1,17 +1,17 @@
 #!/usr/bin/env bash
-# The GPU measurements recorded in BENCHMARKS.md, in one run on an NVIDIA machine
-# (see ../shared/gpu/README.md). On the development machine first:
+# The GPU measurements recorded in BENCHMARKS.md, in one run on an NVIDIA machine.
+# On the development machine first:
 #   bench/gpu/prepare.sh     # the loader, the validation layer, fsot and the GPU
 #                            # test binaries into .gl/ (checks the 64 MiB limit)
-# then one device call: carry [".gl"], command
+# then on the GPU machine, with .gl/ beside the tree:
 #   OUT=$OUT bash bench/gpu/run-lent-gpu.sh [SECTION...]
-# with a timeout_s two minutes above BUDGET_S. Sections, in the order they run (most
-# wanted first; none named runs them all): sort, optimize, swap, tests, bench,
-# stress, cpu. No step starts once BUDGET_S seconds (default 420) have passed, and each
-# step is stopped after STEP_TIMEOUT seconds (default 150), so a run ends inside its
-# call and says what it skipped. Other builds to compare (say, the sort before a
-# change) go in as .gl/bin/fsot-NAME; their sort is measured beside this one's.
-# The device tool brings back at most 8 files from $OUT, so the masks and reports
+# under a wall-clock limit two minutes above BUDGET_S. Sections, in the order they
+# run (most wanted first; none named runs them all): sort, optimize, swap, tests,
+# bench, stress, cpu. No step starts once BUDGET_S seconds (default 420) have
+# passed, and each step is stopped after STEP_TIMEOUT seconds (default 150), so a
+# run ends inside its limit and says what it skipped. Other builds to compare go
+# in as .gl/bin/fsot-NAME; their sort is measured beside this one's.
+# At most 8 files come back from $OUT, so the masks and reports
 # stay in $WORK and come back packed: $OUT/log.txt (everything printed),
 # $OUT/steps.tsv (exit status and seconds of each step) and $OUT/results.tar.gz
 # (reports, JSON, plots, and the masks up to 4 MiB each). Every run prints its mask's
@@ -47,8 +47,8 @@ export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 # Tests find the repository (tests/data, scenes) where it was built.
 [ -e /work/main ] || { mkdir -p /work && ln -s "$PWD" /work/main; }
 
-# A step's limit: STEP_TIMEOUT, and no later than 90 s past the budget (the call's
-# timeout_s leaves a little more for packing the results).
+# A step's limit: STEP_TIMEOUT, and no later than 90 s past the budget (the run's
+# wall-clock limit leaves a little more for packing the results).
 step_limit() { awk -v a="$(elapsed)" -v b="$BUDGET_S" -v t="$STEP_TIMEOUT" 'BEGIN {l = b + 90 - a; if (l > t) l = t; if (l < 1) l = 1; printf "%d", l}'; }
 # step CMD...: runs CMD under the step timeout, unless the budget is spent; logs its
 # exit status and seconds to steps.tsv.
@@ -81,8 +81,8 @@ optimize() {
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
 
   if want sort; then
-    # The sort's targets: 20 G pairs/s at 16M, fixed cost under 0.05 ms at 64k; the
-    # device's copy bandwidth is measured in the same run.
+    # The sort's throughput at 16M pairs and its fixed cost at 64k; the device's
+    # copy bandwidth is measured in the same run.
     for n in 16777216 65536; do
       for v in $B/fsot $B/fsot-*; do [ -x "$v" ] && step "$v" bench sort --n $n --repeats 30; done
     done
@@ -93,7 +93,7 @@ optimize() {
   fi
 
   if want optimize; then
-    # The full-run targets: the paper's tile in at most 1.0 s, 256x256x64 in at most 10 s.
+    # Full runs: the paper's tile (128x128x30) and 256x256x64.
     optimize gpu-128x128x30-ptaa --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     # The same with the other builds carried (.gl/bin/fsot-NAME), to compare.
     for v in $B/fsot-*; do
@@ -101,10 +101,10 @@ optimize() {
         --out "$WORK/gpu-128x128x30-ptaa-${v##*/}.exr"
     done
     optimize gpu-256x256x64-ptaa --backend vulkan --size 256x256x64 --dims 2 --kernel perceptual-taa --profile
-    # Item 1: d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
+    # d = 4 and 8 on the GPU (f64 targets); the CPU path's are in `cpu`.
     optimize gpu-64x64x16-ptaa-d4 --backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa --profile
     optimize gpu-64x64x16-ptaa-d8 --backend vulkan --size 64x64x16 --dims 8 --kernel perceptual-taa --iterations 300 --profile
-    # Item 2: a scene plan in one GPU run (1-D + 2-D + invisible, 64x64x32), and the
+    # A scene plan in one GPU run (1-D + 2-D + invisible, 64x64x32), and the
     # stopping rule on the GPU.
     step $B/fsot optimize --scene bench/results/new-scene.toml --backend vulkan --out "$WORK/scene"
     optimize gpu-128x128x30-ptaa-plateau --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
@@ -113,7 +113,7 @@ optimize() {
   fi
 
   if want swap; then
-    # Item 3: the peers' swap searches on the GPU (64x64x16, 32 passes, seed 1); the
+    # The peers' swap searches on the GPU (64x64x16, 32 passes, seed 1); the
     # CPU path's are in `cpu`.
     for m in fast stbn; do
       optimize gpu-$m-64x64x16 --method $m --dims 2 --backend vulkan --size 64x64x16 --passes 32 --seed 1

@@ -1,6 +1,6 @@
-# Sourced by the per-lane transport benchmarks (bench/lane-rounds.sh,
-# bench/lane-chunks.sh): lavapipe unless VK_DRIVER_FILES says otherwise, a work
-# folder, and a busy loop on one core for their "noisy" setting, all removed on exit.
+# Sourced by per-lane transport benchmarks: lavapipe unless VK_DRIVER_FILES says
+# otherwise, a work folder, and a busy loop on one core for their "noisy" setting,
+# all removed on exit.
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)

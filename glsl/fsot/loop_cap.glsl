@@ -8,8 +8,8 @@
 // all and then drops the rest silently, which would leave a class's targets as
 // garbage. The passes are budgeted to stay under it (src/optimize/vulkan/shape.rs); this
 // last loop, of a run-time count of at least 3, checks it: past the cap a loop
-// still runs its first iteration, and no more (measured on llvmpipe: a count of
-// 1 did not tell), and the batch's count of cut invocations fails the run on the
+// still runs its first iteration, and no more (on llvmpipe a count of 1 does
+// not tell), and the batch's count of cut invocations fails the run on the
 // host.
 void fsot_check_loop_cap() {
     uint want = pc.spp + 2u;

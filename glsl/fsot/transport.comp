@@ -347,8 +347,8 @@ void process_slice(uint slice) {
     sync();
     if (tid == 0u) {
         // The subgroups counted from their size: on lavapipe, gl_NumSubgroups
-        // left out the partial last subgroup of 100 invocations (the cost came
-        // out 1% low).
+        // leaves out the partial last subgroup of 100 invocations (the cost
+        // would come out 1% low).
         uint subgroups = (wg + gl_SubgroupSize - 1u) / gl_SubgroupSize;
         float cost = 0.0;
         for (uint k = 0u; k < subgroups; ++k) {

@@ -25,8 +25,8 @@ const MAGIC: &[u8; 8] = b"FSOTCKP1";
 /// The backend is not part of it: a run may resume on the other backend.
 pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     let s = settings;
-    // Written out as the settings' Debug was before they had `until`, so that
-    // fixed-length runs keep their fingerprints.
+    // Spelled out field by field, not by the settings' Debug, so the text stays
+    // fixed; `until` is added only where the run does not end at a fixed count.
     let mut f = format!(
         "tile {}x{}x{} spp {} d {}; Settings {{ kernel: {:?}, iterations: {}, slices: {:?}, seed: {}, rule: {:?} }}",
         tile.width, tile.height, tile.frames, tile.spp, tile.dims, s.kernel, s.iterations, s.slices, s.seed, s.rule

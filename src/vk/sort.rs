@@ -110,7 +110,7 @@ pub enum SortPath {
     /// (`radix_digits.comp`), then one dispatch per pass (`radix_onesweep.comp`),
     /// in which a workgroup waits on the blocks that started before it. Only for
     /// devices on which a started workgroup goes on running while another waits
-    /// (GPUs; not lavapipe with several threads: `../shared/notes`). `Auto`
+    /// (GPUs; not lavapipe with several threads). `Auto`
     /// never takes it; `sort_choice::choose_sort_path` picks it on a GPU where it
     /// was timed faster there (the optimizer's large-class stage does so).
     /// Tested on lavapipe with one thread (`crates/fsot-cli/tests/gpu_sort_look_back.rs`,
@@ -125,8 +125,9 @@ pub enum SortPath {
     Lanes,
 }
 
-/// Pairs one invocation of the lanes path counts and places (`SortPath::Lanes`).
-/// 2048 and 8192 sorted 1M pairs about as fast on lavapipe (2 cores).
+/// Pairs one invocation of the lanes path counts and places (`SortPath::Lanes`):
+/// long enough that a run's fixed work is small beside its pairs, and in the
+/// middle of the range (2048 to 8192) over which the run length hardly matters.
 pub const LANE_RUN: u32 = 4096;
 
 /// Bytes before the look-back status words in the `LookBack` buffer: four

@@ -1,7 +1,7 @@
 //! Does ColorVideoVDP separate masks at the evaluation's image sizes? JOD of the
 //! quick evaluation's renders (after TAA and without) for white noise, STBN and
 //! fsot's perceptual-taa mask, on several display models, with the time each
-//! prediction takes. The display fsot eval uses was chosen from this output
+//! prediction takes: what the choice of fsot eval's display rests on
 //! (bench/results/jod-probe.txt).
 //!
 //! cargo run --release --example jod_probe -- [CACHE_DIR]

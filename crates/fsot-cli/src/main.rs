@@ -75,7 +75,7 @@ struct PlanArgs {
 
 #[derive(Args)]
 struct EvalArgs {
-    /// Small tiles, images and sample counts: a few minutes on 2 cores.
+    /// Small tiles, images and sample counts, for a quick run.
     #[arg(long)]
     quick: bool,
     /// Also write the records as JSON to this file.
@@ -144,7 +144,7 @@ struct BenchArgs {
     /// the same problem, and time to quality.
     #[command(subcommand)]
     suite: Option<BenchSuite>,
-    /// Small problem: about a minute on 2 cores.
+    /// A small problem, for a quick run.
     #[arg(long)]
     quick: bool,
     /// Also write the figures as JSON to this file.

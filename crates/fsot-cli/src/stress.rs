@@ -38,7 +38,7 @@ impl StressSize {
     pub fn full() -> Self {
         Self { long_cpu: 100_000, long_gpu: 100_000, accumulate: 1_000_000, extreme: 200 }
     }
-    /// A CI-sized run (seconds on 2 cores with lavapipe).
+    /// A CI-sized run: short runs, the same million contributions.
     pub fn quick() -> Self {
         Self { long_cpu: 3_000, long_gpu: 600, accumulate: 1_000_000, extreme: 30 }
     }

@@ -852,8 +852,8 @@ impl Backend for VulkanRun {
             }),
             skipped_large_classes: self.overflowed,
             validation_messages: self.ctx.validation_messages(),
-            // Said where it was timed or set (on CPU implementations, untimed
-            // block passes, as always).
+            // Said where it was timed or set (on CPU implementations it is the
+            // block passes, untimed, and goes unsaid).
             large_sort: self
                 .sort_choice
                 .filter(|c| c.times.is_some() || self.options.hooks.large_sort.is_some())

@@ -10,7 +10,7 @@ pub const LOCAL_MAX: u32 = 2048;
 /// Classes up to this many samples are sorted by one invocation in the per-lane
 /// transport (`FSOT_LANE_MAX` of transport_lane.comp; its private arrays take 18
 /// bytes per sample per invocation, which lavapipe takes and an NVIDIA driver
-/// refused at 20: the per-lane transport is for CPU implementations only),
+/// refuses at 20: the per-lane transport is for CPU implementations only),
 /// unless the kernel's classes pass it and fit the loop budget
 /// (`lane_limit_for`).
 pub const LANE_MAX: u32 = 2048;
@@ -64,8 +64,8 @@ const COLD_EVALS: u32 = 24;
 /// Newton steps one quantile may take at most (`FSOT_NEWTON_MAX` of
 /// glsl/fsot/targets.glsl): the per-lane pass budgets every quantile at this, so
 /// no class, however hard, takes an invocation past the loop cap (budgeting the
-/// mean there let a hard class of 39 samples at d = 8 run past it, and its
-/// targets came out as garbage).
+/// mean there would let a hard class, such as one of 39 samples at d = 8, run
+/// past it and leave its targets as garbage).
 const NEWTON_MAX: u32 = 60;
 
 /// The two transport passes.

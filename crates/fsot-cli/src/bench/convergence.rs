@@ -166,8 +166,7 @@ pub fn convergence(
     let options = base.clone().backend(choice).vulkan(vulkan);
     // An untimed warm-up of the same problem first, so that one-time costs are
     // not counted as the optimisation's: llvmpipe compiles each shader at its
-    // first dispatch (8 s of 8.3 in a first quick run after a build), and the
-    // CPU path's thread pool starts.
+    // first dispatch, and the CPU path's thread pool starts.
     let mut warm_up = settings;
     warm_up.iterations = WARM_UP_ITERATIONS;
     Run::start(tile, warm_up, None, options.clone())?.advance(

@@ -343,7 +343,7 @@ fn kernel_suites(ctx: &Context, quick: bool, records: &mut Vec<serde_json::Value
         let b = fsot_cli::bench::machine::host_copy_bandwidth();
         format!("host memory, measured by a parallel copy: {:.1} GB/s", b * 1e-9)
     } else {
-        "the device's memory bandwidth (../shared/notes/performance.md)".to_string()
+        "the device's memory bandwidth (its specification)".to_string()
     };
     let cpu = fsot_cli::bench::machine::cpu_description();
     let mut table = format!(

@@ -90,7 +90,7 @@ pub struct EvalSize {
 }
 
 impl EvalSize {
-    /// A few minutes on 2 cores.
+    /// Small tiles, images and sample counts, for a quick run.
     pub fn quick() -> Self {
         Self {
             tile: Tile::new(32, 32, 16, 1, 2).expect("valid tile"), // ok: a constant, valid tile
