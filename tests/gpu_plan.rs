@@ -109,3 +109,41 @@ fn a_plan_cancelled_while_its_masks_run_together_resumes_to_the_same_masks() {
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_plan_under_a_budget_on_one_device_runs_its_masks_together_to_the_budgets_end() {
+    use fsot::optimize::backend::BackendChoice;
+    use fsot::optimize::run::{CancelFlag, RunOptions};
+    use fsot::scene::file::Scene;
+    use fsot::scene::plan::{CostModel, Plan, PlanEvent};
+    let ctx = common::gpu_context();
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n[plan]\nbudget = 2\n\
+                [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
+    let scene = Scene::parse(text, "budgeted").unwrap();
+    let plan = Plan::new(&scene, &CostModel { seconds_per_point: 1e-6, backend: "test".into() }).unwrap();
+    let began = std::time::Instant::now();
+    let options =
+        RunOptions::default().backend(BackendChoice::Vulkan).context(Some(ctx.clone())).budget_from(began);
+    let dir = tempfile::tempdir().unwrap();
+    let (mut events, mut slowest, mut last) = (Vec::new(), 0.0f64, std::time::Instant::now());
+    plan.execute(dir.path(), &options, 10, false, &CancelFlag::new(), &mut |e| match e {
+        PlanEvent::Start { file, .. } => events.push(format!("start {file}")),
+        PlanEvent::Done { file, .. } => events.push(format!("done {file}")),
+        PlanEvent::Run { .. } => {
+            slowest = slowest.max(last.elapsed().as_secs_f64());
+            last = std::time::Instant::now();
+        }
+        _ => {}
+    })
+    .unwrap();
+    let seconds = began.elapsed().as_secs_f64();
+    // Both start before either ends: they share the device and the whole budget.
+    assert_eq!(&events[..2], ["start a.exr", "start b.exr"], "{events:?}");
+    assert!(seconds >= 1.0 && seconds <= 2.0 + slowest + 0.5, "{seconds} s for 2 s ({slowest} s a step)");
+    for name in ["a.exr", "b.exr"] {
+        let mask = fsot::io::exr::read(&dir.path().join(name)).unwrap();
+        assert_eq!(mask.meta("budget_seconds"), Some("2"), "{name}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

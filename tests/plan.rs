@@ -241,3 +241,84 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
         assert!(x.samples.iter().zip(&y.samples).all(|(p, q)| p.to_bits() == q.to_bits()), "{name} differs");
     }
 }
+
+#[test]
+fn a_scene_may_give_a_time_budget_as_a_time_or_a_number_of_seconds() {
+    let budget = |plan: &str| Scene::parse(&format!("{plan}\n{ONE}"), "t").map(|s| s.budget);
+    assert_eq!(budget(""), Ok(None));
+    assert_eq!(budget("[plan]\nbudget = \"10s\""), Ok(Some(10.0)));
+    assert_eq!(budget("[plan]\nbudget = \"500ms\""), Ok(Some(0.5)));
+    assert_eq!(budget("[plan]\nbudget = 3"), Ok(Some(3.0)));
+    assert_eq!(budget("[plan]\nbudget = 2.5"), Ok(Some(2.5)));
+    for (bad, says) in [
+        ("[plan]\nbudget = \"soon\"", "line 2: budget must be a time above zero"),
+        ("[plan]\nbudget = 0", "line 2: budget must be a time above zero"),
+        ("[plan]\nbudget = true", "line 2: budget must be a time above zero"),
+        ("[plan]\ndeadline = 3", "unknown field `deadline`"),
+    ] {
+        let e = budget(bad).expect_err(bad);
+        assert!(e.contains(says), "{bad}: {e}");
+    }
+}
+
+#[test]
+fn under_a_budget_each_mask_gets_a_share_of_it_in_proportion_to_its_work_per_iteration() {
+    let groups = "[plan]\nbudget = 12\n[[group]]\nname = \"pick\"\ndims = 1\n\
+                  [[group]]\nname = \"lens\"\ndims = 2\nspp = 4\n[[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
+    assert_eq!(plan.budget, Some(12.0));
+    let m = |f: &str| plan.masks.iter().find(|m| m.file == f).unwrap();
+    assert_eq!((m("deep.exr").estimated_seconds, m("deep.exr").estimated_iterations), (0.0, 0));
+    // The scaling suite's factors: d = 1 costs 0.52 of d = 2 per point, spp 4
+    // 0.60 of spp 1 per point, and the 2-D mask has four times the points.
+    let (pick, lens) = (0.52, 1.0 * 0.60 * 4.0);
+    let expected = 12.0 * pick / (pick + lens);
+    assert!((m("pick.exr").estimated_seconds - expected).abs() < 1e-9, "{}", m("pick.exr").estimated_seconds);
+    assert!((plan.estimated_seconds - 12.0).abs() < 1e-9);
+    // So each gets about the same number of iterations: the budget over the
+    // work of one iteration of every mask.
+    let per_pick = 1e-6 * (128 * 128 * 64) as f64 * pick;
+    let iterations = (12.0 / (per_pick / pick * (pick + lens))) as u32;
+    for f in ["pick.exr", "lens.exr"] {
+        assert!(m(f).estimated_iterations.abs_diff(iterations) <= 1, "{f}: {}", m(f).estimated_iterations);
+    }
+}
+
+#[test]
+fn a_plan_under_a_budget_makes_every_mask_within_it_one_after_the_other_on_the_cpu() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"16x16x8\"\n[plan]\nbudget = 1.5\n\
+                [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n";
+    let scene = Scene::parse(text, "budgeted").unwrap();
+    let began = std::time::Instant::now();
+    let options = RunOptions::default().backend(BackendChoice::Cpu).budget_from(began);
+    let plan = Plan::new(&scene, &CostModel::calibrate(&options).unwrap()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let (mut order, mut slowest) = (Vec::new(), 0.0f64);
+    let mut last = std::time::Instant::now();
+    plan.execute(dir.path(), &options, 10, false, &CancelFlag::new(), &mut |e| match e {
+        PlanEvent::Start { file, .. } => order.push(format!("start {file}")),
+        PlanEvent::Done { file, iterations, .. } => order.push(format!("done {file} {}", iterations > 0)),
+        PlanEvent::Run { event: fsot::optimize::run::Event::Progress { .. }, .. } => {
+            slowest = slowest.max(last.elapsed().as_secs_f64());
+            last = std::time::Instant::now();
+        }
+        _ => {}
+    })
+    .unwrap();
+    let seconds = began.elapsed().as_secs_f64();
+    assert_eq!(order, ["start pick.exr", "done pick.exr true", "start lens.exr", "done lens.exr true"]);
+    assert!(seconds <= 1.5 + slowest + 0.3, "{seconds} s for a budget of 1.5 s ({slowest} s a step)");
+    assert!(seconds >= 0.75, "{seconds} s: the budget was not used");
+    for name in ["pick.exr", "lens.exr"] {
+        let mask = fsot::io::exr::read(&dir.path().join(name)).unwrap();
+        assert!(mask.meta("budget_seconds").is_some(), "{name}: {:?}", mask.meta);
+        let s = score(&mask, fsot::scene::plan::kernel_for(&scene.display).unwrap().0, 4096);
+        assert!(s.ratio() < 0.6, "{name}: {} x white", s.ratio());
+    }
+    assert!(dir.path().join("plan.json").exists());
+    assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e
+        .unwrap()
+        .file_name()
+        .to_string_lossy()
+        .ends_with(".ckpt")));
+}

@@ -25,7 +25,7 @@ run() { # problem binary what args...
   secs=$(sed -n 's/^process \([0-9.]*\) s$/\1/p' "$log")
   its=$(sed -n 's/.*, \([0-9]*\) iterations in .*/\1/p' "$log")
   ratio=$(sed -n 's/.*(\([0-9.]*\) x white noise).*/\1/p' "$log")
-  past=$(sed -n 's/.*s after it started (\([-+0-9.]*\) s).*/\1/p' "$log")
+  past=$(sed -n 's/.*s after \(it\|the process\) started (\([-+0-9.]*\) s).*/\2/p' "$log")
   printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$problem" "$binary" "$what" "$secs" "$its" "$ratio" "${past:--}" | tee -a "$tsv"
 }
 

@@ -65,6 +65,10 @@ pub struct RunOptions {
     pub vulkan: VulkanOptions,
     /// Checkpoints of the run; None: no checkpoints.
     pub checkpoint: Option<Checkpointing>,
+    /// The instant a time budget (`Until::Seconds`) counts from [default: when
+    /// `Run::start` begins]: a host's own start (its process's), or a plan's, so
+    /// that the budget covers the work before the run too.
+    pub budget_from: Option<Instant>,
 }
 
 impl RunOptions {
@@ -103,6 +107,12 @@ impl RunOptions {
     /// Checkpoints of the run, or none.
     pub fn checkpoint(mut self, checkpoint: Option<Checkpointing>) -> Self {
         self.checkpoint = checkpoint;
+        self
+    }
+
+    /// The instant a time budget counts from (see `budget_from`).
+    pub fn budget_from(mut self, from: Instant) -> Self {
+        self.budget_from = Some(from);
         self
     }
 }
@@ -188,6 +198,9 @@ const STEP_SECONDS: f64 = 0.5;
 /// A time budget's scale is updated at least this many times over it.
 const BUDGET_STEPS: f64 = 32.0;
 
+/// The least time the one-frame run of an animated start is given.
+const MIN_SPATIAL_SECONDS: f64 = 1e-3;
+
 /// The longest time budget a run takes (a day).
 const MAX_BUDGET_SECONDS: f64 = 86_400.0;
 
@@ -218,7 +231,8 @@ pub struct Run {
     /// Under `Until::Seconds`: when the first iteration began (the schedule's
     /// time runs from there to the deadline).
     iterating_since: Option<Instant>,
-    /// When `Run::start` began.
+    /// What a time budget counts from: `RunOptions::budget_from`, or when
+    /// `Run::start` began.
     begun: Instant,
 }
 
@@ -226,7 +240,7 @@ impl Run {
     /// Starts a run: checks the checkpoint rules (before any long work), picks the
     /// backend, and resumes from the checkpoint when asked.
     pub fn start(tile: Tile, settings: Settings, init: Option<&Mask>, options: RunOptions) -> Result<Self> {
-        let begun = Instant::now();
+        let begun = options.budget_from.unwrap_or_else(Instant::now);
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
@@ -248,7 +262,11 @@ impl Run {
         let animated;
         let init = match (init, &saved, settings.start) {
             (None, None, start) if start.animates(settings.until, &tile) => {
-                animated = animated_start(tile, &settings)?;
+                let left = match settings.until {
+                    Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
+                    _ => None,
+                };
+                animated = animated_start(tile, &settings, left)?;
                 Some(&animated)
             }
             _ => init,
@@ -383,8 +401,9 @@ impl Run {
         self.stepped(&costs, on)
     }
 
-    /// Wall time since `Run::start` began (its set-up and an animated start
-    /// included), in seconds: what a time budget counts.
+    /// Wall time since the budget's origin (`RunOptions::budget_from`, else
+    /// when `Run::start` began: its set-up and an animated start included), in
+    /// seconds: what a time budget counts.
     pub fn elapsed(&self) -> f64 {
         self.begun.elapsed().as_secs_f64()
     }
@@ -679,12 +698,14 @@ fn paced_iterations(pace: Option<f64>) -> u32 {
 /// The samples of `Start::Animated`: one frame of the tile optimized under the
 /// kernel's spatial filter, set in motion over the frames. On the CPU whatever
 /// the run's backend: one frame is small, and a device that fails later hands
-/// the run over from the same start.
-fn animated_start(tile: Tile, settings: &Settings) -> Result<Mask> {
+/// the run over from the same start. Under a time budget with `left` seconds
+/// of it left, the frame's run takes `SPATIAL_BUDGET_SHARE` of them.
+fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<Mask> {
     let flat = Tile::new(tile.width, tile.height, 1, tile.spp, tile.dims)?;
-    let until = match settings.until {
-        Until::Seconds(budget) => Until::Seconds(budget * SPATIAL_BUDGET_SHARE),
-        _ => Until::Iterations,
+    let until = match left {
+        // A budget already spent leaves the frame its set-up and one iteration.
+        Some(left) => Until::Seconds((left * SPATIAL_BUDGET_SHARE).max(MIN_SPATIAL_SECONDS)),
+        None => Until::Iterations,
     };
     let spatial = Settings::new(KernelSpec { temporal: Temporal::Spatial, ..settings.kernel }, settings.seed)
         .iterations(SPATIAL_ITERATIONS.min(settings.iterations))
@@ -828,6 +849,18 @@ pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
         _ => context_for(options, false)?,
     };
     Ok(RunOptions { context: Some(context), ..options.clone() })
+}
+
+/// Whether runs started with `options` (from `shared_context`) share one Vulkan
+/// device, so that `Run::run_together` steps them in one submission.
+pub fn shares_device(options: &RunOptions) -> bool {
+    #[cfg(feature = "vulkan")]
+    return options.context.is_some();
+    #[cfg(not(feature = "vulkan"))]
+    return {
+        let _ = options;
+        false
+    };
 }
 
 /// Runs the optimizer to the end on the CPU path, with no observer.

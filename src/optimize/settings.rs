@@ -89,13 +89,37 @@ pub enum Until {
     /// When a window's mean objective estimate is at most this (or the plateau
     /// schedule stops first).
     Objective(f64),
-    /// When this many seconds of wall time have passed since `Run::start` began
-    /// (setting up the backend included). The step scale follows the cosine
+    /// When this many seconds of wall time have passed since the budget's
+    /// origin (`RunOptions::budget_from`, else when `Run::start` began: setting
+    /// up the backend included). The step scale follows the cosine
     /// schedule over the time left after set-up, and no iteration starts that
     /// the pace so far says would end past the budget, so a run ends past it by
     /// at most about one iteration. `iterations` caps it. How far it gets
     /// depends on the machine, so it is not reproducible bit for bit.
     Seconds(f64),
+}
+
+/// A time budget written as `1s`, `500ms`, `2m` or a number of seconds, in
+/// seconds; the error ("must be ...") follows the name of what was read.
+///
+/// ```
+/// use fsot::optimize::settings::parse_budget;
+/// assert_eq!(parse_budget("500ms"), Ok(0.5));
+/// assert_eq!(parse_budget("2m"), Ok(120.0));
+/// assert!(parse_budget("-1s").is_err());
+/// ```
+pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
+    let t = text.trim();
+    let (number, unit) = match () {
+        _ if t.ends_with("ms") => (&t[..t.len() - 2], 1e-3),
+        _ if t.ends_with('s') => (&t[..t.len() - 1], 1.0),
+        _ if t.ends_with('m') => (&t[..t.len() - 1], 60.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * unit),
+        _ => Err(format!("must be a time above zero such as 1s, 500ms or 2m, got {text:?}")),
+    }
 }
 
 impl Until {

@@ -16,6 +16,10 @@
 //! size = "128x128x64"
 //! reading = "scalar"  # "scalar": a 1-D mask per dimension; "vector": masks of pairs
 //!
+//! [plan]              # optional
+//! budget = "10s"      # make every mask within this wall time (from the start),
+//!                     # instead of until iterations no longer pay
+//!
 //! [[group]]           # one per sampling decision, in the order the renderer consumes them
 //! name = "pick"       # unique, [a-z0-9_]
 //! dims = 1            # 1 to 8
@@ -87,6 +91,8 @@ pub struct Scene {
     pub size: Option<(usize, usize, usize)>,
     /// How decisions of more than one dimension read masks, when the file says.
     pub reading: Option<Reading>,
+    /// Seconds of wall time to make every mask in, when the file gives them.
+    pub budget: Option<f64>,
     /// In the order the renderer consumes them.
     pub groups: Vec<Group>,
 }
@@ -96,6 +102,7 @@ pub struct Scene {
 struct FileScene {
     display: Option<Spanned<FileDisplay>>,
     tile: Option<FileTile>,
+    plan: Option<FilePlan>,
     #[serde(default)]
     group: Vec<Spanned<FileGroup>>,
 }
@@ -119,6 +126,12 @@ struct FileDisplay {
 struct FileTile {
     size: Option<Spanned<String>>,
     reading: Option<Spanned<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilePlan {
+    budget: Option<Spanned<toml::Value>>,
 }
 
 #[derive(Deserialize)]
@@ -180,8 +193,23 @@ impl Scene {
             }),
             None => None,
         };
-        Ok(Self { name: name.to_string(), display, size, reading, groups })
+        let budget = match file.plan.as_ref().and_then(|p| p.budget.as_ref()) {
+            Some(b) => Some(check_budget(b.get_ref()).map_err(|e| at(b.span(), e))?),
+            None => None,
+        };
+        Ok(Self { name: name.to_string(), display, size, reading, budget, groups })
     }
+}
+
+/// `budget`: a time as text (`"10s"`, `"500ms"`, `"2m"`) or a number of seconds.
+fn check_budget(v: &toml::Value) -> std::result::Result<f64, String> {
+    let text = match v {
+        toml::Value::String(t) => t.clone(),
+        toml::Value::Integer(i) => i.to_string(),
+        toml::Value::Float(x) => x.to_string(),
+        other => other.to_string(),
+    };
+    crate::optimize::settings::parse_budget(&text).map_err(|e| format!("budget {e}"))
 }
 
 fn check_display(

@@ -132,6 +132,10 @@ pub struct Plan {
     pub estimated_seconds: f64,
     /// How the estimates were made, in words.
     pub cost_model: String,
+    /// Seconds of wall time to make every mask in (the scene's `[plan]
+    /// budget`), from the start of `Plan::execute` or `RunOptions::budget_from`;
+    /// None: each mask runs until iterations no longer pay.
+    pub budget: Option<f64>,
 }
 
 /// The kernel a display calls for, and why.
@@ -409,7 +413,33 @@ impl Plan {
                 reason,
             });
         }
+        if let Some(budget) = scene.budget {
+            // Under a budget each mask's share of it is its share of the work
+            // per iteration, so every mask gets about as many iterations.
+            let tiles: Vec<Option<Tile>> = masks
+                .iter()
+                .map(|m| (!m.white).then(|| Tile::new(w, h, t, m.spp, m.dims)).transpose())
+                .collect::<Result<_>>()?;
+            let shares = budget_shares(budget, &tiles);
+            for ((m, tile), share) in masks.iter_mut().zip(&tiles).zip(shares) {
+                if let Some(tile) = tile {
+                    let per = cost.seconds_per_iteration(tile);
+                    m.estimated_seconds = share;
+                    m.estimated_iterations = if per > 0.0 { (share / per) as u32 } else { 0 };
+                }
+            }
+        }
         let estimated_seconds = masks.iter().map(|m| m.estimated_seconds).sum();
+        let cost_model = match scene.budget {
+            Some(b) => format!(
+                "a budget of {b} s, shared by the masks in proportion to their work per iteration; iterations at {:.3e} s per point and iteration at d = 2, measured here, times the scaling suite's factors for d and spp",
+                cost.seconds_per_point
+            ),
+            None => format!(
+                "{:.3e} s per point and iteration at d = 2, measured here, times the scaling suite's factors for d and spp; {EXPECTED_ITERATIONS} iterations each (where the plateau rule stopped on the measured tiles)",
+                cost.seconds_per_point
+            ),
+        };
         Ok(Self {
             scene: scene.name.clone(),
             tile: [w, h, t],
@@ -426,14 +456,13 @@ impl Plan {
             groups,
             masks,
             estimated_seconds,
-            cost_model: format!(
-                "{:.3e} s per point and iteration at d = 2, measured here, times the scaling suite's factors for d and spp; {EXPECTED_ITERATIONS} iterations each (where the plateau rule stopped on the measured tiles)",
-                cost.seconds_per_point
-            ),
+            cost_model,
+            budget: scene.budget,
         })
     }
 
-    /// The settings of an optimized mask of the plan.
+    /// The settings of an optimized mask of the plan (under a budget its run
+    /// ends at the time `Plan::execute` gives it).
     pub fn settings(&self, mask: &PlannedMask) -> Settings {
         let mut s = Settings::new(self.spec, mask.seed);
         s.iterations = DEFAULT_CAP;
@@ -526,6 +555,10 @@ impl Plan {
     /// submission; on the CPU, one after the other. Each checkpoints to
     /// `dir/.NAME.ckpt` (every `every` iterations and when cancelled); with
     /// `resume`, masks already written are kept and checkpoints are continued.
+    /// Under a budget (`Plan::budget`, counted from `options.budget_from` or
+    /// from this call) the runs take no checkpoints: on one device they all end
+    /// at the budget's end; on the CPU each starts as the one before it ends
+    /// and ends at its share of what is left of the budget.
     #[allow(clippy::too_many_arguments)]
     pub fn execute(
         &self,
@@ -536,13 +569,12 @@ impl Plan {
         cancel: &CancelFlag,
         on: &mut dyn FnMut(PlanEvent),
     ) -> Result<Outcome> {
+        let origin = options.budget_from.unwrap_or_else(Instant::now);
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
         let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
-        // The runs to make: the mask's index, its file reserved, the run.
-        let mut pending: Vec<(usize, AtomicFile)> = Vec::new();
-        let mut runs: Vec<Run> = Vec::new();
-        let mut shared: Option<RunOptions> = None;
+        // The masks to make: the mask's index, its file reserved.
+        let mut todo: Vec<(usize, AtomicFile)> = Vec::new();
         for (index, m) in self.masks.iter().enumerate() {
             let path = dir.join(&m.file);
             let out = AtomicFile::create(&path)?;
@@ -554,40 +586,114 @@ impl Plan {
                 made[index] = Some(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
                 continue;
             }
-            let settings = self.settings(m);
             if resume {
-                if let Some(done) = already_made(&path, &tile, &settings) {
+                if let Some(done) = already_made(&path, &tile, &self.settings(m)) {
                     made[index] = Some(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
                     continue;
                 }
             }
-            // One Vulkan device for the plan, opened once.
-            let options = match &shared {
-                Some(o) => o,
-                None => shared.insert(crate::optimize::run::shared_context(options)?),
-            };
-            let checkpoint = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
-            let resume_this = resume && checkpoint.exists();
-            let run_options = RunOptions {
-                checkpoint: Some(Checkpointing { path: checkpoint, every, resume: resume_this }),
-                ..options.clone()
-            };
-            let run = Run::start(tile, settings, None, run_options)?;
-            on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
-            pending.push((index, out));
-            runs.push(run);
+            todo.push((index, out));
         }
-        let indices: Vec<usize> = pending.iter().map(|(i, _)| *i).collect();
-        let mut outs: Vec<Option<AtomicFile>> = pending.into_iter().map(|(_, out)| Some(out)).collect();
-        // Each mask is written as its run ends, so a cancel keeps what is made.
+        if !todo.is_empty() {
+            // One Vulkan device for the plan, opened once.
+            let options = RunOptions { budget_from: Some(origin), ..crate::optimize::run::shared_context(options)? };
+            let together = crate::optimize::run::shares_device(&options);
+            let indices: Vec<usize> = todo.iter().map(|t| t.0).collect();
+            let ends = self.run_ends(&indices, origin, together)?;
+            // Side by side, or (under a budget, on the CPU) one after the other,
+            // each started as the one before it ends.
+            let batches: Vec<Vec<usize>> = match (self.budget, together) {
+                (Some(_), false) => (0..indices.len()).map(|k| vec![k]).collect(),
+                _ => vec![(0..indices.len()).collect()],
+            };
+            let mut outs: Vec<Option<AtomicFile>> = todo.into_iter().map(|(_, out)| Some(out)).collect();
+            for batch in batches {
+                let mut runs = Vec::new();
+                for &k in &batch {
+                    let m = &self.masks[indices[k]];
+                    let run = self.start_run(dir, m, ends[k], &options, every, resume)?;
+                    on(PlanEvent::Start { index: indices[k], file: &m.file, iteration: run.iteration() });
+                    runs.push(run);
+                }
+                let batch: Vec<usize> = batch.iter().map(|&k| indices[k]).collect();
+                let outcome = self.run_batch(&mut runs, &batch, &mut outs, &indices, &mut made, cancel, on)?;
+                if let Outcome::Cancelled { .. } = outcome {
+                    return Ok(outcome);
+                }
+            }
+        }
+        let made: Vec<Made> = made.into_iter().flatten().collect();
+        plan_file.commit(self.document(&made)?.as_bytes())?;
+        Ok(Outcome::Reached)
+    }
+
+    /// Where each run of the masks `indices` ends, in seconds from `origin`,
+    /// under the plan's budget: on one device every run at its end; on the CPU
+    /// each at the end of its share of what is left of it. None: no budget.
+    fn run_ends(&self, indices: &[usize], origin: Instant, together: bool) -> Result<Vec<Option<f64>>> {
+        let Some(budget) = self.budget else { return Ok(vec![None; indices.len()]) };
+        if together {
+            return Ok(vec![Some(budget); indices.len()]);
+        }
+        let spent = origin.elapsed().as_secs_f64();
+        let tiles: Vec<Option<Tile>> =
+            indices.iter().map(|&i| self.tile(&self.masks[i]).map(Some)).collect::<Result<_>>()?;
+        let mut end = spent.max(f64::MIN_POSITIVE);
+        Ok(budget_shares((budget - spent).max(0.0), &tiles)
+            .into_iter()
+            .map(|share| {
+                end += share;
+                Some(end)
+            })
+            .collect())
+    }
+
+    /// Starts the run of mask `m`: ending at `end` seconds from the budget's
+    /// origin, or (no budget) by the plateau rule with checkpoints into `dir`.
+    fn start_run(
+        &self,
+        dir: &Path,
+        m: &PlannedMask,
+        end: Option<f64>,
+        options: &RunOptions,
+        every: u32,
+        resume: bool,
+    ) -> Result<Run> {
+        let mut settings = self.settings(m);
+        let mut options = options.clone();
+        match end {
+            Some(seconds) => settings.until = Until::Seconds(seconds),
+            None => {
+                let path = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
+                let resume = resume && path.exists();
+                options.checkpoint = Some(Checkpointing { path, every, resume });
+            }
+        }
+        Run::start(self.tile(m)?, settings, None, options)
+    }
+
+    /// Runs `runs` (of the masks `batch`) side by side to their ends, writing
+    /// each mask into its reserved file `outs[k]` (k: its place in `indices`) as
+    /// its run ends, so that a cancel keeps what is made.
+    #[allow(clippy::too_many_arguments)]
+    fn run_batch(
+        &self,
+        runs: &mut [Run],
+        batch: &[usize],
+        outs: &mut [Option<AtomicFile>],
+        indices: &[usize],
+        made: &mut [Option<Made>],
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(PlanEvent),
+    ) -> Result<Outcome> {
         // (Both observers speak through `on`, never at once.)
         let on = std::cell::RefCell::new(on);
-        let outcome = Run::run_together(
-            &mut runs,
+        Run::run_together(
+            runs,
             cancel,
-            &mut |r, event| (*on.borrow_mut())(PlanEvent::Run { index: indices[r], event }),
+            &mut |r, event| (*on.borrow_mut())(PlanEvent::Run { index: batch[r], event }),
             &mut |r, run| {
-                let index = indices[r];
+                let index = batch[r];
                 let file = &self.masks[index].file;
                 // With Vulkan's validation layer on, any message means a fault: stop.
                 if let Some(first) = run.backend().report().validation_messages.first() {
@@ -595,20 +701,18 @@ impl Plan {
                         "the Vulkan validation layer reported, making {file}: {first}"
                     )));
                 }
-                let out = outs[r].take().ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
+                let k = indices.iter().position(|&i| i == index).unwrap_or(usize::MAX);
+                let out = outs
+                    .get_mut(k)
+                    .and_then(Option::take)
+                    .ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
                 let (iterations, seconds) = (run.iteration(), run.seconds());
                 crate::io::exr::write(&run.finish_in_place()?, out)?;
                 (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });
                 made[index] = Some(Made { file: file.clone(), iterations, seconds });
                 Ok(())
             },
-        )?;
-        if let Outcome::Cancelled { .. } = outcome {
-            return Ok(outcome);
-        }
-        let made: Vec<Made> = made.into_iter().flatten().collect();
-        plan_file.commit(self.document(&made)?.as_bytes())?;
-        Ok(Outcome::Reached)
+        )
     }
 
     /// `plan.json` with what making each mask took.
@@ -645,6 +749,15 @@ impl Plan {
         text.push('\n');
         Ok(text)
     }
+}
+
+/// A budget of `seconds` shared by masks of `tiles` (None: nothing to make) in
+/// proportion to their work per iteration.
+fn budget_shares(seconds: f64, tiles: &[Option<Tile>]) -> Vec<f64> {
+    let unit = CostModel { seconds_per_point: 1.0, backend: String::new() };
+    let work: Vec<f64> = tiles.iter().map(|t| t.as_ref().map_or(0.0, |t| unit.seconds_per_iteration(t))).collect();
+    let all: f64 = work.iter().sum();
+    work.iter().map(|w| if all > 0.0 { seconds * w / all } else { 0.0 }).collect()
 }
 
 /// The iterations of a mask already written by this very plan (same tile, seed

@@ -71,6 +71,10 @@ struct PlanArgs {
     /// first discrete GPU].
     #[arg(long)]
     device: Option<String>,
+    /// Plan every mask within this wall time (1s, 500ms, 2m) instead of the
+    /// scene's [plan] budget, or without one, until iterations no longer pay.
+    #[arg(long)]
+    budget: Option<String>,
 }
 
 #[derive(Args)]
@@ -363,9 +367,11 @@ struct OptimizeArgs {
     #[arg(long)]
     until: Option<String>,
     /// The best mask reachable in this wall time (`1s`, `500ms`, `2.5s`, `1m`),
-    /// counted from the run's start (setting up the backend included): the step
-    /// size follows the cosine schedule over the time, and the run ends at most
-    /// about one iteration past it. --iterations caps it [default: 10000].
+    /// counted from the process's start (setting up the backend included): the
+    /// step size follows the cosine schedule over the time, and the run ends at
+    /// most about one iteration past it. --iterations caps it [default: 10000].
+    /// With --scene: every mask of the plan within it (instead of the scene's
+    /// [plan] budget).
     #[arg(long, conflicts_with = "until", allow_negative_numbers = true)]
     budget: Option<String>,
     /// Where the optimizer starts without --init (--init takes a mask of the
@@ -500,7 +506,15 @@ struct ScoreArgs {
     slices: u32,
 }
 
+/// When the process started (as `main` began): what a time budget counts from.
+static STARTED: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+
+fn process_start() -> Instant {
+    *STARTED.get_or_init(Instant::now)
+}
+
 fn main() -> ExitCode {
+    process_start();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Optimize(args) => cmd::optimize::optimize(*args),

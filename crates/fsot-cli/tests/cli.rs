@@ -369,6 +369,19 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
     for f in ["pick.exr", "deep.exr", "plan.json"] {
         assert!(dir.path().join("masks").join(f).exists(), "{f}");
     }
+    // Under a budget: the plan says it, the run reports how it kept it.
+    let plan = fsot(&["plan", "s.toml", "--backend", "cpu", "--budget", "1s"], dir.path());
+    let text = String::from_utf8_lossy(&plan.stdout);
+    assert!(text.contains("budget: 1 s") && text.contains("total: about 1.0 s"), "{text}");
+    let o = fsot(
+        &["optimize", "--scene", "s.toml", "--out", "b", "--backend", "cpu", "--budget", "1s"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("budget 1 s: the masks were made"), "{out}");
+    let mask = fsot::io::exr::read(&dir.path().join("b").join("pick.exr")).unwrap();
+    assert!(mask.meta("budget_seconds").is_some(), "{:?}", mask.meta);
     // KTX2 beside each mask, in the format asked for.
     let o = fsot(
         &["optimize", "--scene", "s.toml", "--out", "k", "--backend", "cpu", "--ktx2-format", "r8g8_unorm"],
@@ -388,6 +401,7 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--budget", "soon"], "--budget must be a time"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--ktx2-format", "r8_unorm"], "d = 2"),
         (&["plan", "bad.toml"], "line 4"),
     ];

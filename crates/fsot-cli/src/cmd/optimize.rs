@@ -81,8 +81,6 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         spec.describe(),
         run.backend().slices_per_iteration()
     );
-    let start_samples = fsot::optimize::settings::initial_samples(&tile, &settings, init.as_ref())?;
-    let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
     let bar = iteration_bar(iterations, run.iteration());
     // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
     let cancel = cmd::env::interrupt_flag()?;
@@ -126,6 +124,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let since_start = run.elapsed();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let mask = run.finish()?;
+    // Scored after the run, so that a time budget is the run's alone.
+    let start_samples = fsot::optimize::settings::initial_samples(&tile, &settings, init.as_ref())?;
+    let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
     let after = score(&mask, spec, SCORE_SLICES);
     file_kind.write(&mask, out)?;
     for (kind, file) in also {
@@ -147,7 +148,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     );
     if let Until::Seconds(budget) = until {
         println!(
-            "budget {budget} s: the run ended {since_start:.3} s after it started ({:+.3} s), set-up and start included",
+            "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s)",
             since_start - budget
         );
     }
@@ -169,20 +170,8 @@ fn parse_until(text: Option<&str>) -> Result<Until> {
 }
 
 /// `--budget`: a wall time, `1s`, `500ms`, `2.5` (seconds) or `1m`.
-fn parse_seconds(text: &str) -> Result<f64> {
-    let t = text.trim();
-    let (number, unit) = match () {
-        _ if t.ends_with("ms") => (&t[..t.len() - 2], 1e-3),
-        _ if t.ends_with('s') => (&t[..t.len() - 1], 1.0),
-        _ if t.ends_with('m') => (&t[..t.len() - 1], 60.0),
-        _ => (t, 1.0),
-    };
-    match number.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * unit),
-        _ => Err(Error::invalid(format!(
-            "--budget must be a time above zero such as 1s, 500ms or 2m, got {text:?}"
-        ))),
-    }
+pub(crate) fn parse_seconds(text: &str) -> Result<f64> {
+    fsot::optimize::settings::parse_budget(text).map_err(|e| Error::invalid(format!("--budget {e}")))
 }
 
 /// The library run's options from the flags and the environment.
@@ -206,7 +195,8 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         .device(env::device(args.device.clone()))
         .validation(env::validation())
         .vulkan(vulkan)
-        .checkpoint(checkpoint))
+        .checkpoint(checkpoint)
+        .budget_from(crate::process_start()))
 }
 
 /// The progress bar of a run (hidden when stderr is not a terminal).

@@ -6,7 +6,10 @@ use fsot::scene::file::Scene;
 use fsot::scene::plan::{CostModel, Plan, PlanEvent};
 
 pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
-    let scene = Scene::read(&args.scene)?;
+    let mut scene = Scene::read(&args.scene)?;
+    if let Some(text) = &args.budget {
+        scene.budget = Some(super::optimize::parse_seconds(text)?);
+    }
     let options = RunOptions::default()
         .backend(args.backend.choice())
         .device(env::device(args.device.clone()))
@@ -63,6 +66,9 @@ pub(crate) fn describe(plan: &Plan) -> String {
         );
     }
     s += &format!("  total: about {:.1} s ({})\n", plan.estimated_seconds, plan.cost_model);
+    if let Some(b) = plan.budget {
+        s += &format!("  budget: {b} s from the start, each mask ending at its share (no checkpoints)\n");
+    }
     s
 }
 
@@ -80,7 +86,6 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             args.iterations.is_some() || args.until.is_some(),
             "--iterations and --until (each mask stops when iterations no longer pay)",
         ),
-        (args.budget.is_some(), "--budget (a time budget is for one mask)"),
         (!args.also.is_empty(), "--also (each mask is written into the folder --out)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
@@ -95,12 +100,16 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     if args.checkpoint_every == 0 {
         return Err(Error::invalid("--checkpoint-every must be at least 1"));
     }
-    let scene = Scene::read(path)?;
+    let mut scene = Scene::read(path)?;
+    if let Some(text) = &args.budget {
+        scene.budget = Some(super::optimize::parse_seconds(text)?);
+    }
     let options = RunOptions::default()
         .backend(args.backend.choice())
         .device(env::device(args.device.clone()))
         .validation(env::validation())
-        .vulkan(VulkanOptions::default().deterministic(args.deterministic));
+        .vulkan(VulkanOptions::default().deterministic(args.deterministic))
+        .budget_from(crate::process_start());
     let cost = CostModel::calibrate(&options)?;
     let plan = Plan::new(&scene, &cost)?;
     eprint!("{}", describe(&plan));
@@ -139,6 +148,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             _ => {}
         })?;
     bar.finish_and_clear();
+    let ended = crate::process_start().elapsed().as_secs_f64();
     if let Outcome::Cancelled { iteration, .. } = outcome {
         eprintln!(
             "interrupted at iteration {iteration} of a mask: its state is saved in {}; continue with the same command and --resume",
@@ -155,5 +165,11 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     }
     let also = if args.ktx2_format.is_some() { " (each also as KTX2)" } else { "" };
     println!("wrote {} masks{also} and plan.json into {}", plan.masks.len(), args.out.display());
+    if let Some(budget) = plan.budget {
+        println!(
+            "budget {budget} s: the masks were made {ended:.3} s after the process started ({:+.3} s)",
+            ended - budget
+        );
+    }
     Ok(())
 }
