@@ -338,26 +338,3 @@ fn a_time_budget_that_is_not_a_positive_time_or_that_asks_for_checkpoints_is_ref
     let e = Run::start(tile, s, None, options).err().unwrap();
     assert!(e.to_string().contains("takes no checkpoints"), "{e}");
 }
-
-#[test]
-fn the_default_start_animates_a_budgeted_run_of_two_or_more_dimensions_only() {
-    use fsot::{Start, Until};
-    let tile = |frames, dims| Tile::new(16, 16, frames, 1, dims).unwrap();
-    let budget = Until::Seconds(1.0);
-    assert!(Start::Auto.animates(budget, &tile(8, 2)) && Start::Auto.animates(budget, &tile(8, 3)));
-    assert!(!Start::Auto.animates(budget, &tile(8, 1)), "d = 1: every pixel would move by the same step");
-    assert!(!Start::Auto.animates(Until::Iterations, &tile(8, 2)), "a fixed count starts white");
-    assert!(!Start::Auto.animates(budget, &tile(1, 2)), "one frame has nothing to animate");
-    assert!(
-        Start::Animated.animates(Until::Iterations, &tile(8, 1))
-            && !Start::White.animates(budget, &tile(8, 2))
-    );
-    // The mask says how it started.
-    for (dims, start) in [(1, None), (2, Some("animated"))] {
-        let s = settings(100_000).until(budget);
-        let mut run =
-            Run::start(tile(4, dims), s, None, RunOptions::default().backend(BackendChoice::Cpu)).unwrap();
-        run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
-        assert_eq!(run.finish().unwrap().meta("start"), start, "d = {dims}");
-    }
-}

@@ -61,12 +61,8 @@ pub enum Start {
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
     Animated,
-    /// `Animated` under a time budget (`Until::Seconds`) at d >= 2, where the
-    /// short run gains most from it, `White` otherwise: the default. At d = 1
-    /// every pixel's value moves by the same step each frame, so two readings
-    /// of one scalar mask (a 2-D decision read at two offsets) move together:
-    /// judged in `fsot eval --quick`, a 128x128x64 scalar mask from white
-    /// noise scores better than one from the animated start at the same budget.
+    /// `Animated` under a time budget (`Until::Seconds`), where the short run
+    /// gains most from it, `White` otherwise: the default.
     Auto,
 }
 
@@ -76,7 +72,7 @@ impl Start {
         let on = match self {
             Start::White => false,
             Start::Animated => true,
-            Start::Auto => matches!(until, Until::Seconds(_)) && tile.dims >= 2,
+            Start::Auto => matches!(until, Until::Seconds(_)),
         };
         on && tile.frames > 1
     }

@@ -235,7 +235,7 @@ impl KernelName {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum StartArg {
-    /// `animated` with --budget at d >= 2, `white` otherwise.
+    /// `animated` with --budget, `white` otherwise.
     Auto,
     /// One frame optimized under the kernel's spatial filter, set in motion over
     /// the frames by the R_d sequence (a low-discrepancy sequence at each pixel).
