@@ -150,10 +150,17 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     bar.finish_and_clear();
     let ended = crate::process_start().elapsed().as_secs_f64();
     if let Outcome::Cancelled { iteration, .. } = outcome {
-        eprintln!(
-            "interrupted at iteration {iteration} of a mask: its state is saved in {}; continue with the same command and --resume",
-            args.out.display()
-        );
+        match plan.budget {
+            // Runs under a budget take no checkpoints.
+            Some(_) => eprintln!(
+                "interrupted at iteration {iteration} of a mask: the masks already made are in {}; the same command with --resume keeps them and makes the rest",
+                args.out.display()
+            ),
+            None => eprintln!(
+                "interrupted at iteration {iteration} of a mask: its state is saved in {}; continue with the same command and --resume",
+                args.out.display()
+            ),
+        }
         return Err(Error::Interrupted);
     }
     for (m, format) in plan.masks.iter().zip(&ktx2) {
