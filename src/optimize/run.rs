@@ -853,14 +853,15 @@ pub fn shared_context(options: &RunOptions) -> Result<RunOptions> {
 
 /// Whether runs started with `options` (from `shared_context`) share one Vulkan
 /// device, so that `Run::run_together` steps them in one submission.
+#[cfg(feature = "vulkan")]
 pub fn shares_device(options: &RunOptions) -> bool {
-    #[cfg(feature = "vulkan")]
-    return options.context.is_some();
-    #[cfg(not(feature = "vulkan"))]
-    return {
-        let _ = options;
-        false
-    };
+    options.context.is_some()
+}
+
+/// Without Vulkan no runs share a device.
+#[cfg(not(feature = "vulkan"))]
+pub fn shares_device(_options: &RunOptions) -> bool {
+    false
 }
 
 /// Runs the optimizer to the end on the CPU path, with no observer.

@@ -573,9 +573,11 @@ impl Plan {
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
         let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
-        // The masks to make: the mask's index, its file reserved.
-        let mut todo: Vec<(usize, AtomicFile)> = Vec::new();
+        // The masks to make (their indices) and, by index, their files reserved.
+        let mut todo: Vec<usize> = Vec::new();
+        let mut outs: Vec<Option<AtomicFile>> = Vec::new();
         for (index, m) in self.masks.iter().enumerate() {
+            outs.push(None);
             let path = dir.join(&m.file);
             let out = AtomicFile::create(&path)?;
             let tile = self.tile(m)?;
@@ -592,31 +594,31 @@ impl Plan {
                     continue;
                 }
             }
-            todo.push((index, out));
+            todo.push(index);
+            outs[index] = Some(out);
         }
         if !todo.is_empty() {
             // One Vulkan device for the plan, opened once.
             let options = RunOptions { budget_from: Some(origin), ..crate::optimize::run::shared_context(options)? };
             let together = crate::optimize::run::shares_device(&options);
-            let indices: Vec<usize> = todo.iter().map(|t| t.0).collect();
-            let ends = self.run_ends(&indices, origin, together)?;
+            let ends = self.run_ends(&todo, origin, together)?;
             // Side by side, or (under a budget, on the CPU) one after the other,
             // each started as the one before it ends.
-            let batches: Vec<Vec<usize>> = match (self.budget, together) {
-                (Some(_), false) => (0..indices.len()).map(|k| vec![k]).collect(),
-                _ => vec![(0..indices.len()).collect()],
+            let batches: Vec<&[usize]> = match (self.budget, together) {
+                (Some(_), false) => todo.chunks(1).collect(),
+                _ => vec![&todo[..]],
             };
-            let mut outs: Vec<Option<AtomicFile>> = todo.into_iter().map(|(_, out)| Some(out)).collect();
+            let mut first = 0; // the place in `todo` (and `ends`) of the batch's first mask
             for batch in batches {
                 let mut runs = Vec::new();
-                for &k in &batch {
-                    let m = &self.masks[indices[k]];
-                    let run = self.start_run(dir, m, ends[k], &options, every, resume)?;
-                    on(PlanEvent::Start { index: indices[k], file: &m.file, iteration: run.iteration() });
+                for (&index, &end) in batch.iter().zip(&ends[first..]) {
+                    let m = &self.masks[index];
+                    let run = self.start_run(dir, m, end, &options, every, resume)?;
+                    on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
                     runs.push(run);
                 }
-                let batch: Vec<usize> = batch.iter().map(|&k| indices[k]).collect();
-                let outcome = self.run_batch(&mut runs, &batch, &mut outs, &indices, &mut made, cancel, on)?;
+                first += batch.len();
+                let outcome = self.run_batch(&mut runs, batch, &mut outs, &mut made, cancel, on)?;
                 if let Outcome::Cancelled { .. } = outcome {
                     return Ok(outcome);
                 }
@@ -673,15 +675,14 @@ impl Plan {
     }
 
     /// Runs `runs` (of the masks `batch`) side by side to their ends, writing
-    /// each mask into its reserved file `outs[k]` (k: its place in `indices`) as
-    /// its run ends, so that a cancel keeps what is made.
+    /// each mask into its reserved file (`outs`, by mask index) as its run
+    /// ends, so that a cancel keeps what is made.
     #[allow(clippy::too_many_arguments)]
     fn run_batch(
         &self,
         runs: &mut [Run],
         batch: &[usize],
         outs: &mut [Option<AtomicFile>],
-        indices: &[usize],
         made: &mut [Option<Made>],
         cancel: &CancelFlag,
         on: &mut dyn FnMut(PlanEvent),
@@ -701,11 +702,7 @@ impl Plan {
                         "the Vulkan validation layer reported, making {file}: {first}"
                     )));
                 }
-                let k = indices.iter().position(|&i| i == index).unwrap_or(usize::MAX);
-                let out = outs
-                    .get_mut(k)
-                    .and_then(Option::take)
-                    .ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
+                let out = outs[index].take().ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
                 let (iterations, seconds) = (run.iteration(), run.seconds());
                 crate::io::exr::write(&run.finish_in_place()?, out)?;
                 (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });

@@ -6,10 +6,7 @@ use fsot::scene::file::Scene;
 use fsot::scene::plan::{CostModel, Plan, PlanEvent};
 
 pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
-    let mut scene = Scene::read(&args.scene)?;
-    if let Some(text) = &args.budget {
-        scene.budget = Some(super::optimize::parse_seconds(text)?);
-    }
+    let scene = read_scene(&args.scene, args.budget.as_deref())?;
     let options = RunOptions::default()
         .backend(args.backend.choice())
         .device(env::device(args.device.clone()))
@@ -22,6 +19,15 @@ pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
         print!("{}", describe(&plan));
     }
     Ok(())
+}
+
+/// The scene file, with `--budget` (when given) in place of its own budget.
+fn read_scene(path: &std::path::Path, budget: Option<&str>) -> Result<Scene> {
+    let mut scene = Scene::read(path)?;
+    if let Some(text) = budget {
+        scene.budget = Some(super::optimize::parse_seconds(text)?);
+    }
+    Ok(scene)
 }
 
 /// The plan in words.
@@ -100,10 +106,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     if args.checkpoint_every == 0 {
         return Err(Error::invalid("--checkpoint-every must be at least 1"));
     }
-    let mut scene = Scene::read(path)?;
-    if let Some(text) = &args.budget {
-        scene.budget = Some(super::optimize::parse_seconds(text)?);
-    }
+    let scene = read_scene(path, args.budget.as_deref())?;
     let options = RunOptions::default()
         .backend(args.backend.choice())
         .device(env::device(args.device.clone()))
