@@ -1,5 +1,6 @@
 """One method against others in `fsot eval` results.json: per display, TAA
-setting and scene, the method's JOD, pRelMSE and FLIP (after TAA, where
+setting and scene, the method's JOD, pRelMSE (the column's sigma, and the
+display's eye where measured) and FLIP (after TAA, where
 measured) beside each other method's, and the verdict: ahead or behind where
 the 95% intervals do not overlap, else level.
 
@@ -28,6 +29,8 @@ def main():
             print(f"\n{method} on {display}, {'with' if taa else 'without'} TAA\n")
             head = ["scene", f"{method} JOD"] + [f"{o} JOD" for o in others]
             judges = [("jod", "jod_ci95", True, "JOD"), ("prelmse", "prelmse_ci95", False, "pRelMSE")]
+            if any(r.get("prelmse_display") is not None for r in at.values()):
+                judges.append(("prelmse_display", "prelmse_display_ci95", False, "pRelMSE (display's eye)"))
             if taa and any(r.get("flip") is not None for r in at.values()):
                 judges.append(("flip", "flip_ci95", False, "FLIP"))
             head += [f"vs {o}: {j[3]}" for o in others for j in judges]

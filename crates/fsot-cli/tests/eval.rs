@@ -48,8 +48,10 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     for r in &records {
         assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
         assert!(r.relmse.is_finite() && r.relmse > 0.0, "{r:?}");
-        // The eye averages noise away: what it sees is less than the raw error.
+        // The eye averages noise away: what it sees is less than the raw error,
+        // by the column's sigma and by the display's eye.
         assert!(r.prelmse < r.relmse, "{r:?}");
+        assert!(r.prelmse_display > 0.0 && r.prelmse_display < r.relmse, "{r:?}");
         // Two seeds each: finite intervals; ColorVideoVDP sees a difference.
         assert_eq!(r.seeds, 2, "{r:?}");
         assert!(r.prelmse_ci95.is_finite() && r.relmse_ci95.is_finite() && r.jod_ci95.is_finite(), "{r:?}");
@@ -72,6 +74,8 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
         "\"jod\"",
         "\"jod_ci95\"",
         "\"prelmse_ci95\"",
+        "\"prelmse_display\"",
+        "\"prelmse_display_ci95\"",
         "\"seeds\"",
     ] {
         assert_eq!(json.matches(key).count(), records.len(), "{key}");
@@ -90,6 +94,7 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
     let md = to_markdown(&records);
     assert!(md.contains("| light-pick |") && md.contains("with TAA") && md.contains("without TAA"));
     assert!(md.contains("### JOD on standard_4k, sigma 2.1, with TAA") && md.contains(" +- "));
+    assert!(md.contains("### pRelMSE on standard_4k, the display's eye, without TAA (masks of sigma 2.1;"));
     // A second run reads the masks and references from the cache: same figures.
     let again =
         run_eval(&tiny(), &[2.1], &scenes, dir.path(), None, &[], Default::default(), |_| {}).unwrap();
@@ -149,6 +154,7 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
                 records.iter().find(|r| r.scene == scene && r.method == "white" && r.taa == taa).unwrap();
             assert!(r.prelmse.is_finite() && r.prelmse > 0.0, "{r:?}");
             assert!(r.prelmse < white.prelmse, "{r:?} against {white:?}");
+            assert!(r.prelmse_display < white.prelmse_display, "{r:?} against {white:?}");
         }
     }
     // defocus-motion: a 2-D lens mask and a 1-D time mask; light-pick: one 1-D mask.
@@ -241,6 +247,8 @@ fn record(
         prelmse_ci95,
         relmse: 2.0 * prelmse,
         relmse_ci95: 0.0,
+        prelmse_display: prelmse,
+        prelmse_display_ci95: prelmse_ci95,
         jod,
         jod_ci95,
         flip: None,
@@ -261,9 +269,11 @@ fn a_winner_is_bold_only_where_its_interval_clears_the_runner_ups() {
     ];
     let md = to_markdown(&records);
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| soft-shadow |")).collect();
-    assert_eq!(rows.len(), 2, "{md}");
+    assert_eq!(rows.len(), 3, "{md}");
+    // pRelMSE by the column's sigma, then by the display's eye (here the same figures).
     assert_eq!(rows[0], "| soft-shadow | 1.000e0 +- 5.0e-2 | **0.200 +- 0.010** | 0.300 +- 0.010 |");
-    assert_eq!(rows[1], "| soft-shadow | 6.000 +- 0.100 | 8.000 +- 0.500 | 7.800 +- 0.500 |");
+    assert_eq!(rows[1], rows[0]);
+    assert_eq!(rows[2], "| soft-shadow | 6.000 +- 0.100 | 8.000 +- 0.500 | 7.800 +- 0.500 |");
     // Narrower JOD intervals: now a wins.
     let records = [
         record("white", 1.0, 0.05, 6.0, 0.1),

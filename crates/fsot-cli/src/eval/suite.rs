@@ -8,7 +8,10 @@
 //! given from outside (the published peers, `--mask`) is one mask: its interval
 //! is over placements only.
 //!
-//! pRelMSE and RelMSE are defined in `fsot::quality::metric`.
+//! pRelMSE and RelMSE are defined in `fsot::quality::metric`. pRelMSE is
+//! measured twice: with the eye of the column's sigma (the eye the `ours-*`
+//! methods' masks are made for), and with the eye of the display judged on
+//! (`Eye::on_display`, the eye the planned masks are made for).
 
 use std::path::{Path, PathBuf};
 
@@ -150,6 +153,9 @@ pub struct Record {
     pub prelmse_ci95: f64,
     pub relmse: f64,
     pub relmse_ci95: f64,
+    /// pRelMSE with the eye of the display judged on, not the column's sigma.
+    pub prelmse_display: f64,
+    pub prelmse_display_ci95: f64,
     /// ColorVideoVDP's JOD of the judged frames (10: no visible difference).
     pub jod: f64,
     pub jod_ci95: f64,
@@ -167,10 +173,12 @@ pub struct Record {
 
 /// What one seed's renders measured, per TAA setting (without, with): the
 /// means of pRelMSE and RelMSE over its renders, per display judged the mean
-/// JOD, and the anatomies when asked for.
+/// pRelMSE with that display's eye and the mean JOD, and the anatomies when
+/// asked for.
 #[derive(Clone, Default)]
 struct SeedValues {
     errors: [[f64; 2]; 2],
+    display_errors: [Vec<f64>; 2],
     jods: [Vec<f64>; 2],
     flips: [Vec<f64>; 2],
     anatomy: [Vec<Vec<Anatomy>>; 2],
@@ -195,6 +203,7 @@ fn records_of(
                 values.iter().flat_map(|v| v.anatomy[k].get(d).into_iter().flatten().cloned()).collect();
             let (p, r) = (of(0), of(1));
             let j = Interval::of(&values.iter().map(|v| v.jods[k][d]).collect::<Vec<_>>());
+            let pd = Interval::of(&values.iter().map(|v| v.display_errors[k][d]).collect::<Vec<_>>());
             let flip = values
                 .iter()
                 .all(|v| v.flips[k].len() > d)
@@ -209,6 +218,8 @@ fn records_of(
                 prelmse_ci95: p.ci95,
                 relmse: r.mean,
                 relmse_ci95: r.ci95,
+                prelmse_display: pd.mean,
+                prelmse_display_ci95: pd.ci95,
                 jod: j.mean,
                 jod_ci95: j.ci95,
                 flip: flip.map(|f| f.mean),
@@ -402,10 +413,12 @@ pub fn scene_plan(scene: Scene, viewing: Spatial, taa: bool, share: bool, size: 
 }
 
 /// Filtered references of one scene: per TAA setting, the frames after TAA
-/// (or not) and what the eye sees of them.
+/// (or not) and what the eye sees of them; per display judged, what that
+/// display's eye sees of them.
 struct SceneReference {
     frames: [Vec<Vec<f64>>; 2],
     seen: [Vec<Vec<f64>>; 2],
+    seen_on_display: Vec<[Vec<Vec<f64>>; 2]>,
 }
 
 /// How a scene is judged: the references, the eye, the first judged frame and
@@ -415,6 +428,8 @@ struct Judging<'a> {
     size: &'a EvalSize,
     reference: SceneReference,
     eye: Eye,
+    /// The eye of each display judged on, in the judges' order.
+    display_eyes: &'a [Eye],
     start: usize,
     judges: &'a [Judge],
     /// FLIP, with each display's pixels per degree, when asked for.
@@ -437,6 +452,9 @@ impl Judging<'_> {
             let (p, rel) = relative_errors(frames, &r.frames[k], &r.seen[k], &self.eye, self.start, n);
             out.errors[k] = [p, rel];
             for &d in which {
+                let eye = &self.display_eyes[d];
+                let seen = &r.seen_on_display[d][k];
+                out.display_errors[k].push(relative_errors(frames, &r.frames[k], seen, eye, self.start, n).0);
                 let judge = &self.judges[d];
                 let jod = match self.size.anatomy {
                     true => {
@@ -472,6 +490,7 @@ impl Judging<'_> {
         for k in 0..seeds {
             let flips = if self.flip.is_some() { which.len() } else { 0 };
             let mut mean = SeedValues {
+                display_errors: [vec![0.0; which.len()], vec![0.0; which.len()]],
                 jods: [vec![0.0; which.len()], vec![0.0; which.len()]],
                 flips: [Vec::new(), vec![0.0; flips]],
                 anatomy: [vec![Vec::new(); which.len()], vec![Vec::new(); which.len()]],
@@ -485,6 +504,9 @@ impl Judging<'_> {
                         *a += b / renders as f64;
                     }
                     for (a, b) in mean.jods[t].iter_mut().zip(&v.jods[t]) {
+                        *a += b / renders as f64;
+                    }
+                    for (a, b) in mean.display_errors[t].iter_mut().zip(&v.display_errors[t]) {
                         *a += b / renders as f64;
                     }
                     for (a, b) in mean.flips[t].iter_mut().zip(&v.flips[t]) {
@@ -540,10 +562,14 @@ pub fn run_eval(
         size.displays.iter().map(|d| Judge::new(d, 60.0, size.grey)).collect::<Result<_>>()?;
     let every: Vec<usize> = (0..judges.len()).collect();
     let flip = size.flip.as_deref().map(Flip::start).transpose()?;
-    let ppds: Vec<f64> = match flip {
-        Some(_) => size.displays.iter().map(|d| fsot::core::display::preset_ppd(d)).collect::<Result<_>>()?,
-        None => Vec::new(),
-    };
+    let ppds: Vec<f64> =
+        size.displays.iter().map(|d| fsot::core::display::preset_ppd(d)).collect::<Result<_>>()?;
+    let display_eyes: Vec<Eye> = ppds.iter().map(|&ppd| Eye::on_display(ppd, 60.0)).collect();
+    for (eye, display) in display_eyes.iter().zip(&size.displays) {
+        if n <= 2 * eye.margin {
+            return Err(Error::invalid(format!("image {n} too small for the eye on {display}")));
+        }
+    }
     if size.seeds == 0 {
         return Err(Error::invalid("the evaluation needs at least one seed"));
     }
@@ -556,7 +582,8 @@ pub fn run_eval(
             if n <= 2 * eye.margin {
                 return Err(Error::invalid(format!("image {n} too small for the eye's sigma {sigma}")));
             }
-            let start = size.warmup.max(eye.history());
+            let start =
+                display_eyes.iter().map(Eye::history).fold(size.warmup.max(eye.history()), usize::max);
             if start >= size.shot.frames {
                 return Err(Error::invalid(format!(
                     "{} frames leave none to judge after {start}",
@@ -564,12 +591,28 @@ pub fn run_eval(
                 )));
             }
             let taa_frames = taa(&refs, TAA_ALPHA);
-            let seen =
-                |frames: &Vec<Vec<f64>>| (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect();
-            let reference =
-                SceneReference { seen: [seen(&refs), seen(&taa_frames)], frames: [refs.clone(), taa_frames] };
+            let seen_by = |eye: &Eye, frames: &Vec<Vec<f64>>| -> Vec<Vec<f64>> {
+                (start..frames.len()).map(|f| eye.filter(frames, f, n)).collect()
+            };
+            let reference = SceneReference {
+                seen: [seen_by(&eye, &refs), seen_by(&eye, &taa_frames)],
+                seen_on_display: display_eyes
+                    .iter()
+                    .map(|e| [seen_by(e, &refs), seen_by(e, &taa_frames)])
+                    .collect(),
+                frames: [refs.clone(), taa_frames],
+            };
             let flip = flip.as_ref().map(|f| (f, &ppds[..]));
-            let judging = Judging { scene, size, reference, eye, start, judges: &judges, flip };
+            let judging = Judging {
+                scene,
+                size,
+                reference,
+                eye,
+                display_eyes: &display_eyes,
+                start,
+                judges: &judges,
+                flip,
+            };
             // The first seed's first render of each method, for the pictures (first sigma only).
             let mut kept = Vec::new();
             let keep = pictures.is_some() && sigma_index == 0;
@@ -692,7 +735,8 @@ fn planned_records(
 }
 
 /// The records as JSON: a list of {"scene", "method", "taa", "sigma",
-/// "prelmse", "prelmse_ci95", "relmse", "relmse_ci95", "jod", "jod_ci95",
+/// "prelmse", "prelmse_ci95", "relmse", "relmse_ci95", "prelmse_display",
+/// "prelmse_display_ci95", "jod", "jod_ci95",
 /// "seeds"}.
 pub fn to_json(records: &[Record]) -> Result<String> {
     let mut text = serde_json::to_string_pretty(records)
@@ -748,6 +792,21 @@ pub fn to_markdown(records: &[Record]) -> String {
                         // Absolute values where white noise was not measured.
                         let white = find(scene, "white").map_or(0.0, |r| r.prelmse);
                         find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
+                    },
+                    false,
+                    3,
+                );
+                out += &format!(
+                "\n### pRelMSE on {display}, the display's eye, {setting} (masks of sigma {sigma}; white: absolute; others: ratio to white; +- the 95% interval)\n\n"
+            );
+                out += &table(
+                    &scenes,
+                    &methods,
+                    |scene, m| {
+                        let white = find(scene, "white").map_or(0.0, |r| r.prelmse_display);
+                        find(scene, m).map(|r| {
+                            (Interval { mean: r.prelmse_display, ci95: r.prelmse_display_ci95 }, white)
+                        })
                     },
                     false,
                     3,
