@@ -57,7 +57,7 @@ pub enum Start {
     White,
     /// One frame optimized under the kernel's spatial filter alone
     /// (`SPATIAL_ITERATIONS`, or `SPATIAL_BUDGET_SHARE` of a time budget), then
-    /// set in motion over the frames by the R_d sequence: each pixel's samples
+    /// set in motion over the frames by a Kronecker sequence: each pixel's samples
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
     Animated,

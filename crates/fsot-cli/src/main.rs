@@ -238,7 +238,7 @@ enum StartArg {
     /// `animated` with --budget, `white` otherwise.
     Auto,
     /// One frame optimized under the kernel's spatial filter, set in motion over
-    /// the frames by the R_d sequence (a low-discrepancy sequence at each pixel).
+    /// the frames by a Kronecker sequence (a low-discrepancy sequence at each pixel).
     Animated,
     /// White noise.
     White,

@@ -284,6 +284,19 @@ fn a_winner_is_bold_only_where_its_interval_clears_the_runner_ups() {
 }
 
 #[test]
+fn without_white_noise_the_error_tables_show_absolute_values_in_scientific_notation() {
+    let records = [record("a", 2.24e-4, 1.4e-5, 9.05, 0.17), record("b", 1.38e-4, 1.6e-5, 8.70, 0.06)];
+    let md = to_markdown(&records);
+    assert!(
+        md.contains("### pRelMSE on standard_4k, sigma 2.1, with TAA (absolute; +- the 95% interval)"),
+        "{md}"
+    );
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| soft-shadow |")).collect();
+    assert_eq!(rows[0], "| soft-shadow | 2.240e-4 +- 1.4e-5 | **1.380e-4 +- 1.6e-5** |");
+    assert_eq!(rows[2], "| soft-shadow | **9.050 +- 0.170** | 8.700 +- 0.060 |");
+}
+
+#[test]
 fn a_run_measures_only_the_methods_named_and_dissects_their_error_when_asked() {
     use fsot_cli::eval::anatomy::{SPATIAL_EDGES, TEMPORAL_EDGES};
     let dir = tempfile::tempdir().unwrap();

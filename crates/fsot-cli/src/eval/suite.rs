@@ -782,42 +782,51 @@ pub fn to_markdown(records: &[Record]) -> String {
                             && r.display == display
                     })
                 };
+                // Ratios to white noise where it was measured, absolute values otherwise.
+                let scale = if methods.contains(&"white") {
+                    "white: absolute; others: ratio to white"
+                } else {
+                    "absolute"
+                };
                 out += &format!(
-                "\n### pRelMSE on {display}, sigma {sigma}, {setting} (white: absolute; others: ratio to white; +- the 95% interval)\n\n"
-            );
-                out += &table(
-                    &scenes,
-                    &methods,
-                    |scene, m| {
-                        // Absolute values where white noise was not measured.
-                        let white = find(scene, "white").map_or(0.0, |r| r.prelmse);
-                        find(scene, m).map(|r| (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, white))
-                    },
-                    false,
-                    3,
+                    "\n### pRelMSE on {display}, sigma {sigma}, {setting} ({scale}; +- the 95% interval)\n\n"
                 );
-                out += &format!(
-                "\n### pRelMSE on {display}, the display's eye, {setting} (masks of sigma {sigma}; white: absolute; others: ratio to white; +- the 95% interval)\n\n"
-            );
                 out += &table(
                     &scenes,
                     &methods,
                     |scene, m| {
-                        let white = find(scene, "white").map_or(0.0, |r| r.prelmse_display);
+                        let white = find(scene, "white").map(|r| r.prelmse);
                         find(scene, m).map(|r| {
-                            (Interval { mean: r.prelmse_display, ci95: r.prelmse_display_ci95 }, white)
+                            (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, Shown::Error { white })
                         })
                     },
                     false,
-                    3,
+                );
+                out += &format!(
+                    "\n### pRelMSE on {display}, the display's eye, {setting} (masks of sigma {sigma}; {scale}; +- the 95% interval)\n\n"
+                );
+                out += &table(
+                    &scenes,
+                    &methods,
+                    |scene, m| {
+                        let white = find(scene, "white").map(|r| r.prelmse_display);
+                        find(scene, m).map(|r| {
+                            (
+                                Interval { mean: r.prelmse_display, ci95: r.prelmse_display_ci95 },
+                                Shown::Error { white },
+                            )
+                        })
+                    },
+                    false,
                 );
                 out += &format!("\n### JOD on {display}, sigma {sigma}, {setting} (ColorVideoVDP; 10: no visible difference; +- the 95% interval)\n\n");
                 out += &table(
                     &scenes,
                     &methods,
-                    |scene, m| find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, 0.0)),
+                    |scene, m| {
+                        find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, Shown::Fixed(3)))
+                    },
                     true,
-                    3,
                 );
                 if records.iter().any(|r| r.flip.is_some() && r.display == display && r.taa == taa) {
                     out += &format!("\n### FLIP on {display}, sigma {sigma}, {setting} (mean FLIP error of the judged frames; 0: no difference; +- the 95% interval)\n\n");
@@ -826,10 +835,9 @@ pub fn to_markdown(records: &[Record]) -> String {
                         &methods,
                         |scene, m| {
                             let r = find(scene, m)?;
-                            Some((Interval { mean: r.flip?, ci95: r.flip_ci95? }, 0.0))
+                            Some((Interval { mean: r.flip?, ci95: r.flip_ci95? }, Shown::Fixed(4)))
                         },
                         false,
-                        4,
                     );
                 }
             }
@@ -838,16 +846,25 @@ pub fn to_markdown(records: &[Record]) -> String {
     out
 }
 
+/// How a table shows a cell.
+#[derive(Clone, Copy)]
+enum Shown {
+    /// A judge's score, at this many decimals.
+    Fixed(usize),
+    /// An error measure: a ratio to white noise's mean where white noise was
+    /// measured (white's own cell absolute), else absolute; absolute values in
+    /// scientific notation, as they span decades.
+    Error { white: Option<f64> },
+}
+
 /// One table: a row per scene, a column per method; `cell` gives a method's
-/// interval and, for ratios, white noise's mean (0: absolute values). The
-/// best (highest when `higher_better`) is bold where its interval does not
-/// overlap the runner-up's.
+/// interval and how it is shown. The best (highest when `higher_better`) is
+/// bold where its interval does not overlap the runner-up's.
 fn table(
     scenes: &[&str],
     methods: &[&str],
-    cell: impl Fn(&str, &str) -> Option<(Interval, f64)>,
+    cell: impl Fn(&str, &str) -> Option<(Interval, Shown)>,
     higher_better: bool,
-    digits: usize,
 ) -> String {
     let mut out =
         format!("| scene | {} |\n| --- |{}\n", methods.join(" | "), " ---: |".repeat(methods.len()));
@@ -873,13 +890,14 @@ fn table(
             .iter()
             .map(|m| match cell(scene, m) {
                 None => "-".to_string(),
-                Some((i, white)) if white > 0.0 && *m == "white" => {
-                    format!("{:.3e} +- {:.1e}", i.mean, i.ci95)
-                }
-                Some((i, white)) => {
-                    let (v, c) =
-                        if white > 0.0 { (i.mean / white, i.ci95 / white) } else { (i.mean, i.ci95) };
-                    let text = format!("{v:.digits$} +- {c:.digits$}");
+                Some((i, shown)) => {
+                    let text = match shown {
+                        Shown::Fixed(digits) => format!("{:.digits$} +- {:.digits$}", i.mean, i.ci95),
+                        Shown::Error { white: Some(w) } if w > 0.0 && *m != "white" => {
+                            format!("{:.3} +- {:.3}", i.mean / w, i.ci95 / w)
+                        }
+                        Shown::Error { .. } => format!("{:.3e} +- {:.1e}", i.mean, i.ci95),
+                    };
                     if winner == Some(*m) {
                         format!("**{text}**")
                     } else {
