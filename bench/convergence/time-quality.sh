@@ -7,6 +7,7 @@
 # `fsot eval --quick` beside white noise and the published FAST and STBN masks.
 #
 #   bench/convergence/time-quality.sh NEW_FSOT OLD_FSOT OUT_DIR [PEERS_DIR]
+#   TQ_PROBLEMS="NAME ..."  only these problems (names below) [default: all]
 #
 # OUT_DIR/runs.tsv: problem, binary, what (budget or iterations), process
 # seconds, iterations, objective x white noise, seconds past the budget.
@@ -39,6 +40,9 @@ problems=(
 )
 for p in "${problems[@]}"; do
   IFS='|' read -r name size dims kernel counts <<<"$p"
+  if [[ -n ${TQ_PROBLEMS:-} && ! " $TQ_PROBLEMS " == *" $name "* ]]; then
+    continue
+  fi
   common=(optimize --size "$size" --dims "$dims" --kernel "$kernel" --seed 1 --backend cpu)
   for n in $counts; do
     run "$name" old "iterations-$n" "$old" "${common[@]}" --iterations "$n"
