@@ -1,8 +1,9 @@
 //! A spatial tile set in motion: frame t of the animated mask is the spatial
 //! mask's samples rotated (modulo 1) by t steps of a Kronecker sequence, so each
 //! pixel's samples over time are a low-discrepancy sequence and each frame keeps
-//! the spatial mask's structure. A cheap start for a spatio-temporal
-//! optimization.
+//! the spatial mask's structure. A scalar mask's pixels take their step by their
+//! place in each 2x2 block, so that two pixels a 2-D decision reads together do
+//! not move in lockstep. A cheap start for a spatio-temporal optimization.
 
 use crate::core::mask::Mask;
 use crate::core::tile::{Tile, MAX_DIMS};
@@ -24,21 +25,37 @@ pub fn kronecker_step(dims: usize) -> Vec<f64> {
     std::iter::once(golden).chain(ROOTS.iter().map(|r| r.sqrt().fract())).take(dims).collect()
 }
 
+/// The step of pixel (x, y)'s coordinate k: `steps[k]`, or for a scalar mask
+/// the first four steps by the pixel's place in its 2x2 block. With one step
+/// for all, two pixels of a scalar mask read as one 2-D sample keep the same
+/// difference in every frame; with distinct steps the pair is itself a 2-D
+/// Kronecker sequence over time.
+fn step_of(steps: &[f64], block: &[f64], x: usize, y: usize, k: usize) -> f64 {
+    if steps.len() == 1 {
+        block[x % 2 + 2 * (y % 2)]
+    } else {
+        steps[k]
+    }
+}
+
 /// The mask of `frames` frames whose frame t is `spatial` (one frame) with
-/// every coordinate k moved by t alpha_k, modulo 1.
+/// every coordinate moved by t times its step (`step_of`), modulo 1.
 pub fn animate(spatial: &Mask, frames: usize) -> Result<Mask> {
     let s = spatial.tile;
     if s.frames != 1 {
         return Err(Error::invalid(format!("an animated start takes a one-frame mask, not {}", s.describe())));
     }
     let tile = Tile::new(s.width, s.height, frames, s.spp, s.dims)?;
-    let step = kronecker_step(s.dims);
+    let steps = kronecker_step(s.dims);
+    let block = kronecker_step(4);
     let below_one = 1.0f32 - f32::EPSILON / 2.0;
     let per_frame = spatial.samples.len();
     let mut samples = Vec::with_capacity(per_frame * frames);
     for t in 0..frames {
         for (i, &v) in spatial.samples.iter().enumerate() {
-            let moved = (v as f64 + t as f64 * step[i % s.dims]).fract();
+            let pixel = i / (s.spp * s.dims);
+            let alpha = step_of(&steps, &block, pixel % s.width, pixel / s.width, i % s.dims);
+            let moved = (v as f64 + t as f64 * alpha).fract();
             samples.push((moved as f32).min(below_one));
         }
     }
@@ -94,6 +111,23 @@ mod tests {
         }
         assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
         assert_eq!(animate(&spatial, 1).unwrap().samples, spatial.samples);
+    }
+
+    #[test]
+    fn a_scalar_masks_2x2_block_moves_by_four_distinct_steps() {
+        let spatial = Mask::white(Tile::new(4, 4, 1, 1, 1).unwrap(), 3);
+        let mask = animate(&spatial, 9).unwrap();
+        let steps = kronecker_step(4);
+        for (y, x, k) in [(0, 0, 0), (0, 1, 1), (1, 0, 2), (1, 1, 3), (2, 2, 0), (3, 2, 2), (1, 3, 3)] {
+            for t in 0..9 {
+                let want = (spatial.sample(x, y, 0, 0)[0] as f64 + t as f64 * steps[k]).rem_euclid(1.0);
+                let got = mask.sample(x, y, t, 0)[0] as f64;
+                assert!((got - want).abs() < 1e-6, "t {t} ({x}, {y}): {got} against {want}");
+            }
+        }
+        // Two neighbours' difference changes from frame to frame.
+        let diff = |t| mask.sample(1, 0, t, 0)[0] - mask.sample(0, 0, t, 0)[0];
+        assert!(((diff(1) - diff(0)).rem_euclid(1.0) - (steps[1] - steps[0]).rem_euclid(1.0) as f32).abs() < 1e-5);
     }
 
     #[test]
