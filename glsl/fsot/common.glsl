@@ -33,8 +33,8 @@ vec2 fsot_turn_cos_sin(float u) {
     return vec2(sq, -cq);
 }
 
-#define FSOT_AXIS_BITS 858993459u   // 0.2 * 2^32
-#define FSOT_PAIR_BITS 1717986918u  // 0.4 * 2^32
+#define FSOT_AXIS_BITS 1503238553u  // 0.35 * 2^32
+#define FSOT_PAIR_BITS 2362232012u  // 0.55 * 2^32
 
 struct FsotSlice {
     float theta[FSOT_MAX_DIMS];

@@ -6,8 +6,11 @@ use crate::core::kernel::Kernel;
 use crate::core::rng::{derive, hash2, Stream};
 use crate::core::tile::{Tile, MAX_DIMS};
 
-/// Probability of an axis-aligned direction (one coordinate alone), for d >= 2.
-pub const AXIS_PROBABILITY: f64 = 0.2;
+/// Probability of an axis-aligned direction (one coordinate alone), for d >= 2:
+/// about a third of the slices, so that each coordinate read alone (a 1-D
+/// decision reading one channel, an integrand aligned with the axes) is well
+/// spread too; more comes at the cost of directions across the axes.
+pub const AXIS_PROBABILITY: f64 = 0.35;
 /// Probability of a direction inside one pair of coordinates (2k, 2k+1), for
 /// d >= 3: renderers consume dimensions in pairs, so these 2-D projections matter.
 pub const PAIR_PROBABILITY: f64 = 0.2;
