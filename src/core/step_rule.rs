@@ -48,8 +48,19 @@ pub fn schedule(iteration: u32, iterations: u32) -> f32 {
 /// start, `FINAL_FRACTION` at the end. A run under a time budget takes its
 /// progress from the clock.
 pub fn schedule_at(progress: f32) -> f32 {
+    schedule_between(1.0, progress)
+}
+
+/// The step scale a run under a time budget starts at when it starts from a
+/// mask (the animated start, or a mask given): that start is already well
+/// spread, and full steps would first undo its order before refining it.
+pub const FROM_MASK_START: f32 = 0.5;
+
+/// The cosine schedule from `start` at `progress` 0 to `FINAL_FRACTION` at 1
+/// (progress clamped to [0, 1]).
+pub fn schedule_between(start: f32, progress: f32) -> f32 {
     let x = progress.clamp(0.0, 1.0);
-    FINAL_FRACTION + (1.0 - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
+    FINAL_FRACTION + (start - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
 }
 
 /// An end-agnostic schedule, for runs that stop when iterations no longer pay:
@@ -193,6 +204,22 @@ mod tests {
         assert_eq!(schedule(0, 100), 1.0);
         assert!((schedule(99, 100) - FINAL_FRACTION).abs() < 1e-6);
         assert!(schedule(30, 100) > schedule(60, 100));
+    }
+
+    #[test]
+    fn a_schedule_from_a_lower_start_is_the_same_cosine_scaled() {
+        // Closed form in f64: FINAL + (start - FINAL) (1 + cos(pi x)) / 2.
+        for start in [1.0f32, FROM_MASK_START, 0.2] {
+            for i in 0..=20 {
+                let x = i as f64 / 20.0;
+                let f = FINAL_FRACTION as f64;
+                let want = f + (start as f64 - f) * 0.5 * (1.0 + (std::f64::consts::PI * x).cos());
+                assert!((schedule_between(start, x as f32) as f64 - want).abs() < 1e-6, "{start} at {x}");
+            }
+            assert_eq!(schedule_between(start, -1.0), start);
+            assert!((schedule_between(start, 2.0) - FINAL_FRACTION).abs() < 1e-7);
+        }
+        assert_eq!(schedule_at(0.3), schedule_between(1.0, 0.3));
     }
 
     #[test]

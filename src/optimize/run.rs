@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use crate::core::animate::animate;
 use crate::core::kernel::{KernelSpec, Temporal};
 use crate::core::mask::Mask;
-use crate::core::step_rule::{schedule_at, Plateau, PlateauState};
+use crate::core::step_rule::{schedule_between, Plateau, PlateauState, FROM_MASK_START};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
@@ -432,7 +432,7 @@ impl Run {
     }
 
     /// Under a time budget: sets the step scale the cosine schedule gives at the
-    /// time reached, and caps `count` at the iterations that fit in the budget
+    /// time reached (from `FROM_MASK_START` for a run that starts from a mask), and caps `count` at the iterations that fit in the budget
     /// and at a `BUDGET_STEPS`th of it, so the scale follows the clock.
     fn budget_step(&mut self, count: u32) -> u32 {
         let Some(deadline) = self.deadline() else { return count };
@@ -440,7 +440,8 @@ impl Run {
         let since = *self.iterating_since.get_or_insert(now);
         let span = deadline.saturating_duration_since(since).as_secs_f64();
         let progress = if span > 0.0 { now.duration_since(since).as_secs_f64() / span } else { 1.0 };
-        self.backend.set_scale(Some(schedule_at(progress as f32)));
+        let start = if self.init.is_some() { FROM_MASK_START } else { 1.0 };
+        self.backend.set_scale(Some(schedule_between(start, progress as f32)));
         match self.pace {
             Some(pace) if pace > 0.0 => {
                 let left = deadline.saturating_duration_since(now).as_secs_f64();

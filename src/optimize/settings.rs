@@ -92,9 +92,10 @@ pub enum Until {
     /// When this many seconds of wall time have passed since the budget's
     /// origin (`RunOptions::budget_from`, else when `Run::start` began: setting
     /// up the backend included). The step scale follows the cosine
-    /// schedule over the time left after set-up, and no iteration starts that
-    /// the pace so far says would end past the budget, so a run ends past it by
-    /// at most about one iteration. `iterations` caps it. How far it gets
+    /// schedule over the time left after set-up (from half the step when
+    /// the run starts from a mask, as the animated start does), and no
+    /// iteration starts that the pace so far says would end past the budget,
+    /// so a run ends past it by at most about one iteration. `iterations` caps it. How far it gets
     /// depends on the machine, so it is not reproducible bit for bit.
     Seconds(f64),
 }
