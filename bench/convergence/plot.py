@@ -2,7 +2,8 @@
 """The time-quality curves of bench/convergence/time-quality.sh's output folder as
 an SVG: per problem, fsot's objective as a fraction of white noise's against the
 process's wall time (log scale), the old binary's iteration counts and the new
-binary's budgets as two lines.
+binary's budgets as two lines. Where bench/convergence/rescore.sh has scored the
+masks (objective-by-score.tsv), the objective is that one binary's for both.
 
     bench/convergence/plot.py OUT_DIR > curves.svg
 """
@@ -11,7 +12,13 @@ import math
 import sys
 from pathlib import Path
 
-runs = list(csv.DictReader(open(Path(sys.argv[1]) / "runs.tsv"), delimiter="\t"))
+out_dir = Path(sys.argv[1])
+runs = list(csv.DictReader(open(out_dir / "runs.tsv"), delimiter="\t"))
+rescored = out_dir / "objective-by-score.tsv"
+if rescored.exists():
+    scores = {r["mask"]: r["objective_x_white"] for r in csv.DictReader(open(rescored), delimiter="\t")}
+    for r in runs:
+        r["objective_x_white"] = scores[f"{r['problem']}-{r['binary']}-{r['what']}"]
 problems = list(dict.fromkeys(r["problem"] for r in runs))
 W, H, PAD = 300, 220, 45
 x_lo, x_hi = math.log10(0.1), math.log10(1000.0)

@@ -10,7 +10,8 @@
 #   TQ_SEEDS="1 2 3 4 5"    the seeds [default: 1 to 5]
 #
 # OUT_DIR/runs.tsv: problem, binary, seed, process seconds, iterations, objective
-# x white noise. OUT_DIR/eval-PROBLEM.{log,json}: the judge's records.
+# x white noise (each binary's own slices). OUT_DIR/eval-PROBLEM.{log,json}: the
+# judge's records. OUT_DIR/objective-by-score.tsv: every mask scored by OLD_FSOT.
 # bench/convergence/quarter-table.py OUT_DIR prints the table.
 set -euo pipefail
 new=$1 old=$2 out=$3 peers=${4:-../shared/data/peer-masks}
@@ -54,3 +55,4 @@ for p in "${problems[@]}"; do
   "$new" eval --quick --methods "$methods" --peers "$peers" "${masks[@]}" \
     --out "$out/eval-$name" --json "$out/eval-$name.json" >"$out/eval-$name.log" 2>&1
 done
+"$(dirname "$0")/rescore.sh" "$old" "$out" >/dev/null

@@ -4,7 +4,9 @@ and seed, the old binary's 1000 iterations against the new binary's quarter
 budget (process seconds, iterations, objective x white noise, and from `fsot
 eval --quick` under TAA pRelMSE's geometric mean ratio to white over the scenes,
 with pRelMSE's own eye, sigma 2.1, and with the eye of the display judged on),
-then the means over seeds and the new mean's distance from the old one.
+then the means over seeds and the new mean's distance from the old one. Where
+bench/convergence/rescore.sh has scored the masks (objective-by-score.tsv), the
+objective is that one binary's, on its fixed slices, for old and new alike.
 
     bench/convergence/quarter-table.py OUT_DIR
 """
@@ -17,6 +19,8 @@ from pathlib import Path
 
 out = Path(sys.argv[1])
 runs = list(csv.DictReader(open(out / "runs.tsv"), delimiter="\t"))
+rescored = out / "objective-by-score.tsv"
+scores = {r["mask"]: r for r in csv.DictReader(open(rescored), delimiter="\t")} if rescored.exists() else {}
 
 
 def geo(records, name, key):
@@ -25,7 +29,8 @@ def geo(records, name, key):
     return math.exp(sum(math.log(r[key] / white[r["scene"]]) for r in rs) / len(rs))
 
 
-cols = ["process s", "iterations", "objective", "pRelMSE (sigma 2.1)", "pRelMSE (display's eye)", "JOD"]
+scorer = f"objective ({next(iter(scores.values()))['scored_by']}'s score)" if scores else "objective"
+cols = ["process s", "iterations", scorer, "pRelMSE (sigma 2.1)", "pRelMSE (display's eye)", "JOD"]
 print("| problem | made by | seed | " + " | ".join(cols) + " |")
 print("| --- | --- | --- |" + " ---: |" * len(cols))
 for problem in dict.fromkeys(r["problem"] for r in runs):
@@ -34,7 +39,8 @@ for problem in dict.fromkeys(r["problem"] for r in runs):
     for run in (r for r in runs if r["problem"] == problem):
         name = f"{run['binary']}-s{run['seed']}"
         jods = [r["jod"] for r in records if r["method"] == name and r["taa"]]
-        row = [float(run["process_s"]), int(run["iterations"]), float(run["objective_x_white"]),
+        objective = scores[f"{problem}-{name}"]["objective_x_white"] if scores else run["objective_x_white"]
+        row = [float(run["process_s"]), int(run["iterations"]), float(objective),
                geo(records, name, "prelmse"), geo(records, name, "prelmse_display"), sum(jods) / len(jods)]
         table.setdefault(run["binary"], []).append(row)
         what = "1000 iterations" if run["binary"] == "old" else "a quarter's budget"

@@ -12,6 +12,8 @@
 # OUT_DIR/runs.tsv: problem, binary, what (budget or iterations), process
 # seconds, iterations, objective x white noise, seconds past the budget.
 # OUT_DIR/eval-PROBLEM.{log,json}: the judge's tables.
+# OUT_DIR/objective-by-score.tsv: every mask scored by OLD_FSOT's `fsot score`
+# (bench/convergence/rescore.sh), one set of slices for both binaries.
 set -euo pipefail
 new=$1 old=$2 out=$3 peers=${4:-../shared/data/peer-masks}
 mkdir -p "$out"
@@ -60,3 +62,4 @@ for p in "${problems[@]}"; do
   "$new" eval --quick --methods "$methods" --peers "$peers" "${masks[@]}" \
     --out "$out/eval-$name" --json "$out/eval-$name.json" >"$out/eval-$name.log" 2>&1
 done
+"$(dirname "$0")/rescore.sh" "$old" "$out" >/dev/null
