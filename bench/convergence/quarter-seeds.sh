@@ -10,7 +10,7 @@
 #   TQ_SEEDS="1 2 3 4 5"    the seeds [default: 1 to 5]
 #
 # OUT_DIR/runs.tsv: problem, binary, seed, process seconds, iterations, objective
-# x white noise (each binary's own slices). OUT_DIR/eval-PROBLEM.{log,json}: the
+# x white noise (each binary's own slices), seconds past the budget. OUT_DIR/eval-PROBLEM.{log,json}: the
 # judge's records. OUT_DIR/objective-by-score.tsv: every mask scored by OLD_FSOT.
 # bench/convergence/quarter-table.py OUT_DIR prints the table.
 set -euo pipefail
@@ -18,17 +18,12 @@ new=$1 old=$2 out=$3 peers=${4:-../shared/data/peer-masks}
 seeds=${TQ_SEEDS:-1 2 3 4 5}
 mkdir -p "$out"
 tsv="$out/runs.tsv"
-printf 'problem\tbinary\tseed\tprocess_s\titerations\tobjective_x_white\n' >"$tsv"
+printf 'problem\tbinary\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
 
+source "$(dirname "$0")/timed.sh"
 run() { # problem binary seed args...
   local problem=$1 binary=$2 seed=$3; shift 3
-  local log="$out/$problem-$binary-s$seed.log"
-  /usr/bin/time -f 'process %e s' "$@" --seed "$seed" --out "$out/$problem-$binary-s$seed.exr" >"$log" 2>&1
-  local secs its ratio
-  secs=$(sed -n 's/^process \([0-9.]*\) s$/\1/p' "$log")
-  its=$(sed -n 's/.*, \([0-9]*\) iterations in .*/\1/p' "$log")
-  ratio=$(sed -n 's/.*(\([0-9.]*\) x white noise).*/\1/p' "$log")
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$problem" "$binary" "$seed" "$secs" "$its" "$ratio" | tee -a "$tsv"
+  timed_run "$tsv" "$out/$problem-$binary-s$seed" "$problem"$'\t'"$binary"$'\t'"$seed" "$@" --seed "$seed"
 }
 
 problems=(

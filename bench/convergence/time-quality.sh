@@ -20,16 +20,10 @@ mkdir -p "$out"
 tsv="$out/runs.tsv"
 printf 'problem\tbinary\twhat\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
 
+source "$(dirname "$0")/timed.sh"
 run() { # problem binary what args...
   local problem=$1 binary=$2 what=$3; shift 3
-  local log="$out/$problem-$binary-$what.log"
-  /usr/bin/time -f 'process %e s' "$@" --out "$out/$problem-$binary-$what.exr" >"$log" 2>&1
-  local secs its ratio past
-  secs=$(sed -n 's/^process \([0-9.]*\) s$/\1/p' "$log")
-  its=$(sed -n 's/.*, \([0-9]*\) iterations in .*/\1/p' "$log")
-  ratio=$(sed -n 's/.*(\([0-9.]*\) x white noise).*/\1/p' "$log")
-  past=$(sed -n 's/.*s after \(it\|the process\) started (\([-+0-9.]*\) s).*/\2/p' "$log")
-  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$problem" "$binary" "$what" "$secs" "$its" "$ratio" "${past:--}" | tee -a "$tsv"
+  timed_run "$tsv" "$out/$problem-$binary-$what" "$problem"$'\t'"$binary"$'\t'"$what" "$@"
 }
 
 # problem: size, dims, kernel; old iteration counts spanning the new budgets. The

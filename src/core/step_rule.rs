@@ -207,7 +207,7 @@ mod tests {
     }
 
     #[test]
-    fn a_schedule_from_a_lower_start_is_the_same_cosine_scaled() {
+    fn a_schedule_from_a_lower_start_decays_by_the_same_cosine_to_the_same_floor() {
         // Closed form in f64: FINAL + (start - FINAL) (1 + cos(pi x)) / 2.
         for start in [1.0f32, FROM_MASK_START, 0.2] {
             for i in 0..=20 {

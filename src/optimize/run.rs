@@ -432,8 +432,9 @@ impl Run {
     }
 
     /// Under a time budget: sets the step scale the cosine schedule gives at the
-    /// time reached (from `FROM_MASK_START` for a run that starts from a mask), and caps `count` at the iterations that fit in the budget
-    /// and at a `BUDGET_STEPS`th of it, so the scale follows the clock.
+    /// time reached (from `FROM_MASK_START` for a run that starts from a mask),
+    /// and caps `count` at the iterations that fit in the budget and at a
+    /// `BUDGET_STEPS`th of it, so the scale follows the clock.
     fn budget_step(&mut self, count: u32) -> u32 {
         let Some(deadline) = self.deadline() else { return count };
         let now = Instant::now();
