@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# The start-up mask against the published FAST mask, with enough placements for
+# the judge's intervals to separate them: for each display and seed, a 64x64x32
+# d = 2 perceptual-taa mask under `--budget 1s` (timed as a whole process), then
+# one `fsot eval --quick` with PLACEMENTS placements of every mask (the quick
+# run's default is 3, whose 95% intervals use Student's t at 2 degrees of
+# freedom, 4.3 standard errors wide), and each mask's verdicts against the
+# published FAST and STBN masks.
+#
+#   bench/convergence/one-second.sh FSOT OUT_DIR [PEERS_DIR]
+#   OS_SEEDS="1 2 3"                        the seeds [default: 1 2 3]
+#   OS_DISPLAYS="standard_fhd standard_4k"  the displays the masks are made for
+#   OS_PLACEMENTS=10                        placements per mask in the eval
+#
+# OUT_DIR/runs.tsv: display, seed, process seconds, iterations, objective x
+# white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
+# records (judged on its default display, standard_4k). OUT_DIR/verdicts.md:
+# bench/eval/compare.py per mask.
+set -euo pipefail
+fsot=$1 out=$2 peers=${3:-../shared/data/peer-masks}
+seeds=${OS_SEEDS:-1 2 3}
+displays=${OS_DISPLAYS:-standard_fhd standard_4k}
+placements=${OS_PLACEMENTS:-10}
+here=$(dirname "$0")
+mkdir -p "$out"
+tsv="$out/runs.tsv"
+printf 'display\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
+
+source "$here/timed.sh"
+masks=() methods=published-fast,published-stbn names=()
+for display in $displays; do
+  for s in $seeds; do
+    name="1s-$display-s$s"
+    timed_run "$tsv" "$out/$name" "$display"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
+      --kernel perceptual-taa --display "$display" --backend cpu --budget 1s --seed "$s"
+    masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
+  done
+done
+"$fsot" eval --quick --seeds "$placements" --methods "$methods" --peers "$peers" "${masks[@]}" \
+  --out "$out/eval" --json "$out/eval.json" >"$out/eval.log" 2>&1
+for name in "${names[@]}"; do
+  python3 "$here/../eval/compare.py" "$out/eval.json" "$name" published-fast published-stbn
+done >"$out/verdicts.md"
+python3 - "$out/verdicts.md" <<'EOF'
+import re, sys
+mask = None
+for line in open(sys.argv[1]):
+    m = re.match(r"^(\S+) on \S+, (with|without) TAA", line)
+    if m:
+        mask, taa = m.group(1), m.group(2)
+    elif line.startswith("- vs") and taa == "with":
+        print(f"{mask}, TAA: {line[2:].strip()}")
+EOF
