@@ -8,6 +8,9 @@
 #   bench/convergence/quarter-seeds.sh NEW_FSOT OLD_FSOT OUT_DIR [PEERS_DIR]
 #   TQ_PROBLEMS="NAME ..."  only these problems (names as in time-quality.sh)
 #   TQ_SEEDS="1 2 3 4 5"    the seeds [default: 1 to 5]
+#   TQ_PLACEMENTS=10        placements of each mask in the eval [default: the quick
+#                           run's 3; its 64 x 64 images show a quarter of a 128 x 128
+#                           tile at each]
 #
 # OUT_DIR/runs.tsv: problem, binary, seed, process seconds, iterations, objective
 # x white noise (each binary's own slices), seconds past the budget. OUT_DIR/eval-PROBLEM.{log,json}: the
@@ -47,7 +50,7 @@ for p in "${problems[@]}"; do
       masks+=(--mask "$b-s$s=$out/$name-$b-s$s.exr"); methods+=",$b-s$s"
     done
   done
-  "$new" eval --quick --methods "$methods" --peers "$peers" "${masks[@]}" \
+  "$new" eval --quick ${TQ_PLACEMENTS:+--seeds "$TQ_PLACEMENTS"} --methods "$methods" --peers "$peers" "${masks[@]}" \
     --out "$out/eval-$name" --json "$out/eval-$name.json" >"$out/eval-$name.log" 2>&1
 done
 "$(dirname "$0")/rescore.sh" "$old" "$out" >/dev/null
