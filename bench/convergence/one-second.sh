@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The start-up mask against the published FAST mask, with enough placements for
-# the judge's intervals to separate them: for each display and seed, a 64x64x32
+# the judge's intervals to separate them: for each eye and seed, a 64x64x32
 # d = 2 perceptual-taa mask under `--budget 1s` (timed as a whole process), then
 # one `fsot eval --quick` with PLACEMENTS placements of every mask (the quick
 # run's default is 3, whose 95% intervals use Student's t at 2 degrees of
@@ -9,30 +9,35 @@
 #
 #   bench/convergence/one-second.sh FSOT OUT_DIR [PEERS_DIR]
 #   OS_SEEDS="1 2 3"                        the seeds [default: 1 2 3]
-#   OS_DISPLAYS="standard_fhd standard_4k"  the displays the masks are made for
+#   OS_EYES="standard_fhd standard_4k"      the eyes the masks are made for: a display
+#                                           (--display) or sigma-S (--sigma S, pixels)
 #   OS_PLACEMENTS=10                        placements per mask in the eval
 #
-# OUT_DIR/runs.tsv: display, seed, process seconds, iterations, objective x
+# OUT_DIR/runs.tsv: eye, seed, process seconds, iterations, objective x
 # white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
 # records (judged on its default display, standard_4k). OUT_DIR/verdicts.md:
 # bench/eval/compare.py per mask.
 set -euo pipefail
 fsot=$1 out=$2 peers=${3:-../shared/data/peer-masks}
 seeds=${OS_SEEDS:-1 2 3}
-displays=${OS_DISPLAYS:-standard_fhd standard_4k}
+eyes=${OS_EYES:-standard_fhd standard_4k}
 placements=${OS_PLACEMENTS:-10}
 here=$(dirname "$0")
 mkdir -p "$out"
 tsv="$out/runs.tsv"
-printf 'display\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
+printf 'eye\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
 
 source "$here/timed.sh"
 masks=() methods=published-fast,published-stbn names=()
-for display in $displays; do
+for eye in $eyes; do
+  case $eye in
+    sigma-*) eye_flags=(--sigma "${eye#sigma-}") ;;
+    *) eye_flags=(--display "$eye") ;;
+  esac
   for s in $seeds; do
-    name="1s-$display-s$s"
-    timed_run "$tsv" "$out/$name" "$display"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
-      --kernel perceptual-taa --display "$display" --backend cpu --budget 1s --seed "$s"
+    name="1s-$eye-s$s"
+    timed_run "$tsv" "$out/$name" "$eye"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
+      --kernel perceptual-taa "${eye_flags[@]}" --backend cpu --budget 1s --seed "$s"
     masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
   done
 done
