@@ -13,8 +13,9 @@
 #                           tile at each]
 #
 # OUT_DIR/runs.tsv: problem, binary, seed, process seconds, iterations, objective
-# x white noise (each binary's own slices), seconds past the budget. OUT_DIR/eval-PROBLEM.{log,json}: the
-# judge's records. OUT_DIR/objective-by-score.tsv: every mask scored by OLD_FSOT.
+# x white noise (each binary's own slices), seconds past the budget.
+# OUT_DIR/eval-PROBLEM.{log,json}: the judge's records.
+# OUT_DIR/objective-by-score.tsv: every mask scored by OLD_FSOT.
 # bench/convergence/quarter-table.py OUT_DIR prints the table.
 set -euo pipefail
 new=$1 old=$2 out=$3 peers=${4:-../shared/data/peer-masks}

@@ -41,14 +41,7 @@ pub fn schedule(iteration: u32, iterations: u32) -> f32 {
     if iterations <= 1 {
         return 1.0;
     }
-    schedule_at(iteration as f32 / (iterations - 1) as f32)
-}
-
-/// The cosine schedule at `progress` in [0, 1] of the run (clamped): 1 at the
-/// start, `FINAL_FRACTION` at the end. A run under a time budget takes its
-/// progress from the clock.
-pub fn schedule_at(progress: f32) -> f32 {
-    schedule_between(1.0, progress)
+    schedule_between(1.0, iteration as f32 / (iterations - 1) as f32)
 }
 
 /// The step scale a run under a time budget starts at when it starts from a
@@ -57,7 +50,8 @@ pub fn schedule_at(progress: f32) -> f32 {
 pub const FROM_MASK_START: f32 = 0.5;
 
 /// The cosine schedule from `start` at `progress` 0 to `FINAL_FRACTION` at 1
-/// (progress clamped to [0, 1]).
+/// (progress clamped to [0, 1]). A run under a time budget takes its progress
+/// from the clock.
 pub fn schedule_between(start: f32, progress: f32) -> f32 {
     let x = progress.clamp(0.0, 1.0);
     FINAL_FRACTION + (start - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
@@ -219,7 +213,6 @@ mod tests {
             assert_eq!(schedule_between(start, -1.0), start);
             assert!((schedule_between(start, 2.0) - FINAL_FRACTION).abs() < 1e-7);
         }
-        assert_eq!(schedule_at(0.3), schedule_between(1.0, 0.3));
     }
 
     #[test]

@@ -95,8 +95,9 @@ pub enum Until {
     /// schedule over the time left after set-up (from half the step when
     /// the run starts from a mask, as the animated start does), and no
     /// iteration starts that the pace so far says would end past the budget,
-    /// so a run ends past it by at most about one iteration. `iterations` caps it. How far it gets
-    /// depends on the machine, so it is not reproducible bit for bit.
+    /// so a run ends past it by at most about one iteration. `iterations`
+    /// caps it. How far it gets depends on the machine, so it is not
+    /// reproducible bit for bit.
     Seconds(f64),
 }
 
