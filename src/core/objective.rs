@@ -7,6 +7,7 @@ use crate::core::kernel::{Kernel, KernelSpec};
 use crate::core::mask::Mask;
 use crate::core::rng::seed_key;
 use crate::core::slice::{Slice, SliceSampler};
+use crate::core::tile::Tile;
 use crate::core::transport::objective;
 
 /// Slices in the fixed scoring set.
@@ -15,7 +16,7 @@ pub const SCORE_SLICES: u32 = 16384;
 const SCORE_SEED: u64 = 0x5c0e_5c0e;
 
 /// The fixed slices for a tile and kernel.
-pub fn score_slices(kernel: &Kernel, tile: &crate::core::tile::Tile, count: u32) -> Vec<Slice> {
+pub fn score_slices(kernel: &Kernel, tile: &Tile, count: u32) -> Vec<Slice> {
     let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel);
     (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()
 }
@@ -55,12 +56,17 @@ impl Mask {
 
 /// `Mask::score` on `count` slices.
 pub fn score(mask: &Mask, spec: KernelSpec, count: u32) -> Score {
-    let kernel = Kernel::new(spec, &mask.tile);
-    let slices = score_slices(&kernel, &mask.tile, count);
-    let own = objective(&mask.samples, &mask.tile, &kernel, &slices);
+    scores(&mask.tile, &[&mask.samples], spec, count)[0]
+}
+
+/// The scores of several sample sets of one tile on `count` slices: the kernel,
+/// the slices and white noise's objective are made once for all of them.
+pub fn scores(tile: &Tile, samples: &[&[f32]], spec: KernelSpec, count: u32) -> Vec<Score> {
+    let kernel = Kernel::new(spec, tile);
+    let slices = score_slices(&kernel, tile, count);
     let white = (0..4u64)
-        .map(|s| objective(&Mask::white(mask.tile, 0xa11ce + s).samples, &mask.tile, &kernel, &slices))
+        .map(|s| objective(&Mask::white(*tile, 0xa11ce + s).samples, tile, &kernel, &slices))
         .sum::<f64>()
         / 4.0;
-    Score { objective: own, white }
+    samples.iter().map(|s| Score { objective: objective(s, tile, &kernel, &slices), white }).collect()
 }

@@ -329,6 +329,13 @@ impl Run {
         self.resumed_from
     }
     internal! {
+        /// The samples the run started from: its initial mask (an animated
+        /// start's), or white noise drawn from the seed.
+        fn start_samples(&self) -> Result<Vec<f32>> {
+            crate::optimize::settings::initial_samples(&self.tile, &self.settings, self.init.as_ref())
+        }
+    }
+    internal! {
         fn backend(&self) -> &dyn Backend {
             self.backend.as_ref()
         }

@@ -12,8 +12,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use fsot::core::kernel::{KernelSpec, DEFAULT_ALPHA, DEFAULT_FPS, DEFAULT_SIGMA};
-use fsot::core::mask::Mask;
-use fsot::core::objective::{score, SCORE_SLICES};
+use fsot::core::objective::{score, scores, SCORE_SLICES};
 use fsot::core::tile::Tile;
 use fsot::error::{Error, Result};
 use fsot::io::atomic::AtomicFile;

@@ -71,7 +71,39 @@ fn optimize_writes_exr_and_png_and_score_reads_it() {
         dir.path(),
     );
     assert!(c.status.success(), "{}", stderr(&c));
-    assert!(String::from_utf8_lossy(&c.stdout).contains("8x8x4"));
+    let continued = String::from_utf8_lossy(&c.stdout).into_owned();
+    assert!(continued.contains("8x8x4"), "{continued}");
+    // The report's objectives are the start's and the result's on `fsot score`'s
+    // slices: here the start is m.exr, scored above.
+    let scored =
+        |text: &str| text.split(": objective ").nth(1).unwrap().split(' ').next().unwrap().to_string();
+    assert_eq!(report(&continued).0, scored(&asked), "{continued}");
+    assert_eq!(report(&out).1, scored(&asked), "{out}");
+}
+
+/// The objectives `fsot optimize` reports: (start, result, result x white noise).
+fn report(stdout: &str) -> (String, String, f64) {
+    let line = stdout.lines().find(|l| l.contains("x white noise")).expect(stdout);
+    let figures = line.split("; objective ").nth(1).unwrap();
+    let (start, rest) = figures.split_once(" -> ").unwrap();
+    let (result, rest) = rest.split_once(" (").unwrap();
+    let ratio = rest.split(' ').next().unwrap().parse().unwrap();
+    (start.to_string(), result.to_string(), ratio)
+}
+
+#[test]
+fn a_budgeted_run_reports_the_objective_of_its_animated_start_not_of_white_noise() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["optimize", "--backend", "cpu", "--size", "16x16x8", "--kernel", "taa", "--budget", "0.3s"];
+    let o = fsot(&[&args[..], &["--out", "m.exr"]].concat(), dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    let (start, result, ratio) = report(&out);
+    let (start, result): (f64, f64) = (start.parse().unwrap(), result.parse().unwrap());
+    // White noise's objective is the result's divided by its ratio; one frame
+    // optimized and set in motion starts well below it.
+    let white = result / ratio;
+    assert!(start < 0.7 * white, "start {start}, white noise {white}: {out}");
 }
 
 #[test]

@@ -123,11 +123,11 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     let since_start = run.elapsed();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
+    let start_samples = run.start_samples()?;
     let mask = run.finish()?;
     // Scored after the run, so that a time budget is the run's alone.
-    let start_samples = fsot::optimize::settings::initial_samples(&tile, &settings, init.as_ref())?;
-    let before = score(&Mask { tile, samples: start_samples, meta: vec![] }, spec, SCORE_SLICES);
-    let after = score(&mask, spec, SCORE_SLICES);
+    let scored = scores(&tile, &[&start_samples, &mask.samples], spec, SCORE_SLICES);
+    let (before, after) = (scored[0], scored[1]);
     file_kind.write(&mask, out)?;
     for (kind, file) in also {
         kind.write(&mask, file)?;
