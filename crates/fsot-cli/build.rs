@@ -6,7 +6,9 @@ use std::{env, path::Path};
 
 fn main() {
     println!("cargo:rustc-env=FSOT_COMMIT={}", commit());
-    for watched in ["../../.git/HEAD", "../../.git/index"] {
+    // A commit or a staged change moves HEAD or the index; an edit to the sources
+    // moves neither, so the sources are watched too ("-dirty" then shows).
+    for watched in ["../../.git/HEAD", "../../.git/index", "../../src", "../../glsl", "src"] {
         if Path::new(watched).exists() {
             println!("cargo:rerun-if-changed={watched}");
         }
