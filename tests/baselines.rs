@@ -3,7 +3,7 @@
 
 use fsot::core::mask::Mask;
 use fsot::core::tile::Tile;
-use fsot::peers::fast::{fast_mask, FastSpec};
+use fsot::peers::fast::{fast_mask, fast_mask_from, FastSpec};
 use fsot::peers::stbn::{stbn_mask, stbn_mask_with, stbn_offsets, stbn_vector, void_and_cluster};
 use fsot::peers::swap::{PairEnergy, SwapDevice, ValueTerm};
 use fsot::quality::perceived::{perceived_error, TestSetup};
@@ -92,4 +92,33 @@ fn fast_and_vector_stbn_masks_beat_white_noise_under_taa() {
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);
     eprintln!("vector STBN / white under TAA: {ratio:.3}");
     assert!(ratio < 0.51, "{ratio}"); // measured 0.444; 15% margin
+}
+
+#[test]
+fn fast_from_an_initial_mask_moves_its_values_between_pixels_and_lowers_the_energy() {
+    // Swaps keep the start's values (its histogram, exactly) and rearrange
+    // them; the pairwise energy, summed afresh, falls below the start's.
+    let tile = Tile::new(16, 16, 8, 1, 1).unwrap();
+    let start = Mask::white(tile, 21);
+    let spec = FastSpec::default();
+    let (mask, report) =
+        fast_mask_from(tile, &spec, 2, 5, Some(&start), &SwapDevice::Cpu, |_, _| {}).unwrap();
+    let sorted = |v: &[f32]| {
+        let mut v = v.to_vec();
+        v.sort_by(f32::total_cmp);
+        v
+    };
+    assert_eq!(sorted(&mask.samples), sorted(&start.samples));
+    assert_ne!(mask.samples, start.samples);
+    let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance).unwrap();
+    let (before, after) = (energy.total(&start.samples), energy.total(&mask.samples));
+    assert!(after < before, "energy {before} -> {after}");
+    assert!(
+        (report.start_energy - before).abs() < 1e-9 * before.abs(),
+        "{} against {before}",
+        report.start_energy
+    );
+    // A start of another tile is refused.
+    let other = Mask::white(Tile::new(16, 16, 4, 1, 1).unwrap(), 21);
+    assert!(fast_mask_from(tile, &spec, 1, 5, Some(&other), &SwapDevice::Cpu, |_, _| {}).is_err());
 }

@@ -291,8 +291,34 @@ pub fn fast_mask(
     device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
 ) -> Result<(Mask, SwapReport)> {
+    fast_mask_from(tile, spec, passes, seed, None, device, on_pass)
+}
+
+/// A FAST mask from `start`'s values when given (swaps keep the values and
+/// move them between pixels, so the mask's value histogram is `start`'s), else
+/// from stratified values: greedy swaps searched on `device`. `start` must be
+/// a mask of `tile`.
+pub fn fast_mask_from(
+    tile: Tile,
+    spec: &FastSpec,
+    passes: u32,
+    seed: u64,
+    start: Option<&Mask>,
+    device: &SwapDevice,
+    on_pass: impl FnMut(u32, f64),
+) -> Result<(Mask, SwapReport)> {
     let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance)?;
-    let mut samples = stratified_values(&tile, seed, 0xfa57);
+    let mut samples = match start {
+        Some(m) if m.tile != tile => {
+            return Err(Error::invalid(format!(
+                "the initial mask is {} but FAST was asked for {}",
+                m.tile.describe(),
+                tile.describe()
+            )))
+        }
+        Some(m) => m.samples.clone(),
+        None => stratified_values(&tile, seed, 0xfa57),
+    };
     let report = device.search(
         &energy,
         &mut samples,
@@ -305,6 +331,7 @@ pub fn fast_mask(
         ("kernel".to_string(), spec.describe()),
         ("seed".to_string(), seed.to_string()),
         ("passes".to_string(), passes.to_string()),
+        ("start".to_string(), if start.is_some() { "the initial mask" } else { "stratified values" }.to_string()),
         ("backend".to_string(), device.kind().to_string()),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];

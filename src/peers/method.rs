@@ -4,9 +4,9 @@
 
 use crate::core::mask::Mask;
 use crate::core::tile::Tile;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::optimize::settings::Settings;
-use crate::peers::fast::{fast_mask, FastSpec};
+use crate::peers::fast::{fast_mask_from, FastSpec};
 use crate::peers::stbn::stbn_mask_with;
 use crate::peers::swap::SwapDevice;
 
@@ -39,14 +39,22 @@ pub struct Made {
 
 /// Makes the mask of `method` for `tile` from `seed` (fsot: the settings' seed),
 /// the swap searches on `device`; `on_pass(pass, energy)` after each pass of a
-/// swap search.
+/// swap search. `start`, a mask of `tile`, is where fsot and FAST begin (FAST's
+/// swaps keep its values); white noise and STBN make their masks from nothing
+/// and refuse one.
 pub fn make(
     method: &Method,
     tile: Tile,
     seed: u64,
+    start: Option<&Mask>,
     device: &SwapDevice,
     on_pass: &mut dyn FnMut(u32, f64),
 ) -> Result<Made> {
+    if start.is_some() && matches!(method, Method::White | Method::Stbn { .. }) {
+        return Err(Error::invalid(
+            "white noise and STBN make their masks from nothing: an initial mask is for fsot and FAST",
+        ));
+    }
     let (mask, note) = match method {
         Method::White => {
             let mut m = Mask::white(tile, seed);
@@ -60,10 +68,10 @@ pub fn make(
             (mask, note)
         }
         Method::Fast { spec, passes } => {
-            let (mask, report) = fast_mask(tile, spec, *passes, seed, device, &mut *on_pass)?;
+            let (mask, report) = fast_mask_from(tile, spec, *passes, seed, start, device, &mut *on_pass)?;
             (mask, Some(format!("{}: {}", spec.describe(), report.describe(device))))
         }
-        Method::Fsot(settings) => (crate::optimize::run::optimize(tile, *settings, None)?, None),
+        Method::Fsot(settings) => (crate::optimize::run::optimize(tile, *settings, start)?, None),
     };
     Ok(Made { mask, note })
 }

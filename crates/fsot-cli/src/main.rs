@@ -402,7 +402,8 @@ struct OptimizeArgs {
     /// Worker threads for the CPU path [default: every core].
     #[arg(long, allow_negative_numbers = true)]
     threads: Option<usize>,
-    /// Start from this mask (EXR written by fsot or laid out the same way).
+    /// Start from this mask (EXR written by fsot or laid out the same way); with
+    /// --method fast, the swaps rearrange its values.
     #[arg(long)]
     init: Option<PathBuf>,
     /// Swap methods (stbn with d >= 2, fast): passes of as many proposed swaps

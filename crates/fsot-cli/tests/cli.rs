@@ -286,6 +286,41 @@ fn swap_methods_refuse_bad_settings() {
 }
 
 #[test]
+fn fast_starts_from_an_initial_mask_and_methods_that_start_from_nothing_refuse_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let made = fsot(
+        &["optimize", "--method", "white", "--size", "8x8x4", "--dims", "1", "--out", "w.exr"],
+        dir.path(),
+    );
+    assert!(made.status.success(), "{}", stderr(&made));
+    let o = fsot(
+        &["optimize", "--method", "fast", "--init", "w.exr", "--passes", "2", "--out", "f.exr"],
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (mut start, mut swapped) =
+        (read_samples(&dir.path().join("w.exr")), read_samples(&dir.path().join("f.exr")));
+    assert_ne!(start, swapped, "no swap taken");
+    start.sort_unstable();
+    swapped.sort_unstable();
+    assert_eq!(start, swapped, "FAST from a mask keeps its values");
+    let cases: &[(&[&str], &str)] = &[
+        (&["--method", "white"], "initial mask"),
+        (&["--method", "stbn"], "initial mask"),
+        (&["--method", "fast", "--size", "16x16x4"], "initial mask is 8x8x4"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = vec!["optimize", "--init", "w.exr", "--out", "m.exr"];
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
+    }
+}
+
+#[test]
 fn a_run_killed_mid_way_leaves_the_existing_output_untouched_and_nothing_else() {
     // A long run over an existing file, killed (SIGKILL: no chance to clean up)
     // after a second and a half of its work.

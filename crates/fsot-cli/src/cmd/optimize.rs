@@ -50,7 +50,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         if args.checkpoint.is_some() || args.resume {
             return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
         }
-        return make_baseline(&args, tile, spec, file_kind, out, also);
+        return make_baseline(&args, tile, spec, init.as_ref(), file_kind, out, also);
     }
     let mut settings = Settings::new(spec, args.seed);
     settings.iterations = iterations;
@@ -282,6 +282,7 @@ pub(crate) fn make_baseline(
     args: &OptimizeArgs,
     tile: Tile,
     spec: KernelSpec,
+    init: Option<&fsot::Mask>,
     kind: MaskFile,
     out: AtomicFile,
     also: Vec<(MaskFile, AtomicFile)>,
@@ -322,7 +323,7 @@ pub(crate) fn make_baseline(
     };
     let start = Instant::now();
     let bar = swap_bar(args.passes, method.swaps(&tile));
-    let made = fsot::peers::method::make(&method, tile, args.seed, &device, &mut |_, e| {
+    let made = fsot::peers::method::make(&method, tile, args.seed, init, &device, &mut |_, e| {
         bar.inc(1);
         bar.set_message(format!("{e:.6e}"));
     })?;

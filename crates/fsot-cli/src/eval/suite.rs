@@ -273,7 +273,7 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed
         },
         other => return Err(Error::invalid(format!("unknown method `{other}`"))),
     };
-    let mask = make(&method, t, seed, &SwapDevice::Cpu, &mut |_, _| {})?.mask;
+    let mask = make(&method, t, seed, None, &SwapDevice::Cpu, &mut |_, _| {})?.mask;
     fsot::io::atomic::make_folder(cache)?;
     fsot::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)
