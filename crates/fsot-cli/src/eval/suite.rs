@@ -63,8 +63,8 @@ pub struct EvalSize {
     pub renders: u32,
     pub reference_samples: usize,
     /// Also measure `fsot-planned`: each scene's plan (`scenes/*.toml`), every
-    /// decision reading its own mask, made until iterations no longer pay (at most
-    /// ten times `iterations`).
+    /// decision reading its own mask, made from the animated start until
+    /// iterations no longer pay (at most ten times `iterations`).
     pub planned: bool,
     /// Also the no-TAA plan's masks (`fsot-planned` without TAA); the quick run
     /// leaves them out for time.
@@ -350,7 +350,7 @@ pub fn planned_masks(
             .map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' })
             .collect();
         let name = format!(
-            "planned-{slug}-{}x{}x{}-d{}-spp{}-cap{cap}-seed{}.exr",
+            "planned-{slug}-{}x{}x{}-d{}-spp{}-cap{cap}-animated-seed{}.exr",
             tile.width, tile.height, tile.frames, tile.dims, tile.spp, planned.seed
         );
         let path = cache.join(name);
