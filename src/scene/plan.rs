@@ -25,9 +25,9 @@
 //!   `share = false` owns all its masks and lends none.
 //! - Every optimized mask starts from the animated start (one frame optimized,
 //!   set in motion by a Kronecker sequence; `Start::Animated`): against white
-//!   noise, the masks the plateau rule then stops score better by every judge in
-//!   every scene measured, with TAA and without, in fewer iterations (RESULTS.md,
-//!   the leads).
+//!   noise, the masks the plateau rule then stops score better or level by
+//!   every judge in every scene measured, with TAA and without, in fewer
+//!   iterations (RESULTS.md, the leads).
 //! - Every optimized mask runs until further iterations no longer pay
 //!   (`Until::Plateau`); the estimate of its iterations is the measured stopping
 //!   point of the rule, its time a cost model: a calibration run on this machine
