@@ -274,14 +274,20 @@ fn swap_methods_refuse_bad_settings() {
         (&["--method", "fast", "--spp", "2"], "1 spp"),
         (&["--method", "stbn", "--spp", "2"], "1 spp"),
     ];
+    refused(dir.path(), &["optimize", "--size", "4x4x2", "--out", "m.exr"], cases);
+}
+
+/// Each case, `base` then its flags, fails with its message, no panic, and
+/// leaves no `m.exr` in `dir`.
+fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {
     for (extra, expect) in cases {
-        let mut args = vec!["optimize", "--size", "4x4x2", "--out", "m.exr"];
+        let mut args = base.to_vec();
         args.extend_from_slice(extra);
-        let o = fsot(&args, dir.path());
+        let o = fsot(&args, dir);
         let err = stderr(&o);
         assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
         assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
-        assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
+        assert!(!dir.join("m.exr").exists(), "{extra:?} left a file");
     }
 }
 
@@ -309,15 +315,7 @@ fn fast_starts_from_an_initial_mask_and_methods_that_start_from_nothing_refuse_o
         (&["--method", "stbn"], "initial mask"),
         (&["--method", "fast", "--size", "16x16x4"], "initial mask is 8x8x4"),
     ];
-    for (extra, expect) in cases {
-        let mut args = vec!["optimize", "--init", "w.exr", "--out", "m.exr"];
-        args.extend_from_slice(extra);
-        let o = fsot(&args, dir.path());
-        let err = stderr(&o);
-        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
-        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
-        assert!(!dir.path().join("m.exr").exists(), "{extra:?} left a file");
-    }
+    refused(dir.path(), &["optimize", "--init", "w.exr", "--out", "m.exr"], cases);
 }
 
 #[test]
