@@ -374,7 +374,8 @@ struct OptimizeArgs {
     #[arg(long, conflicts_with = "until", allow_negative_numbers = true)]
     budget: Option<String>,
     /// Where the optimizer starts without --init (--init takes a mask of the
-    /// tile, or of one frame of it, which is then set in motion as `animated` does).
+    /// tile, or of one frame of it, which is then set in motion as `animated` does);
+    /// with --scene every mask starts `animated`.
     #[arg(long, value_enum, default_value = "auto")]
     start: StartArg,
     /// Slices per iteration [default: enough for each sample to be in 16 classes

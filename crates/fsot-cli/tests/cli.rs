@@ -466,6 +466,10 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
+        (
+            &["optimize", "--scene", "s.toml", "--out", "bad", "--start", "white"],
+            "--scene does not take --start",
+        ),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--budget", "soon"], "--budget must be a time"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--ktx2-format", "r8_unorm"], "d = 2"),
         (&["plan", "bad.toml"], "line 4"),

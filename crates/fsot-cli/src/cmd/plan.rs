@@ -93,6 +93,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             "--iterations and --until (each mask stops when iterations no longer pay)",
         ),
         (!args.also.is_empty(), "--also (each mask is written into the folder --out)"),
+        (args.start != StartArg::Auto, "--start (a plan's masks start from the animated start)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));
