@@ -349,8 +349,11 @@ pub fn planned_masks(
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' })
             .collect();
+        let mut s = plan.settings(planned);
+        s.iterations = cap;
+        let begins = if s.start.animates(s.until, &tile) { "animated" } else { "white" };
         let name = format!(
-            "planned-{slug}-{}x{}x{}-d{}-spp{}-cap{cap}-animated-seed{}.exr",
+            "planned-{slug}-{}x{}x{}-d{}-spp{}-cap{cap}-{begins}-seed{}.exr",
             tile.width, tile.height, tile.frames, tile.dims, tile.spp, planned.seed
         );
         let path = cache.join(name);
@@ -359,8 +362,6 @@ pub fn planned_masks(
             (Some(m), _) => m,
             (None, true) => Mask::white(tile, planned.seed),
             (None, false) => {
-                let mut s = plan.settings(planned);
-                s.iterations = cap;
                 let start = std::time::Instant::now();
                 let m = fsot::optimize::run::optimize(tile, s, None)?;
                 out.seconds += start.elapsed().as_secs_f64();
