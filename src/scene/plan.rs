@@ -23,6 +23,11 @@
 //!   and R_d sequences): measured to cost nothing against masks of its own
 //!   (RESULTS.md, `fsot-planned-unshared`), at none of the time. A group with
 //!   `share = false` owns all its masks and lends none.
+//! - A scalar mask (one dimension) takes the eye at no fewer than
+//!   `SCALAR_EYE_PPD` pixels per degree, `standard_4k`'s: for a 1-D decision
+//!   the judges score a mask for `standard_fhd`'s sharper eye level with one
+//!   for that wider eye on `standard_fhd` itself, while the wider eye's mask
+//!   leaves less error under every wider filter (RESULTS.md, the leads).
 //! - Every optimized mask starts from the animated start (one frame optimized,
 //!   set in motion by a Kronecker sequence; `Start::Animated`): against white
 //!   noise, the masks the plateau rule then stops score better or level by
@@ -38,7 +43,7 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::core::kernel::KernelSpec;
+use crate::core::kernel::{KernelSpec, Spatial};
 use crate::core::mask::Mask;
 use crate::core::step_rule::Plateau;
 use crate::core::tile::Tile;
@@ -55,6 +60,14 @@ pub const DEFAULT_SIZE: usize = 128;
 /// 64x64x16 `perceptual`, 64x64x32 `perceptual-taa` and a 128x128x64 scalar
 /// mask): the plan's estimate.
 pub const EXPECTED_ITERATIONS: u32 = 450;
+
+/// The least pixels per degree a scalar mask's eye is taken at (`standard_4k`'s,
+/// an eye of about 1.8 pixels): on `standard_fhd` (38 pixels per degree, an eye
+/// of about 0.9 pixels) light-pick's scalar mask for this eye scored level with
+/// the one for the display's own by ColorVideoVDP and FLIP and by pRelMSE with
+/// the display's eye, and 27% lower by pRelMSE with a Gaussian of sigma 2.1
+/// pixels, where the sharp eye's mask is behind FAST's (RESULTS.md, the leads).
+pub const SCALAR_EYE_PPD: f64 = 75.4;
 
 /// One mask file of the plan.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -73,6 +86,11 @@ pub struct PlannedMask {
     pub estimated_iterations: u32,
     /// Seconds making the mask is expected to take, by the cost model.
     pub estimated_seconds: f64,
+    /// The kernel it is optimized for, in words (`KernelSpec::describe`).
+    pub kernel: String,
+    /// The kernel itself (`kernel` is its description).
+    #[serde(skip)]
+    pub spec: KernelSpec,
 }
 
 /// What one sampling decision reads.
@@ -90,6 +108,8 @@ pub struct Part {
     pub shift: Vec<f32>,
     /// The group whose mask this part reads, when it is not its own.
     pub shares: Option<String>,
+    /// The kernel the mask it reads is optimized for (None: white noise).
+    pub kernel: Option<String>,
 }
 
 /// One sampling decision's plan.
@@ -164,6 +184,18 @@ pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
     )?;
     let spec = KernelSpec { spatial: display.spatial, ..spec };
     Ok((spec, format!("{why}; the eye: {}", display.seen_on)))
+}
+
+/// The kernel of a mask of `dims` dimensions under the plan's kernel `spec`: a
+/// scalar mask's eye is taken at no fewer than `SCALAR_EYE_PPD` pixels per
+/// degree; an eye the scene gives as a Gaussian is kept as given.
+pub fn mask_kernel(spec: KernelSpec, dims: usize) -> KernelSpec {
+    match spec.spatial {
+        Spatial::Display { ppd } if dims == 1 && ppd < SCALAR_EYE_PPD => {
+            KernelSpec { spatial: Spatial::Display { ppd: SCALAR_EYE_PPD }, ..spec }
+        }
+        _ => spec,
+    }
 }
 
 /// The tile's size, and why.
@@ -313,6 +345,7 @@ impl Plan {
         struct Lender {
             file: String,
             group: String,
+            kernel: String,
             dims: usize,
             spp: usize,
             readers: u32,
@@ -330,6 +363,8 @@ impl Plan {
                     seed: seed_of(&scene.name, &file),
                     estimated_iterations: 0,
                     estimated_seconds: 0.0,
+                    kernel: "none (white noise)".into(),
+                    spec: kernel,
                 });
                 parts.push(Part {
                     mask: file,
@@ -338,6 +373,7 @@ impl Plan {
                     offset: [0; 3],
                     shift: vec![0.0; g.dims],
                     shares: None,
+                    kernel: None,
                 });
                 (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
             } else {
@@ -353,6 +389,7 @@ impl Plan {
                             offset: share_offset(l.readers, [w, h, t]),
                             shift: share_shift(l.readers, dims),
                             shares: Some(l.group.clone()),
+                            kernel: Some(l.kernel.clone()),
                         });
                         continue;
                     }
@@ -362,6 +399,7 @@ impl Plan {
                     };
                     let tile = Tile::new(w, h, t, g.spp, dims)?;
                     let per = cost.seconds_per_iteration(&tile);
+                    let spec = mask_kernel(kernel, dims);
                     masks.push(PlannedMask {
                         file: file.clone(),
                         dims,
@@ -370,11 +408,14 @@ impl Plan {
                         seed: seed_of(&scene.name, &file),
                         estimated_iterations: EXPECTED_ITERATIONS,
                         estimated_seconds: per * EXPECTED_ITERATIONS as f64,
+                        kernel: spec.describe(),
+                        spec,
                     });
                     if g.share {
                         lenders.push(Lender {
                             file: file.clone(),
                             group: g.name.clone(),
+                            kernel: spec.describe(),
                             dims,
                             spp: g.spp,
                             readers: 0,
@@ -387,6 +428,7 @@ impl Plan {
                         offset: [0; 3],
                         shift: vec![0.0; dims],
                         shares: None,
+                        kernel: Some(spec.describe()),
                     });
                 }
                 let what = match (g.dims, reading) {
@@ -397,6 +439,9 @@ impl Plan {
                         format!("{d}-D: split into pairs and a single, as renderers consume them")
                     }
                 };
+                // A scalar mask of its own for an eye wider than the display's.
+                let wider = parts.iter().any(|p| p.shares.is_none() && p.dims == 1)
+                    && mask_kernel(kernel, 1) != kernel;
                 let shared: Vec<String> = parts
                     .iter()
                     .filter_map(|p| p.shares.as_ref().map(|s| format!("{} ({s}'s)", p.mask)))
@@ -408,6 +453,12 @@ impl Plan {
                         "{what}, sharing {}: as good as a mask of its own, measured, at none of the time",
                         shared.join(", ")
                     ),
+                };
+                let reason = match wider {
+                    true => format!(
+                        "{reason}; the scalar mask is made for the eye at {SCALAR_EYE_PPD} pixels per degree (for a 1-D decision a sharper eye is seen no better and leaves more error under a wider filter)"
+                    ),
+                    false => reason,
                 };
                 (None, reason)
             };
@@ -471,7 +522,7 @@ impl Plan {
     /// The settings of an optimized mask of the plan (under a budget its run
     /// ends at the time `Plan::execute` gives it).
     pub fn settings(&self, mask: &PlannedMask) -> Settings {
-        let mut s = Settings::new(self.spec, mask.seed);
+        let mut s = Settings::new(mask.spec, mask.seed);
         s.iterations = DEFAULT_CAP;
         s.until = Until::Plateau(Plateau::DEFAULT);
         s.start = Start::Animated;
@@ -741,7 +792,7 @@ impl Plan {
                     offset: first.offset,
                     shift: &first.shift,
                     parts: &g.parts,
-                    kernel: optimized.then_some(self.kernel.as_str()),
+                    kernel: first.kernel.as_deref().filter(|_| optimized),
                     iterations: optimized.then(|| read.iter().map(|m| m.iterations).sum()),
                     seconds: optimized.then(|| own.iter().map(|m| m.seconds).sum()),
                     skipped: g.skipped.as_deref(),

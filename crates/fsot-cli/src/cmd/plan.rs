@@ -66,8 +66,12 @@ pub(crate) fn describe(plan: &Plan) -> String {
         );
     }
     for m in plan.masks.iter().filter(|m| !m.white) {
+        let kernel = match m.kernel == plan.kernel {
+            true => String::new(),
+            false => format!(", kernel {}", m.kernel),
+        };
         s += &format!(
-            "  mask {}: d = {}, spp {}, about {} iterations, about {:.1} s\n",
+            "  mask {}: d = {}, spp {}{kernel}, about {} iterations, about {:.1} s\n",
             m.file, m.dims, m.spp, m.estimated_iterations, m.estimated_seconds
         );
     }

@@ -344,12 +344,13 @@ pub fn planned_masks(
         );
         planned.seed = fsot::core::rng::derive(key, seed as u32) as u64;
         let planned = &planned;
-        let slug: String = plan
+        let mut s = plan.settings(planned);
+        let slug: String = s
             .kernel
+            .describe()
             .chars()
             .map(|c| if c.is_ascii_alphanumeric() || c == '.' { c } else { '_' })
             .collect();
-        let mut s = plan.settings(planned);
         s.iterations = cap;
         let begins = if s.start.animates(s.until, &tile) { "animated" } else { "white" };
         let name = format!(
