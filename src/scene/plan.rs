@@ -26,8 +26,8 @@
 //! - A scalar mask (one dimension) takes the eye at no fewer than
 //!   `SCALAR_EYE_PPD` pixels per degree, `standard_4k`'s: for a 1-D decision
 //!   the judges score a mask for `standard_fhd`'s sharper eye level with one
-//!   for that wider eye on `standard_fhd` itself, while the wider eye's mask
-//!   leaves less error under every wider filter (RESULTS.md, the leads).
+//!   for that wider eye on `standard_fhd` itself, and the wider eye's mask
+//!   leaves far less error under a wider filter (RESULTS.md, the leads).
 //! - Every optimized mask starts from the animated start (one frame optimized,
 //!   set in motion by a Kronecker sequence; `Start::Animated`): against white
 //!   noise, the masks the plateau rule then stops score better or level by
@@ -62,11 +62,12 @@ pub const DEFAULT_SIZE: usize = 128;
 pub const EXPECTED_ITERATIONS: u32 = 450;
 
 /// The least pixels per degree a scalar mask's eye is taken at (`standard_4k`'s,
-/// an eye of about 1.8 pixels): on `standard_fhd` (38 pixels per degree, an eye
+/// an eye of about 1.8 pixels). On `standard_fhd` (38 pixels per degree, an eye
 /// of about 0.9 pixels) light-pick's scalar mask for this eye scored level with
-/// the one for the display's own by ColorVideoVDP and FLIP and by pRelMSE with
-/// the display's eye, and 27% lower by pRelMSE with a Gaussian of sigma 2.1
-/// pixels, where the sharp eye's mask is behind FAST's (RESULTS.md, the leads).
+/// the one for the display's own by ColorVideoVDP, within 1% by FLIP and 5% by
+/// pRelMSE with the display's eye, and 27% lower by pRelMSE with a Gaussian of
+/// sigma 2.1 pixels, by which the sharper eye's mask is behind FAST's
+/// (RESULTS.md, the leads).
 pub const SCALAR_EYE_PPD: f64 = 75.4;
 
 /// One mask file of the plan.
