@@ -457,7 +457,7 @@ impl Plan {
                 };
                 let reason = match wider {
                     true => format!(
-                        "{reason}; the scalar mask is made for the eye at {SCALAR_EYE_PPD} pixels per degree (for a 1-D decision a sharper eye is seen no better and leaves more error under a wider filter)"
+                        "{reason}; scalar masks are made for the eye at {SCALAR_EYE_PPD} pixels per degree (for a 1-D decision a sharper eye is seen no better and leaves more error under a wider filter)"
                     ),
                     false => reason,
                 };
