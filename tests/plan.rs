@@ -390,10 +390,11 @@ fn a_plan_under_a_budget_makes_every_mask_within_it_one_after_the_other_on_the_c
     assert_eq!(order, ["start pick.exr", "done pick.exr true", "start lens.exr", "done lens.exr true"]);
     assert!(seconds <= 1.5 + slowest + 0.3, "{seconds} s for a budget of 1.5 s ({slowest} s a step)");
     assert!(seconds >= 0.75, "{seconds} s: the budget was not used");
-    for name in ["pick.exr", "lens.exr"] {
+    for (name, planned) in ["pick.exr", "lens.exr"].iter().zip(&plan.masks) {
         let mask = fsot::io::exr::read(&dir.path().join(name)).unwrap();
         assert!(mask.meta("budget_seconds").is_some(), "{name}: {:?}", mask.meta);
-        let s = score(&mask, fsot::scene::plan::kernel_for(&scene.display).unwrap().0, 4096);
+        assert_eq!(planned.file, *name);
+        let s = score(&mask, planned.spec, 4096);
         assert!(s.ratio() < 0.6, "{name}: {} x white", s.ratio());
     }
     assert!(dir.path().join("plan.json").exists());

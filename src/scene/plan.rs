@@ -64,8 +64,8 @@ pub const EXPECTED_ITERATIONS: u32 = 450;
 /// The least pixels per degree a scalar mask's eye is taken at (`standard_4k`'s,
 /// an eye of about 1.8 pixels). On `standard_fhd` (38 pixels per degree, an eye
 /// of about 0.9 pixels) light-pick's scalar mask for this eye scored level with
-/// the one for the display's own by ColorVideoVDP, within 1% by FLIP and 5% by
-/// pRelMSE with the display's eye, and 27% lower by pRelMSE with a Gaussian of
+/// the one for the display's own by ColorVideoVDP, about 1% higher by FLIP and
+/// 5% by pRelMSE with the display's eye, and 27% lower by pRelMSE with a Gaussian of
 /// sigma 2.1 pixels, by which the sharper eye's mask is behind FAST's
 /// (RESULTS.md, the leads).
 pub const SCALAR_EYE_PPD: f64 = 75.4;
