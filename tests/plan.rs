@@ -26,8 +26,16 @@ fn model() -> CostModel {
 fn the_display_chooses_the_kernel() {
     let k = |d: &str| kernel_for(&scene(d, ONE).display).unwrap().0.describe();
     assert!(k("taa_alpha = 0.1").starts_with("perceptual-taa"), "{}", k("taa_alpha = 0.1"));
-    assert!(k("fps = 30").starts_with("perceptual ("), "{}", k("fps = 30"));
-    assert!(k("fps = 30").contains("fps = 30"));
+    // No TAA: a blend whose half-life is one 60 fps frame, whatever the rate.
+    assert!(k("fps = 60").starts_with("taa ("), "{}", k("fps = 60"));
+    assert!(k("fps = 60").contains("alpha = 0.5"), "{}", k("fps = 60"));
+    for fps in [24.0f64, 30.0, 60.0, 144.0] {
+        let spec = kernel_for(&scene(&format!("fps = {fps}"), ONE).display).unwrap().0;
+        let fsot::core::kernel::Temporal::Taa { alpha } = spec.temporal else { panic!("{spec:?}") };
+        // The weight a frame keeps after 1/60 s of later frames is one half.
+        let frames = fps / 60.0;
+        assert!(((1.0 - alpha).powf(frames) - 0.5).abs() < 1e-12, "{fps} fps: alpha {alpha}");
+    }
     assert!(k("animated = false\ntaa_alpha = 0.1").starts_with("spatial"));
     assert!(
         k("sigma = 1.5\ntaa_alpha = 0.2").contains("sigma = 1.5")

@@ -2,7 +2,10 @@
 //! seen) to the masks that pay off, each with the reason for it.
 //!
 //! - The kernel follows the display: TAA -> `perceptual-taa` at its alpha and frame
-//!   rate, no TAA -> `perceptual`, a still camera (frames accumulated) -> `spatial`.
+//!   rate, no TAA -> `taa` with the blend whose half-life is one 60 fps frame
+//!   (`no_taa_blend`, 0.5 at 60 fps: the eye's integration over frames as the
+//!   judge rewards it, measured against the eye's own temporal response), a
+//!   still camera (frames accumulated) -> `spatial`.
 //! - The kernel's spatial filter is the eye at the scene's display (its contrast
 //!   sensitivity at the display's pixels per degree; `csf.rs`), or a Gaussian
 //!   the scene gives in pixels.
@@ -166,6 +169,20 @@ pub struct Plan {
     pub budget: Option<f64>,
 }
 
+/// Without TAA, the half-life in seconds of the exponential blend that stands for
+/// the eye's integration over frames: one frame at 60 fps. On light-pick's
+/// scalar mask on `standard_4k` without TAA, blends of weight 0.3, 0.5, 0.7 and 1
+/// (frames alone) per 60 fps frame scored 2.004, 2.024, 2.016 and 2.015 JOD,
+/// and the eye's own temporal response (`perceptual`) 1.980 (RESULTS.md, the
+/// leads).
+pub const NO_TAA_HALF_LIFE: f64 = 1.0 / 60.0;
+
+/// The blend weight per frame at `fps` whose half-life is `NO_TAA_HALF_LIFE`:
+/// 1 - 2^(-1 / (fps NO_TAA_HALF_LIFE)), 0.5 at 60 fps.
+pub fn no_taa_blend(fps: f64) -> f64 {
+    1.0 - (-1.0 / (fps * NO_TAA_HALF_LIFE)).exp2()
+}
+
 /// The kernel a display calls for, and why.
 pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
     let (name, why) = match (display.animated, display.taa_alpha) {
@@ -174,15 +191,21 @@ pub fn kernel_for(display: &Display) -> Result<(KernelSpec, String)> {
             "a still camera: frames are accumulated, each frame's error is seen alone".to_string(),
         ),
         (true, Some(a)) => ("perceptual-taa", format!("TAA (alpha {a}) then the eye at {} fps", display.fps)),
-        (true, None) => ("perceptual", format!("no TAA: the eye's temporal filter at {} fps", display.fps)),
+        (true, None) => (
+            "taa",
+            format!(
+                "no TAA: the eye's integration over frames as a blend of weight {:.3} per frame at {} fps (a half-life of {:.1} ms)",
+                no_taa_blend(display.fps),
+                display.fps,
+                1e3 * NO_TAA_HALF_LIFE
+            ),
+        ),
     };
-    let spec = KernelSpec::from_name(
-        name,
-        crate::core::kernel::DEFAULT_SIGMA,
-        None,
-        display.taa_alpha.unwrap_or(0.1),
-        display.fps,
-    )?;
+    let alpha = match display.taa_alpha {
+        Some(a) => a,
+        None => no_taa_blend(display.fps),
+    };
+    let spec = KernelSpec::from_name(name, crate::core::kernel::DEFAULT_SIGMA, None, alpha, display.fps)?;
     let spec = KernelSpec { spatial: display.spatial, ..spec };
     Ok((spec, format!("{why}; the eye: {}", display.seen_on)))
 }

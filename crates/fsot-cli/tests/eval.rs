@@ -185,8 +185,8 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
     assert_eq!(planned.masks.iter().map(|m| m.tile.dims).collect::<Vec<_>>(), [1]);
     assert_eq!(planned.seconds, 0.0, "read from the cache");
     assert!(
-        planned.masks[0].meta("kernel").unwrap().starts_with("perceptual ("),
-        "no TAA: the perceptual kernel"
+        planned.masks[0].meta("kernel").unwrap().starts_with("taa ("),
+        "no TAA: a short blend over frames"
     );
 }
 
