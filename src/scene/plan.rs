@@ -11,7 +11,7 @@
 //!   the scene gives in pixels.
 //! - The tile: W = H from the scene or 128; T from the scene, or twice the TAA
 //!   history that carries 95% of the blend's weight rounded up to a power of two
-//!   (alpha 0.1 -> 64), or a quarter second of the eye's temporal filter without
+//!   (alpha 0.1 -> 64), or a quarter second (the eye's temporal response's span) without
 //!   TAA (60 fps -> 16), or 16 for a still camera.
 //! - Reading: decisions of two or more dimensions read masks of pairs (vector),
 //!   or a scalar mask per dimension where the scene asks (`reading = "scalar"`).
@@ -247,7 +247,7 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
         (true, None) => {
             let frames = (0.25 * d.fps).ceil() as usize;
             let t = frames.clamp(1, 256).next_power_of_two();
-            (t, format!("no TAA: the eye's filter spans about a quarter second, {frames} frames, rounded up to {t}"))
+            (t, format!("no TAA: the eye's temporal response spans about a quarter second, {frames} frames, rounded up to {t}"))
         }
     };
     let wh = format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default: the published masks' size, no repeat across a 128-pixel view)");
