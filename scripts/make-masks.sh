@@ -23,8 +23,8 @@ masks=(
   "rg-64x64x32-taa|r8g8_unorm|--size 64x64x32 --dims 2 --kernel perceptual-taa --start animated --iterations 300 --seed 1"
   "r-128x128x64-taa|r8_unorm|--size 128x128x64 --dims 1 --kernel perceptual-taa --iterations 1000 --seed 1"
   "rg-128x128x64-taa|r8g8_unorm|--size 128x128x64 --dims 2 --kernel perceptual-taa --iterations 1000 --seed 1"
-  "r-128x128x64-no-taa|r8_unorm|--size 128x128x64 --dims 1 --kernel perceptual --iterations 1000 --seed 1"
-  "rg-128x128x64-no-taa|r8g8_unorm|--size 128x128x64 --dims 2 --kernel perceptual --iterations 1000 --seed 1"
+  "r-128x128x64-no-taa|r8_unorm|--size 128x128x64 --dims 1 --kernel taa --alpha 0.5 --iterations 1000 --seed 1"
+  "rg-128x128x64-no-taa|r8g8_unorm|--size 128x128x64 --dims 2 --kernel taa --alpha 0.5 --iterations 1000 --seed 1"
 )
 
 wanted=("$@")
