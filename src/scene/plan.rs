@@ -146,13 +146,11 @@ pub struct Plan {
     pub reading: String,
     /// Why that reading, in words.
     pub reading_reason: String,
-    /// The kernel's description (`KernelSpec::describe`).
+    /// The display's kernel, described (`KernelSpec::describe`); each mask's own,
+    /// whose scalar masks' eye may be wider, is `PlannedMask::kernel`.
     pub kernel: String,
     /// Why that kernel, in words.
     pub kernel_reason: String,
-    /// The kernel itself (`kernel` is its description).
-    #[serde(skip)]
-    pub spec: KernelSpec,
     /// The backend the cost model was measured on, in words.
     pub backend: String,
     /// The scene's decisions, in the order the renderer consumes them.
@@ -369,7 +367,6 @@ impl Plan {
         struct Lender {
             file: String,
             group: String,
-            kernel: String,
             dims: usize,
             spp: usize,
             readers: u32,
@@ -413,7 +410,7 @@ impl Plan {
                             offset: share_offset(l.readers, [w, h, t]),
                             shift: share_shift(l.readers, dims),
                             shares: Some(l.group.clone()),
-                            kernel: Some(l.kernel.clone()),
+                            kernel: masks.iter().find(|m| m.file == l.file).map(|m| m.kernel.clone()),
                         });
                         continue;
                     }
@@ -439,7 +436,6 @@ impl Plan {
                         lenders.push(Lender {
                             file: file.clone(),
                             group: g.name.clone(),
-                            kernel: spec.describe(),
                             dims,
                             spp: g.spp,
                             readers: 0,
@@ -533,7 +529,6 @@ impl Plan {
             reading_reason,
             kernel: kernel.describe(),
             kernel_reason,
-            spec: kernel,
             backend: cost.backend.clone(),
             groups,
             masks,
