@@ -19,7 +19,7 @@ fn main() {
     s.slices = Some(1);
     let mask = Mask::white(tile, 21);
     let kernel = Kernel::new(s.kernel, &tile);
-    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel, s.axis_share);
     let options = VulkanOptions::default().deterministic(true);
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     let mut worst = (0.0f64, String::new());

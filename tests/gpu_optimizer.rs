@@ -66,13 +66,17 @@ fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: Tr
 }
 
 fn compare_with_options(mask: &Mask, kernel: &str, options: VulkanOptions) {
+    compare_with_share(mask, kernel, options, fsot::core::slice::DEFAULT_AXIS_SHARE);
+}
+
+fn compare_with_share(mask: &Mask, kernel: &str, options: VulkanOptions, axis_share: f64) {
     let ctx = common::gpu_context();
     let transport = options.hooks.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
     let tile = mask.tile;
-    let mut s = settings(kernel, 10, 21);
+    let mut s = settings(kernel, 10, 21).axis_share(axis_share);
     s.slices = Some(300);
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(mask), options).unwrap();
     for iteration in [0u32, 5] {
@@ -102,6 +106,16 @@ fn one_iteration_gives_the_cpu_displacements_small_classes() {
 #[test]
 fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
     compare_one_iteration(Tile::new(16, 16, 8, 1, 1).unwrap(), "perceptual-taa", true);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn an_axis_share_other_than_the_default_gives_the_cpu_displacements() {
+    let options = VulkanOptions::default().deterministic(true);
+    for (dims, share) in [(2, 0.85), (3, 0.9), (2, 0.0)] {
+        let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
+        compare_with_share(&Mask::white(tile, 21), "taa", options, share);
+    }
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
@@ -388,7 +402,7 @@ fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, lar
     let kernel = Kernel::new(s.kernel, &tile);
     assert!(kernel.taps.len() * spp > 2048, "the test must reach classes past 2048");
     let mask = Mask::white(tile, 5);
-    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel, s.axis_share);
     let mut gpu = VulkanRun::new(&ctx, tile, s, Some(&mask), options).unwrap();
     assert_eq!(gpu.large_capacity() > 1024, large_stage, "large-class capacity {}", gpu.large_capacity());
     let (mut checked, mut ties) = (0, 0);

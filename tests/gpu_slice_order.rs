@@ -59,7 +59,7 @@ fn per_lane_run_and_its_slices(ctx: &Context, tile: Tile) -> (VulkanRun, SliceSa
         .hooks(VulkanHooks { transport: Some(TransportKind::PerLane), ..VulkanHooks::default() });
     let gpu = VulkanRun::new(ctx, tile, s, None, options).unwrap();
     let kernel = Kernel::new(s.kernel, &tile);
-    (gpu, SliceSampler::new(seed_key(s.seed), tile, &kernel), kernel.taps.len() as u32)
+    (gpu, SliceSampler::new(seed_key(s.seed), tile, &kernel, s.axis_share), kernel.taps.len() as u32)
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
@@ -137,7 +137,7 @@ fn the_chunk_plan_gives_every_rank_to_one_chunk_within_the_loop_budget() {
         let shape = *gpu.shape();
         let lanes = shape.workgroup;
         let kernel = Kernel::new(s.kernel, &tile);
-        let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+        let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel, s.axis_share);
         for iteration in [0u32, 33] {
             let order = gpu.slice_order(iteration).unwrap().expect("a per-lane run orders its slices");
             let what = format!("{}, iteration {iteration}", tile.describe());

@@ -56,7 +56,7 @@ type Mirror = (&'static str, usize, Vec<(&'static str, usize)>);
 
 fn mirrors() -> Vec<Mirror> {
     vec![
-        fields!(TransportPush; slice_key, iteration, width, height, frames, spp, dims, taps, slices, cost_slot, large_capacity, order_slot, deferred_capacity),
+        fields!(TransportPush; slice_key, iteration, width, height, frames, spp, dims, taps, slices, cost_slot, large_capacity, order_slot, deferred_capacity, axis_bits, pair_bits),
         fields!(UpdatePush; values, rule, step_t, scale, inv_hits, p0, p1, p2, p3, bias1, bias2, scheduled),
         fields!(PlateauPush; slot, iteration),
         fields!(RuleState; previous, sum, decay_below, stop_below, target, scale, factor, floor_scale, count, window, has_previous, has_target, stopped, stop_iteration, pad),

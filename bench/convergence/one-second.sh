@@ -12,6 +12,7 @@
 #   OS_EYES="standard_fhd standard_4k"      the eyes the masks are made for: a display
 #                                           (--display) or sigma-S (--sigma S, pixels)
 #   OS_PLACEMENTS=10                        placements per mask in the eval
+#   OS_AXIS_SHARES="default 0.85"           --axis-share of the masks [default: default]
 #
 # OUT_DIR/runs.tsv: eye, seed, process seconds, iterations, objective x
 # white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
@@ -21,11 +22,12 @@ set -euo pipefail
 fsot=$1 out=$2 peers=${3:-../shared/data/peer-masks}
 seeds=${OS_SEEDS:-1 2 3}
 eyes=${OS_EYES:-standard_fhd standard_4k}
+shares=${OS_AXIS_SHARES:-default}
 placements=${OS_PLACEMENTS:-10}
 here=$(dirname "$0")
 mkdir -p "$out"
 tsv="$out/runs.tsv"
-printf 'eye\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
+printf 'eye\taxis_share\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
 
 source "$here/timed.sh"
 masks=() methods=published-fast,published-stbn names=()
@@ -34,11 +36,17 @@ for eye in $eyes; do
     sigma-*) eye_flags=(--sigma "${eye#sigma-}") ;;
     *) eye_flags=(--display "$eye") ;;
   esac
-  for s in $seeds; do
-    name="1s-$eye-s$s"
-    timed_run "$tsv" "$out/$name" "$eye"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
-      --kernel perceptual-taa "${eye_flags[@]}" --backend cpu --budget 1s --seed "$s"
-    masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
+  for share in $shares; do
+    case $share in
+      default) share_flags=() tag="" ;;
+      *) share_flags=(--axis-share "$share") tag="-axis-$share" ;;
+    esac
+    for s in $seeds; do
+      name="1s-$eye$tag-s$s"
+      timed_run "$tsv" "$out/$name" "$eye"$'\t'"$share"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
+        --kernel perceptual-taa "${eye_flags[@]}" "${share_flags[@]}" --backend cpu --budget 1s --seed "$s"
+      masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
+    done
   done
 done
 "$fsot" eval --quick --seeds "$placements" --methods "$methods" --peers "$peers" "${masks[@]}" \

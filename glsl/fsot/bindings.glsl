@@ -65,6 +65,8 @@ struct TransportPush {
     uint large_capacity; // elements the large-class buffers hold
     uint order_slot;     // where the per-lane transport finds this iteration's slice order
     uint deferred_capacity; // slices the deferred list holds (transport.comp's second pass)
+    uint axis_bits;      // a slice's first draw below this: an axis (slice::share_bits)
+    uint pair_bits;      // below this (d >= 3): a pair of coordinates
 };
 
 // The update pass.

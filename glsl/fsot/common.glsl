@@ -33,9 +33,6 @@ vec2 fsot_turn_cos_sin(float u) {
     return vec2(sq, -cq);
 }
 
-#define FSOT_AXIS_BITS 1503238553u  // 0.35 * 2^32
-#define FSOT_PAIR_BITS 2362232012u  // 0.55 * 2^32
-
 struct FsotSlice {
     float theta[FSOT_MAX_DIMS];
     float shift[FSOT_MAX_DIMS];
@@ -43,7 +40,8 @@ struct FsotSlice {
     uint level;
 };
 
-FsotSlice fsot_draw_slice(uint slice_key, uint iteration, uint index, uint dims, uint w, uint h, uint t) {
+// axis_bits and pair_bits: slice::share_bits of the run's axis share.
+FsotSlice fsot_draw_slice(uint slice_key, uint axis_bits, uint pair_bits, uint iteration, uint index, uint dims, uint w, uint h, uint t) {
     FsotSlice s;
     FsotStream rng;
     rng.key = fsot_hash2(fsot_derive(slice_key, iteration), index);
@@ -52,9 +50,9 @@ FsotSlice fsot_draw_slice(uint slice_key, uint iteration, uint index, uint dims,
     uint pick = fsot_next(rng);
     if (dims == 1u) {
         s.theta[0] = 1.0;
-    } else if (pick < FSOT_AXIS_BITS) {
+    } else if (pick < axis_bits) {
         s.theta[fsot_below(rng, dims)] = 1.0;
-    } else if (dims >= 3u && pick < FSOT_PAIR_BITS) {
+    } else if (dims >= 3u && pick < pair_bits) {
         uint p = 2u * fsot_below(rng, dims / 2u);
         vec2 cs = fsot_turn_cos_sin(fsot_unit(fsot_next(rng)));
         s.theta[p] = cs.x;

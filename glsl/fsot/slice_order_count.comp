@@ -17,7 +17,7 @@ void main() {
     uint k = gl_WorkGroupID.y;
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     for (uint slice = gl_GlobalInvocationID.x; slice < pc.slices; slice += stride) {
-        FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration + k, slice, pc.dims, pc.width, pc.height, pc.frames);
+        FsotSlice s = fsot_draw_slice(pc.slice_key, pc.axis_bits, pc.pair_bits, pc.iteration + k, slice, pc.dims, pc.width, pc.height, pc.frames);
         uint class_taps = fsot_class_taps(s);
         slice_order[fsot_order_key_at(k, slice)] = class_taps;
         atomicAdd(slice_order[fsot_order_bin_at(k, fsot_order_bin(class_taps))], 1u);

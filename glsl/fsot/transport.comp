@@ -278,7 +278,7 @@ void subgroup_class(FsotSlice s, uint n) {
 void process_slice(uint slice) {
     uint tid = gl_LocalInvocationID.x;
     uint wg = gl_WorkGroupSize.x;
-    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.axis_bits, pc.pair_bits, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     uint n = fsot_class_size(s);
     if (n < 2u) {
         return;

@@ -86,7 +86,7 @@ float send(FsotSlice s, uint i, float target) {
 // Transports the slice of rank `rank` in the iteration's order.
 void transport_rank(uint rank) {
     uint slice = slice_order[fsot_order_rank_at(pc.order_slot, rank)];
-    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.axis_bits, pc.pair_bits, pc.iteration, slice, pc.dims, pc.width, pc.height, pc.frames);
     // The class's size, which the ordering found (no search of the taps).
     uint n = slice_order[fsot_order_key_at(pc.order_slot, slice)] * pc.spp;
     if (n < 2u) {

@@ -35,7 +35,7 @@ void main() {
     }
     LargeSegment seg = segments[g];
     uint off = seg.first, n = seg.size;
-    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.iteration, seg.slice, pc.dims, pc.width, pc.height, pc.frames);
+    FsotSlice s = fsot_draw_slice(pc.slice_key, pc.axis_bits, pc.pair_bits, pc.iteration, seg.slice, pc.dims, pc.width, pc.height, pc.frames);
     FsotTargets z = fsot_targets(s);
     float local_cost = 0.0;
 #ifdef FSOT_ANY_DIMS

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 use crate::core::kernel::{Kernel, KernelSpec};
 use crate::core::mask::Mask;
 use crate::core::rng::seed_key;
-use crate::core::slice::{Slice, SliceSampler};
+use crate::core::slice::{Slice, SliceSampler, DEFAULT_AXIS_SHARE};
 use crate::core::tile::Tile;
 use crate::core::transport::objective;
 
@@ -17,7 +17,7 @@ const SCORE_SEED: u64 = 0x5c0e_5c0e;
 
 /// The fixed slices for a tile and kernel.
 pub fn score_slices(kernel: &Kernel, tile: &Tile, count: u32) -> Vec<Slice> {
-    let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel);
+    let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel, DEFAULT_AXIS_SHARE);
     (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()
 }
 

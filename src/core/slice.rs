@@ -6,13 +6,15 @@ use crate::core::kernel::Kernel;
 use crate::core::rng::{derive, hash2, Stream};
 use crate::core::tile::{Tile, MAX_DIMS};
 
-/// Probability of an axis-aligned direction (one coordinate alone), for d >= 2:
-/// about a third of the slices, so that each coordinate read alone (a 1-D
-/// decision reading one channel, an integrand aligned with the axes) is well
-/// spread too; more comes at the cost of directions across the axes.
-pub const AXIS_PROBABILITY: f64 = 0.35;
+/// The default probability of an axis-aligned direction (one coordinate alone),
+/// for d >= 2 (`Settings::axis_share`): about a third of the slices, so that
+/// each coordinate read alone (a 1-D decision reading one channel, an integrand
+/// aligned with the axes) is well spread too; more comes at the cost of
+/// directions across the axes.
+pub const DEFAULT_AXIS_SHARE: f64 = 0.35;
 /// Probability of a direction inside one pair of coordinates (2k, 2k+1), for
-/// d >= 3: renderers consume dimensions in pairs, so these 2-D projections matter.
+/// d >= 3 (at most what the axis share leaves): renderers consume dimensions in
+/// pairs, so these 2-D projections matter.
 pub const PAIR_PROBABILITY: f64 = 0.2;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,6 +57,13 @@ pub const fn probability_bits(probability: f64) -> u32 {
     (probability * 4_294_967_296.0) as u32
 }
 
+/// The integer thresholds of a slice's first draw for an axis share: below the
+/// first, an axis; below the second (d >= 3), a pair of coordinates. The GPU's
+/// transport passes get the same two numbers (`TransportPush`).
+pub fn share_bits(axis_share: f64) -> (u32, u32) {
+    (probability_bits(axis_share), probability_bits((axis_share + PAIR_PROBABILITY).min(1.0)))
+}
+
 /// Draws the slices of one run. The order and use of the draws is mirrored by
 /// `fsot_draw_slice` in `glsl/fsot/common.glsl`: integer decisions (axis, pair,
 /// centre, level) are bit-identical on both backends; angles and Gaussian
@@ -64,11 +73,16 @@ pub struct SliceSampler {
     key: u32,
     tile: Tile,
     thresholds: Vec<u32>,
+    axis_bits: u32,
+    pair_bits: u32,
 }
 
 impl SliceSampler {
-    pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel) -> Self {
-        Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel) }
+    /// The slices of a run of seed key `seed_key` on `tile` under `kernel`, an
+    /// `axis_share` of them along one coordinate (in [0, 1]; d >= 2).
+    pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel, axis_share: f64) -> Self {
+        let (axis_bits, pair_bits) = share_bits(axis_share);
+        Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel), axis_bits, pair_bits }
     }
 
     pub fn draw(&self, iteration: u32, index: u32) -> Slice {
@@ -79,9 +93,9 @@ impl SliceSampler {
         let angle = |rng: &mut Stream| turn_cos_sin(rng.next_f32() as f64);
         if d == 1 {
             theta[0] = 1.0;
-        } else if pick < probability_bits(AXIS_PROBABILITY) {
+        } else if pick < self.axis_bits {
             theta[rng.below(d as u32) as usize] = 1.0;
-        } else if d >= 3 && pick < probability_bits(AXIS_PROBABILITY + PAIR_PROBABILITY) {
+        } else if d >= 3 && pick < self.pair_bits {
             let p = 2 * rng.below((d / 2) as u32) as usize;
             (theta[p], theta[p + 1]) = angle(&mut rng);
         } else if d == 2 {
@@ -166,5 +180,43 @@ mod tests {
             let a = std::f64::consts::TAU * u;
             assert!((c - a.cos()).abs() < 1e-12 && (s - a.sin()).abs() < 1e-12, "{u}");
         }
+    }
+
+    /// The share of each kind of direction a sampler draws, over `n` slices:
+    /// (one axis, a pair of coordinates, any other).
+    fn kinds(share: f64, dims: usize, n: u32) -> (f64, f64, f64) {
+        let tile = Tile::new(8, 8, 4, 1, dims).unwrap();
+        let kernel = Kernel::new(crate::core::kernel::KernelSpec::named("taa").unwrap(), &tile);
+        let sampler = SliceSampler::new(7, tile, &kernel, share);
+        let (mut axis, mut pair) = (0u32, 0u32);
+        for i in 0..n {
+            let nonzero = sampler.draw(3, i).theta.iter().filter(|t| **t != 0.0).count();
+            match nonzero {
+                1 => axis += 1,
+                2 if dims >= 3 => pair += 1,
+                _ => {}
+            }
+        }
+        let n = n as f64;
+        (axis as f64 / n, pair as f64 / n, (n - axis as f64 - pair as f64) / n)
+    }
+
+    #[test]
+    fn the_axis_share_is_the_share_of_slices_along_one_coordinate() {
+        let n = 40_000;
+        // Five binomial standard deviations at n draws, at worst p = 1/2.
+        let tolerance = 5.0 * (0.25 / n as f64).sqrt();
+        for share in [0.0, DEFAULT_AXIS_SHARE, 0.85, 1.0] {
+            let (axis, _, _) = kinds(share, 2, n);
+            assert!((axis - share).abs() < tolerance, "d = 2, share {share}: {axis}");
+            // d >= 3: pairs take PAIR_PROBABILITY of what the axes leave, at most.
+            let (axis, pair, other) = kinds(share, 5, n);
+            let pair_share = PAIR_PROBABILITY.min(1.0 - share);
+            assert!((axis - share).abs() < tolerance, "d = 5, share {share}: {axis}");
+            assert!((pair - pair_share).abs() < tolerance, "d = 5, share {share}: pairs {pair}");
+            assert!((other - (1.0 - share - pair_share)).abs() < tolerance, "d = 5, share {share}: {other}");
+        }
+        // One coordinate: every slice is along it, whatever the share.
+        assert_eq!(kinds(0.0, 1, 1000).0, 1.0);
     }
 }

@@ -11,6 +11,7 @@
 
 use std::path::Path;
 
+use crate::core::slice::DEFAULT_AXIS_SHARE;
 use crate::core::step_rule::PlateauState;
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
@@ -33,6 +34,9 @@ pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     );
     if s.until != Until::Iterations {
         f += &format!("; until {:?}", s.until);
+    }
+    if s.axis_share != DEFAULT_AXIS_SHARE {
+        f += &format!("; axis share {}", s.axis_share);
     }
     f
 }
@@ -204,6 +208,8 @@ mod tests {
         );
         let until = Settings { until: Until::Plateau(crate::core::step_rule::Plateau::DEFAULT), ..s };
         assert_ne!(fingerprint(&tile, &until), fp);
+        // Another axis share draws other slices: another run.
+        assert_ne!(fingerprint(&tile, &s.axis_share(0.85)), fp);
     }
 
     #[test]

@@ -182,7 +182,7 @@ pub fn iterate(
 pub fn reference_displacements(mask: &Mask, s: &Settings, slices: u32, iteration: u32) -> Vec<f64> {
     let tile = mask.tile;
     let kernel = Kernel::new(s.kernel, &tile);
-    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel);
+    let sampler = SliceSampler::new(seed_key(s.seed), tile, &kernel, s.axis_share);
     let mut out = vec![0.0f64; tile.values()];
     let mut scratch = Scratch::default();
     for i in 0..slices {
@@ -224,7 +224,7 @@ impl CpuRun {
         let samples = initial_samples(&tile, &settings, init)?;
         Ok(Self {
             tile,
-            sampler: SliceSampler::new(seed_key(settings.seed), tile, &kernel),
+            sampler: SliceSampler::new(seed_key(settings.seed), tile, &kernel, settings.axis_share),
             kernel,
             state: OptimizerState::new(settings.rule, tile.values()),
             acc: Accumulator::new(tile.values()),

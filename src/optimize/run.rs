@@ -720,7 +720,8 @@ fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<
         .iterations(SPATIAL_ITERATIONS.min(settings.iterations))
         .rule(settings.rule)
         .until(until)
-        .start(Start::White);
+        .start(Start::White)
+        .axis_share(settings.axis_share);
     let mut run = Run::start(flat, spatial, None, RunOptions::default().backend(BackendChoice::Cpu))?;
     run.run(&CancelFlag::new(), &mut |_| {})?;
     animate(&run.finish()?, tile.frames)

@@ -4,6 +4,7 @@
 
 use crate::core::kernel::{Kernel, KernelSpec};
 use crate::core::mask::Mask;
+use crate::core::slice::DEFAULT_AXIS_SHARE;
 use crate::core::step_rule::{Plateau, PlateauState, StepRule};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
@@ -47,6 +48,10 @@ pub struct Settings {
     pub until: Until,
     /// Where the run starts when it is given no initial mask.
     pub start: Start,
+    /// The share of slices along one coordinate, in [0, 1] (d >= 2): more
+    /// spreads each coordinate read alone better, at the cost of the
+    /// coordinates read together (`DEFAULT_AXIS_SHARE`).
+    pub axis_share: f64,
 }
 
 /// Where a run starts when it is given no initial mask.
@@ -147,6 +152,7 @@ impl Settings {
             rule: StepRule::DEFAULT,
             until: Until::Iterations,
             start: Start::Auto,
+            axis_share: DEFAULT_AXIS_SHARE,
         }
     }
 
@@ -189,6 +195,20 @@ impl Settings {
     /// Where the run starts when it is given no initial mask.
     pub fn start(mut self, start: Start) -> Self {
         self.start = start;
+        self
+    }
+
+    /// The share of slices along one coordinate (d >= 2), in [0, 1]: for a
+    /// vector mask whose channels are also read one at a time.
+    ///
+    /// ```
+    /// use fsot::{KernelSpec, Settings};
+    /// let s = Settings::new(KernelSpec::named("taa")?, 7).axis_share(0.85);
+    /// assert_eq!(s.axis_share, 0.85);
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn axis_share(mut self, share: f64) -> Self {
+        self.axis_share = share;
         self
     }
 }
@@ -250,8 +270,16 @@ pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) ->
 }
 
 /// Slices per iteration (the setting, or enough for DEFAULT_HITS class
-/// memberships per sample) and the resulting expected hits per sample.
+/// memberships per sample) and the resulting expected hits per sample; an
+/// error for slice settings no run can draw (no slices, an axis share outside
+/// [0, 1]).
 pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Result<(u32, f64)> {
+    if !(0.0..=1.0).contains(&settings.axis_share) {
+        return Err(Error::invalid(format!(
+            "the axis share must be between 0 and 1, got {}",
+            settings.axis_share
+        )));
+    }
     let mean_points = kernel.mean_class_len() * tile.spp as f64;
     let slices = match settings.slices {
         Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
@@ -274,6 +302,9 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
     ];
     if s.start.animates(s.until, tile) {
         meta.push(("start".to_string(), "animated".to_string()));
+    }
+    if s.axis_share != DEFAULT_AXIS_SHARE && tile.dims >= 2 {
+        meta.push(("axis_share".to_string(), s.axis_share.to_string()));
     }
     if let Until::Seconds(budget) = s.until {
         meta.push(("budget_seconds".to_string(), budget.to_string()));

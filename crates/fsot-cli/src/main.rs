@@ -382,6 +382,11 @@ struct OptimizeArgs {
     /// per iteration].
     #[arg(long, allow_negative_numbers = true)]
     slices: Option<u32>,
+    /// The share of slices along one coordinate, 0 to 1 (d >= 2): higher spreads
+    /// each channel read alone better (a 1-D decision on the first channel), at
+    /// the cost of the channels read together [default: 0.35].
+    #[arg(long, allow_negative_numbers = true)]
+    axis_share: Option<f64>,
     /// Random seed: the same seed gives a bit-identical mask (on Vulkan with
     /// --deterministic).
     #[arg(long, default_value_t = 0, allow_negative_numbers = true)]

@@ -268,6 +268,10 @@ pub struct TransportPush {
     pub order_slot: u32,
     /// Slices the workgroup transport's deferred list holds (its second pass).
     pub deferred_capacity: u32,
+    /// A slice's first draw below this: an axis; below `pair_bits`: a pair
+    /// (`slice::share_bits`).
+    pub axis_bits: u32,
+    pub pair_bits: u32,
 }
 
 /// `UpdatePush`.

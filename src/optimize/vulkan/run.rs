@@ -28,7 +28,7 @@ use super::{VulkanOptions, BATCH, CLOSED_FORM_DIMS};
 use crate::core::kernel::Kernel;
 use crate::core::mask::Mask;
 use crate::core::rng::seed_key;
-use crate::core::slice::{level_thresholds, slice_key};
+use crate::core::slice::{level_thresholds, share_bits, slice_key};
 use crate::core::step_rule::{schedule, Plateau, PlateauState, StepRule};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
@@ -381,6 +381,7 @@ impl VulkanRun {
     }
 
     fn transport_push(&self, iteration: u32, slot: u32) -> TransportPush {
+        let (axis_bits, pair_bits) = share_bits(self.settings.axis_share);
         TransportPush {
             slice_key: slice_key(seed_key(self.settings.seed)),
             iteration,
@@ -395,6 +396,8 @@ impl VulkanRun {
             large_capacity: self.large.capacity,
             order_slot: slot % self.order_slots.max(1),
             deferred_capacity: self.shape.deferred_capacity(self.slices),
+            axis_bits,
+            pair_bits,
         }
     }
 

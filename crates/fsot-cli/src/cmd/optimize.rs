@@ -28,6 +28,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if iterations == 0 {
         return Err(Error::invalid("--iterations must be at least 1"));
     }
+    if let Some(share) = args.axis_share.filter(|s| !(0.0..=1.0).contains(s)) {
+        return Err(Error::invalid(format!("--axis-share must be between 0 and 1, got {share}")));
+    }
     // Check the output's kind and reserve it before the long work: a bad path or
     // a format that cannot hold d fails now.
     let file_kind = MaskFile::for_path(&args.out, dims, args.ktx2_format.as_deref())?;
@@ -47,8 +50,8 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         }
     }
     if args.method != Method::Fsot {
-        if args.checkpoint.is_some() || args.resume {
-            return Err(Error::invalid("--checkpoint and --resume are for --method fsot"));
+        if args.checkpoint.is_some() || args.resume || args.axis_share.is_some() {
+            return Err(Error::invalid("--checkpoint, --resume and --axis-share are for --method fsot"));
         }
         return make_baseline(&args, tile, spec, init.as_ref(), file_kind, out, also);
     }
@@ -61,6 +64,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         StartArg::Animated => fsot::Start::Animated,
         StartArg::White => fsot::Start::White,
     };
+    if let Some(share) = args.axis_share {
+        settings.axis_share = share;
+    }
     let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
     eprintln!("backend: {}", run.note());
     if let (Some(from), Some(p)) = (run.resumed_from(), &args.checkpoint) {
@@ -75,8 +81,12 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         Until::Seconds(s) => format!("for {s} s (at most {iterations} iterations)"),
         _ => format!("at most {iterations} iterations"),
     };
+    let axes = match args.axis_share {
+        Some(share) if dims >= 2 => format!(", {share} of them along one axis"),
+        _ => String::new(),
+    };
     eprintln!(
-        "optimizing {} for kernel {}: {length} x {} slices",
+        "optimizing {} for kernel {}: {length} x {} slices{axes}",
         tile.describe(),
         spec.describe(),
         run.backend().slices_per_iteration()
