@@ -7,7 +7,7 @@ use fsot::core::kernel::{Kernel, KernelSpec};
 use fsot::core::mask::Mask;
 use fsot::core::objective::score;
 use fsot::core::rng::seed_key;
-use fsot::core::slice::SliceSampler;
+use fsot::core::slice::{SliceSampler, DEFAULT_AXIS_SHARE};
 use fsot::core::step_rule::StepRule;
 use fsot::core::tile::Tile;
 use fsot::core::transport::{transport_slice, Scratch};
@@ -66,7 +66,7 @@ fn compare_on_mask(mask: &Mask, kernel: &str, deterministic: bool, transport: Tr
 }
 
 fn compare_with_options(mask: &Mask, kernel: &str, options: VulkanOptions) {
-    compare_with_share(mask, kernel, options, fsot::core::slice::DEFAULT_AXIS_SHARE);
+    compare_with_share(mask, kernel, options, DEFAULT_AXIS_SHARE);
 }
 
 fn compare_with_share(mask: &Mask, kernel: &str, options: VulkanOptions, axis_share: f64) {
@@ -111,10 +111,14 @@ fn one_iteration_gives_the_cpu_displacements_in_one_dimension() {
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn an_axis_share_other_than_the_default_gives_the_cpu_displacements() {
-    let options = VulkanOptions::default().deterministic(true);
-    for (dims, share) in [(2, 0.85), (3, 0.9), (2, 0.0)] {
-        let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
-        compare_with_share(&Mask::white(tile, 21), "taa", options, share);
+    for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
+        let options = VulkanOptions::default()
+            .deterministic(true)
+            .hooks(VulkanHooks { transport: Some(transport), ..VulkanHooks::default() });
+        for (dims, share) in [(2, 0.85), (3, 0.9), (2, 0.0)] {
+            let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
+            compare_with_share(&Mask::white(tile, 21), "taa", options, share);
+        }
     }
 }
 
@@ -152,7 +156,7 @@ fn per_lane_classes_past_2048_that_fit_the_loop_budget_need_no_large_class_stage
     assert!(launch.contains("per lane") && launch.contains("classes up to 2304"), "{launch}");
     assert_eq!(run.large_capacity(), 0, "a large-class stage was built");
     drop(run);
-    classes_past(options, 2048, 2, 3, false);
+    classes_past(options, 2048, 2, 3, false, DEFAULT_AXIS_SHARE);
     let mut tied = Mask::white(tile, 3);
     tied.samples.iter_mut().for_each(|v| *v = 0.375);
     compare_with_options(
@@ -326,7 +330,7 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
         ..VulkanHooks::default()
     });
     for dims in [2, 3] {
-        classes_past(options, 1024, dims, 4, true);
+        classes_past(options, 1024, dims, 4, true, DEFAULT_AXIS_SHARE);
     }
     // Asked for what the device or the shape cannot give: a clear error.
     let tile = Tile::new(16, 16, 8, 3, 2).unwrap();
@@ -358,20 +362,22 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
 #[test]
 fn large_classes_sorted_globally_give_the_cpu_displacements() {
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
-        large_classes_with(transport, 2);
+        large_classes_with(transport, 2, DEFAULT_AXIS_SHARE);
     }
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn large_classes_in_three_dimensions_give_the_cpu_displacements() {
-    // Per lane, d = 3 leaves classes past its limit (207) to this stage.
+    // Per lane, d = 3 leaves classes past its limit (207) to this stage; and at
+    // an axis share other than the default, which this stage draws by too.
     for transport in [TransportKind::Workgroup, TransportKind::PerLane] {
-        large_classes_with(transport, 3);
+        large_classes_with(transport, 3, DEFAULT_AXIS_SHARE);
+        large_classes_with(transport, 3, 0.9);
     }
 }
 
-fn large_classes_with(transport: TransportKind, dims: usize) {
+fn large_classes_with(transport: TransportKind, dims: usize, axis_share: f64) {
     // On a GPU the workgroup transport's second pass would take these classes:
     // off, so that they reach the large-class stage everywhere.
     let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
@@ -380,7 +386,7 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
         ..VulkanHooks::default()
     });
     let limit = if transport == TransportKind::PerLane { TransportShape::lane_limit(dims) } else { 2048 };
-    classes_past(options, limit, dims, 4, true);
+    classes_past(options, limit, dims, 4, true, axis_share);
 }
 
 /// The classes past `limit` of 16x16x8 `taa` at `spp` (which the transport with
@@ -389,15 +395,22 @@ fn large_classes_with(transport: TransportKind, dims: usize) {
 /// class; whether the run has a large-class stage (`large_stage`). In classes
 /// of thousands of points some projections lie within float32 rounding of each
 /// other and may rank the other way round on the GPU; such a point must then
-/// get exactly its neighbour's target.
-fn classes_past(options: VulkanOptions, limit: u32, dims: usize, spp: usize, large_stage: bool) {
+/// get exactly its neighbour's target. The run draws its slices at `axis_share`.
+fn classes_past(
+    options: VulkanOptions,
+    limit: u32,
+    dims: usize,
+    spp: usize,
+    large_stage: bool,
+    axis_share: f64,
+) {
     let ctx = common::gpu_context();
     let transport = options.hooks.transport.unwrap_or(TransportKind::Workgroup);
     if refused_here(&ctx, transport) {
         return;
     }
     let tile = Tile::new(16, 16, 8, spp, dims).unwrap();
-    let mut s = settings("taa", 5000, 5);
+    let mut s = settings("taa", 5000, 5).axis_share(axis_share);
     s.slices = Some(1);
     let kernel = Kernel::new(s.kernel, &tile);
     assert!(kernel.taps.len() * spp > 2048, "the test must reach classes past 2048");

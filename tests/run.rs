@@ -338,3 +338,23 @@ fn a_time_budget_that_is_not_a_positive_time_or_that_asks_for_checkpoints_is_ref
     let e = Run::start(tile, s, None, options).err().unwrap();
     assert!(e.to_string().contains("takes no checkpoints"), "{e}");
 }
+
+#[test]
+fn an_axis_share_outside_zero_to_one_is_refused_before_any_work() {
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    for bad in [-0.1, 1.5, f64::NAN, f64::INFINITY] {
+        // An animated start would run first: the share is refused before it.
+        let s = settings(100).axis_share(bad).start(fsot::Start::Animated);
+        let e = Run::start(tile, s, None, RunOptions::default().backend(BackendChoice::Cpu)).err().unwrap();
+        assert!(matches!(e, Error::Invalid(_)) && e.to_string().contains("axis share"), "{bad}: {e}");
+    }
+    for good in [0.0, 1.0] {
+        assert!(Run::start(
+            tile,
+            settings(3).axis_share(good),
+            None,
+            RunOptions::default().backend(BackendChoice::Cpu)
+        )
+        .is_ok());
+    }
+}

@@ -14,7 +14,7 @@
 #   OS_PLACEMENTS=10                        placements per mask in the eval
 #   OS_AXIS_SHARES="default 0.85"           --axis-share of the masks [default: default]
 #
-# OUT_DIR/runs.tsv: eye, seed, process seconds, iterations, objective x
+# OUT_DIR/runs.tsv: eye, axis share, seed, process seconds, iterations, objective x
 # white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
 # records (judged on its default display, standard_4k). OUT_DIR/verdicts.md:
 # bench/eval/compare.py per mask.

@@ -15,7 +15,8 @@ pub const SCORE_SLICES: u32 = 16384;
 /// Seed of the fixed scoring set (never a run's own slices: a different stream).
 const SCORE_SEED: u64 = 0x5c0e_5c0e;
 
-/// The fixed slices for a tile and kernel.
+/// The fixed slices for a tile and kernel, at the default axis share whatever a
+/// run's: scores of masks made with any share stay comparable.
 pub fn score_slices(kernel: &Kernel, tile: &Tile, count: u32) -> Vec<Slice> {
     let sampler = SliceSampler::new(seed_key(SCORE_SEED), *tile, kernel, DEFAULT_AXIS_SHARE);
     (0..count).into_par_iter().map(|i| sampler.draw(u32::MAX, i)).collect()

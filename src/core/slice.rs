@@ -57,9 +57,10 @@ pub const fn probability_bits(probability: f64) -> u32 {
     (probability * 4_294_967_296.0) as u32
 }
 
-/// The integer thresholds of a slice's first draw for an axis share: below the
-/// first, an axis; below the second (d >= 3), a pair of coordinates. The GPU's
-/// transport passes get the same two numbers (`TransportPush`).
+/// The integer thresholds of a slice's first draw for an axis share in [0, 1]:
+/// below the first, an axis; below the second (d >= 3), a pair of coordinates.
+/// A share of 1 is 1 - 2^-32. The GPU's transport passes get the same two
+/// numbers (`TransportPush`).
 pub fn share_bits(axis_share: f64) -> (u32, u32) {
     (probability_bits(axis_share), probability_bits((axis_share + PAIR_PROBABILITY).min(1.0)))
 }
@@ -81,6 +82,7 @@ impl SliceSampler {
     /// The slices of a run of seed key `seed_key` on `tile` under `kernel`, an
     /// `axis_share` of them along one coordinate (in [0, 1]; d >= 2).
     pub fn new(seed_key: u32, tile: Tile, kernel: &Kernel, axis_share: f64) -> Self {
+        debug_assert!((0.0..=1.0).contains(&axis_share), "axis share {axis_share}");
         let (axis_bits, pair_bits) = share_bits(axis_share);
         Self { key: slice_key(seed_key), tile, thresholds: level_thresholds(kernel), axis_bits, pair_bits }
     }

@@ -11,17 +11,17 @@
 
 use std::path::Path;
 
-use crate::core::slice::DEFAULT_AXIS_SHARE;
 use crate::core::step_rule::PlateauState;
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::optimize::settings::{RunState, Settings, Until};
+use crate::optimize::settings::{recorded_axis_share, RunState, Settings, Until};
 
 const MAGIC: &[u8; 8] = b"FSOTCKP1";
 
 /// What a checkpoint must match to be resumed: the tile and every setting that
-/// changes the run's iterations (kernel, iterations, slices, seed, step rule).
+/// changes the run's iterations (kernel, iterations, slices, seed, step rule,
+/// the stopping rule, the axis share where it is not the default and d >= 2).
 /// The start is not: a checkpoint holds the samples the start led to.
 /// The backend is not part of it: a run may resume on the other backend.
 pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
@@ -35,8 +35,8 @@ pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     if s.until != Until::Iterations {
         f += &format!("; until {:?}", s.until);
     }
-    if s.axis_share != DEFAULT_AXIS_SHARE {
-        f += &format!("; axis share {}", s.axis_share);
+    if let Some(share) = recorded_axis_share(tile, s) {
+        f += &format!("; axis share {share}");
     }
     f
 }

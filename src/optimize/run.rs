@@ -20,7 +20,9 @@ use crate::io::atomic::AtomicFile;
 use crate::optimize::backend::{Backend, BackendChoice};
 use crate::optimize::checkpoint;
 use crate::optimize::cpu::CpuRun;
-use crate::optimize::settings::{RunState, Settings, Start, Until, SPATIAL_BUDGET_SHARE, SPATIAL_ITERATIONS};
+use crate::optimize::settings::{
+    check_axis_share, RunState, Settings, Start, Until, SPATIAL_BUDGET_SHARE, SPATIAL_ITERATIONS,
+};
 #[cfg(feature = "vulkan")]
 use crate::optimize::vulkan::{VulkanOptions, VulkanRun};
 #[cfg(feature = "vulkan")]
@@ -244,6 +246,7 @@ impl Run {
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
+        check_axis_share(settings.axis_share)?;
         match settings.until {
             Until::Seconds(s) if !(s.is_finite() && s > 0.0 && s <= MAX_BUDGET_SECONDS) => {
                 return Err(Error::invalid(format!(

@@ -48,9 +48,10 @@ pub struct Settings {
     pub until: Until,
     /// Where the run starts when it is given no initial mask.
     pub start: Start,
-    /// The share of slices along one coordinate, in [0, 1] (d >= 2): more
-    /// spreads each coordinate read alone better, at the cost of the
-    /// coordinates read together (`DEFAULT_AXIS_SHARE`).
+    /// The share of slices along one coordinate, in [0, 1] (d >= 2; to within
+    /// 2^-32): more spreads each coordinate read alone better, at the cost of
+    /// the coordinates read together (`DEFAULT_AXIS_SHARE`). Under
+    /// `Until::Objective` the target is judged on the run's own slices.
     pub axis_share: f64,
 }
 
@@ -274,12 +275,7 @@ pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) ->
 /// error for slice settings no run can draw (no slices, an axis share outside
 /// [0, 1]).
 pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Result<(u32, f64)> {
-    if !(0.0..=1.0).contains(&settings.axis_share) {
-        return Err(Error::invalid(format!(
-            "the axis share must be between 0 and 1, got {}",
-            settings.axis_share
-        )));
-    }
+    check_axis_share(settings.axis_share)?;
     let mean_points = kernel.mean_class_len() * tile.spp as f64;
     let slices = match settings.slices {
         Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
@@ -287,6 +283,21 @@ pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Res
         None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
     };
     Ok((slices, slices as f64 * mean_points / tile.points() as f64))
+}
+
+/// An error unless `share` is an axis share a run can draw by: in [0, 1].
+pub fn check_axis_share(share: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&share) {
+        Ok(())
+    } else {
+        Err(Error::invalid(format!("the axis share must be between 0 and 1, got {share}")))
+    }
+}
+
+/// The axis share a run on `tile` records, where it matters: None for the
+/// default, and for d = 1 (every slice lies along the one axis).
+pub fn recorded_axis_share(tile: &Tile, s: &Settings) -> Option<String> {
+    (s.axis_share != DEFAULT_AXIS_SHARE && tile.dims >= 2).then(|| s.axis_share.to_string())
 }
 
 /// A mask with the provenance of a run.
@@ -303,8 +314,8 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
     if s.start.animates(s.until, tile) {
         meta.push(("start".to_string(), "animated".to_string()));
     }
-    if s.axis_share != DEFAULT_AXIS_SHARE && tile.dims >= 2 {
-        meta.push(("axis_share".to_string(), s.axis_share.to_string()));
+    if let Some(share) = recorded_axis_share(tile, s) {
+        meta.push(("axis_share".to_string(), share));
     }
     if let Until::Seconds(budget) = s.until {
         meta.push(("budget_seconds".to_string(), budget.to_string()));

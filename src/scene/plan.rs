@@ -53,7 +53,7 @@ use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-use crate::optimize::settings::{Settings, Start, Until, DEFAULT_CAP};
+use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, DEFAULT_CAP};
 use crate::scene::file::{Display, Reading, Scene};
 
 /// Tile width and height when the scene does not give them.
@@ -843,6 +843,31 @@ fn already_made(path: &Path, tile: &Tile, settings: &Settings) -> Option<u32> {
     let same = mask.tile == *tile
         && mask.meta("seed") == Some(settings.seed.to_string().as_str())
         && mask.meta("kernel") == Some(settings.kernel.describe().as_str())
-        && (mask.meta("start") == Some("animated")) == animated;
+        && (mask.meta("start") == Some("animated")) == animated
+        && mask.meta("axis_share").map(str::to_string) == recorded_axis_share(tile, settings);
     same.then(|| mask.meta("iterations").and_then(|i| i.parse().ok())).flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::atomic::AtomicFile;
+    use crate::optimize::settings::run_mask;
+
+    #[test]
+    fn a_mask_made_with_another_axis_share_is_not_already_made() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.exr");
+        let tile = Tile::new(4, 4, 2, 1, 2).unwrap();
+        let plan = Settings::new(KernelSpec::named("taa").unwrap(), 3);
+        let write = |s: &Settings| {
+            let mask = run_mask(&tile, s, 7, 16, Mask::white(tile, 1).samples);
+            crate::io::exr::write(&mask, AtomicFile::create(&path).unwrap()).unwrap();
+        };
+        write(&plan);
+        assert_eq!(already_made(&path, &tile, &plan), Some(7));
+        write(&plan.axis_share(0.85));
+        assert_eq!(already_made(&path, &tile, &plan), None);
+        assert_eq!(already_made(&path, &tile, &plan.axis_share(0.85)), Some(7));
+    }
 }

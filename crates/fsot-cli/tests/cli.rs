@@ -193,6 +193,7 @@ fn every_flag_has_help() {
         "--fps",
         "--iterations",
         "--slices",
+        "--axis-share",
         "--seed",
         "--backend",
         "--threads",
@@ -206,6 +207,12 @@ fn every_flag_has_help() {
             .unwrap_or_else(|| panic!("{flag} missing from --help"));
         assert!(!lines[i + 1].trim().is_empty(), "{flag} has no description");
     }
+    // A default the help states in words is the library's.
+    let flat = help.split_whitespace().collect::<Vec<_>>().join(" ");
+    let share = format!("[default: {}]", fsot::core::slice::DEFAULT_AXIS_SHARE);
+    let from = flat.find("--axis-share <").expect("--axis-share in --help");
+    let to = flat[from..].find("--seed <").expect("--seed after --axis-share") + from;
+    assert!(flat[from..to].contains(&share), "--axis-share's help does not say {share}");
 }
 
 #[test]
