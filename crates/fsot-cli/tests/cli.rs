@@ -699,3 +699,14 @@ fn profile_prints_each_pass_s_time_and_the_bytes_it_must_move() {
     let mb: f64 = line.split("transport ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
     assert!(mb * 1e6 >= 8.0 * (8 * 8 * 4 * 16 * 2) as f64, "{line}");
 }
+
+#[test]
+fn an_axis_share_at_one_dimension_is_said_to_do_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "3", "--out", "m.exr"];
+    let one = fsot(&[&args[..], &["--dims", "1", "--axis-share", "0.9"]].concat(), dir.path());
+    assert!(one.status.success(), "{}", stderr(&one));
+    assert!(stderr(&one).contains("--axis-share does nothing at d = 1"), "{}", stderr(&one));
+    let two = fsot(&[&args[..], &["--dims", "2", "--axis-share", "0.9"]].concat(), dir.path());
+    assert!(two.status.success() && !stderr(&two).contains("does nothing"), "{}", stderr(&two));
+}

@@ -66,6 +66,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     };
     if let Some(share) = args.axis_share {
         settings.axis_share = share;
+        if dims == 1 {
+            eprintln!("note: --axis-share does nothing at d = 1: every slice lies along the one axis");
+        }
     }
     let mut run = Run::start(tile, settings, init.as_ref(), run_options(&args)?)?;
     eprintln!("backend: {}", run.note());
