@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The start-up mask against the published FAST mask, with enough placements for
 # the judge's intervals to separate them: for each eye and seed, a 64x64x32
-# d = 2 perceptual-taa mask under `--budget 1s` (timed as a whole process), then
+# d = 2 perceptual-taa mask under `--budget 1s` or OS_BUDGET (timed as a whole process), then
 # one `fsot eval --quick` with PLACEMENTS placements of every mask (the quick
 # run's default is 3, whose 95% intervals use Student's t at 2 degrees of
 # freedom, 4.3 standard errors wide), and each mask's verdicts against the
@@ -13,6 +13,7 @@
 #                                           (--display) or sigma-S (--sigma S, pixels)
 #   OS_PLACEMENTS=10                        placements per mask in the eval
 #   OS_AXIS_SHARES="default 0.85"           --axis-share of the masks [default: default]
+#   OS_BUDGET=3s                            the masks' --budget [default: 1s]
 #
 # OUT_DIR/runs.tsv: eye, axis share, seed, process seconds, iterations, objective x
 # white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
@@ -24,6 +25,7 @@ seeds=${OS_SEEDS:-1 2 3}
 eyes=${OS_EYES:-standard_fhd standard_4k}
 shares=${OS_AXIS_SHARES:-default}
 placements=${OS_PLACEMENTS:-10}
+budget=${OS_BUDGET:-1s}
 here=$(dirname "$0")
 mkdir -p "$out"
 tsv="$out/runs.tsv"
@@ -42,9 +44,9 @@ for eye in $eyes; do
       *) share_flags=(--axis-share "$share") tag="-axis-$share" ;;
     esac
     for s in $seeds; do
-      name="1s-$eye$tag-s$s"
+      name="$budget-$eye$tag-s$s"
       timed_run "$tsv" "$out/$name" "$eye"$'\t'"$share"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
-        --kernel perceptual-taa "${eye_flags[@]}" "${share_flags[@]}" --backend cpu --budget 1s --seed "$s"
+        --kernel perceptual-taa "${eye_flags[@]}" "${share_flags[@]}" --backend cpu --budget "$budget" --seed "$s"
       masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
     done
   done
