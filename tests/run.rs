@@ -358,3 +358,40 @@ fn an_axis_share_outside_zero_to_one_is_refused_before_any_work() {
         .is_ok());
     }
 }
+
+#[test]
+fn a_coarse_start_makes_a_quarter_first_within_the_budget_and_says_so() {
+    let _alone = PACING.write().unwrap_or_else(|e| e.into_inner());
+    let tile = Tile::new(32, 32, 8, 1, 2).unwrap();
+    let budget = 0.6;
+    let s = settings(100_000).until(fsot::Until::Seconds(budget)).start(fsot::Start::Coarse);
+    let begun = std::time::Instant::now();
+    let mut run = Run::start(tile, s, None, RunOptions::default().backend(BackendChoice::Cpu)).unwrap();
+    let note = run.start_note().expect("a coarse start says how it was made").to_string();
+    assert!(note.contains("16x16x8") && note.contains("laid out 2x2"), "{note}");
+    run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    let mask = run.finish().unwrap();
+    let seconds = begun.elapsed().as_secs_f64();
+    // The quarter's run and the whole tile's share one budget; a margin for the
+    // last iteration and a busy machine.
+    assert!(seconds <= budget + 0.3, "{seconds} s for a budget of {budget} s");
+    assert_eq!(mask.meta("start"), Some("coarse"));
+    assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+    let score = mask.score(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap());
+    assert!(score.ratio() < 0.8, "{} x white noise", score.ratio());
+}
+
+#[test]
+fn a_coarse_start_without_a_budget_or_without_an_even_quarter_of_sixteen_pixels_is_refused() {
+    let s = settings(10).start(fsot::Start::Coarse);
+    let e = Run::start(Tile::new(32, 32, 4, 1, 2).unwrap(), s, None, RunOptions::default()).err().unwrap();
+    assert!(matches!(e, Error::Invalid(_)) && e.to_string().contains("--budget"), "{e}");
+    for (w, h) in [(30, 32), (32, 33), (32, 24)] {
+        let s = settings(10).until(fsot::Until::Seconds(1.0)).start(fsot::Start::Coarse);
+        let e = Run::start(Tile::new(w, h, 4, 1, 2).unwrap(), s, None, RunOptions::default()).err().unwrap();
+        assert!(
+            matches!(e, Error::Invalid(_)) && e.to_string().contains("even and at least 32"),
+            "{w}x{h}: {e}"
+        );
+    }
+}

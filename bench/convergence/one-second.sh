@@ -14,8 +14,10 @@
 #   OS_PLACEMENTS=10                        placements per mask in the eval
 #   OS_AXIS_SHARES="default 0.85"           --axis-share of the masks [default: default]
 #   OS_BUDGET=3s                            the masks' --budget [default: 1s]
+#   OS_STARTS="auto coarse"                 the masks' --start [default: auto]
 #
-# OUT_DIR/runs.tsv: eye, axis share, seed, process seconds, iterations, objective x
+# OUT_DIR/runs.tsv: eye, axis share, start, seed, process seconds, iterations (of the
+# whole tile; a coarse start's quarter says its own in the run's log), objective x
 # white noise, seconds past the budget. OUT_DIR/eval.{log,json}: the judge's
 # records (judged on its default display, standard_4k). OUT_DIR/verdicts.md:
 # bench/eval/compare.py per mask.
@@ -26,10 +28,11 @@ eyes=${OS_EYES:-standard_fhd standard_4k}
 shares=${OS_AXIS_SHARES:-default}
 placements=${OS_PLACEMENTS:-10}
 budget=${OS_BUDGET:-1s}
+starts=${OS_STARTS:-auto}
 here=$(dirname "$0")
 mkdir -p "$out"
 tsv="$out/runs.tsv"
-printf 'eye\taxis_share\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
+printf 'eye\taxis_share\tstart\tseed\tprocess_s\titerations\tobjective_x_white\tpast_budget_s\n' >"$tsv"
 
 source "$here/timed.sh"
 masks=() methods=published-fast,published-stbn names=()
@@ -43,11 +46,15 @@ for eye in $eyes; do
       default) share_flags=() tag="" ;;
       *) share_flags=(--axis-share "$share") tag="-axis-$share" ;;
     esac
-    for s in $seeds; do
-      name="$budget-$eye$tag-s$s"
-      timed_run "$tsv" "$out/$name" "$eye"$'\t'"$share"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
-        --kernel perceptual-taa "${eye_flags[@]}" "${share_flags[@]}" --backend cpu --budget "$budget" --seed "$s"
-      masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
+    for start in $starts; do
+      start_tag=$([ "$start" = auto ] || echo "-$start")
+      for s in $seeds; do
+        name="$budget$start_tag-$eye$tag-s$s"
+        timed_run "$tsv" "$out/$name" "$eye"$'\t'"$share"$'\t'"$start"$'\t'"$s" "$fsot" optimize --size 64x64x32 --dims 2 \
+          --kernel perceptual-taa "${eye_flags[@]}" "${share_flags[@]}" --backend cpu --budget "$budget" \
+          --start "$start" --seed "$s"
+        masks+=(--mask "$name=$out/$name.exr") methods+=",$name" names+=("$name")
+      done
     done
   done
 done

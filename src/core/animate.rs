@@ -4,6 +4,10 @@
 //! the spatial mask's structure. A scalar mask's pixels take their step by their
 //! place in each 2x2 block, so that two pixels a 2-D decision reads together do
 //! not move in lockstep. A cheap start for a spatio-temporal optimization.
+//!
+//! Also the coarse start's layout (`lay_out`): a mask of a quarter of the tile
+//! laid out 2x2, each copy rotated (modulo 1) by its own multiple of the
+//! Kronecker steps, so that no copy holds another's values.
 
 use crate::core::mask::Mask;
 use crate::core::tile::{Tile, MAX_DIMS};
@@ -61,6 +65,44 @@ pub fn animate(spatial: &Mask, frames: usize) -> Result<Mask> {
     }
     let mut mask = Mask { tile, samples, meta: spatial.meta.clone() };
     mask.set_meta("start", "animated by a Kronecker sequence");
+    Ok(mask)
+}
+
+/// The mask of `tile` whose quarter at copy (i, j) (i across, j down) is
+/// `quarter` with every coordinate k moved by the fractional part of c times
+/// `kronecker_step`'s k-th step, modulo 1, c = i + 2 j: the first copy as it
+/// is, the others rotated apart. `quarter` must be half the tile's width and
+/// height, with its frames, samples per pixel and dimensions. A rotation of a
+/// whole copy leaves every class inside it as well spread as it was (the
+/// transport projects after a random toroidal shift); only classes that
+/// straddle two copies see the seam.
+pub fn lay_out(quarter: &Mask, tile: Tile) -> Result<Mask> {
+    let q = quarter.tile;
+    if Tile::new(2 * q.width, 2 * q.height, q.frames, q.spp, q.dims)? != tile {
+        return Err(Error::invalid(format!(
+            "a coarse start lays out a quarter of the tile, not {} for {}",
+            q.describe(),
+            tile.describe()
+        )));
+    }
+    let steps = kronecker_step(q.dims);
+    let below_one = 1.0f32 - f32::EPSILON / 2.0;
+    let per = q.spp * q.dims;
+    let mut samples = Vec::with_capacity(tile.values());
+    for t in 0..tile.frames {
+        for y in 0..tile.height {
+            for x in 0..tile.width {
+                let copy = (x / q.width + 2 * (y / q.height)) as f64;
+                let at = ((t * q.height + y % q.height) * q.width + x % q.width) * per;
+                for (i, &v) in quarter.samples[at..at + per].iter().enumerate() {
+                    let moved = (v as f64 + (copy * steps[i % q.dims]).fract()).fract();
+                    samples.push((moved as f32).min(below_one));
+                }
+            }
+        }
+    }
+    let mut mask = Mask { tile, samples, meta: quarter.meta.clone() };
+    mask.set_meta("start", "a quarter of the tile laid out 2x2");
     Ok(mask)
 }
 
@@ -128,6 +170,37 @@ mod tests {
         // Two neighbours' difference changes from frame to frame.
         let diff = |t| mask.sample(1, 0, t, 0)[0] - mask.sample(0, 0, t, 0)[0];
         assert!(((diff(1) - diff(0)).rem_euclid(1.0) - (steps[1] - steps[0]).rem_euclid(1.0) as f32).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_quarter_laid_out_holds_four_copies_each_rotated_by_its_multiple_of_the_steps() {
+        let quarter = Mask::white(Tile::new(3, 2, 4, 2, 2).unwrap(), 5);
+        let tile = Tile::new(6, 4, 4, 2, 2).unwrap();
+        let mask = lay_out(&quarter, tile).unwrap();
+        assert_eq!(mask.tile, tile);
+        let step = kronecker_step(2);
+        for (i, j) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let c = (i + 2 * j) as f64;
+            for (x, y, t, s) in [(0, 0, 0, 0), (2, 1, 3, 1), (1, 0, 2, 1)] {
+                for (k, alpha) in step.iter().enumerate() {
+                    let want = (quarter.sample(x, y, t, s)[k] as f64 + c * alpha).rem_euclid(1.0);
+                    let got = mask.sample(x + 3 * i, y + 2 * j, t, s)[k] as f64;
+                    assert!((got - want).abs() < 1e-6, "copy ({i}, {j}) ({x}, {y}, {t}) s {s} k {k}: {got} against {want}");
+                }
+            }
+        }
+        assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
+        // The first copy is the quarter itself.
+        assert_eq!(mask.sample(2, 1, 3, 1), quarter.sample(2, 1, 3, 1));
+    }
+
+    #[test]
+    fn only_a_quarter_of_the_tile_is_laid_out() {
+        let quarter = Mask::white(Tile::new(4, 4, 2, 1, 1).unwrap(), 1);
+        assert!(lay_out(&quarter, Tile::new(8, 8, 2, 1, 1).unwrap()).is_ok());
+        for other in [Tile::new(8, 4, 2, 1, 1), Tile::new(8, 8, 4, 1, 1), Tile::new(8, 8, 2, 1, 2)] {
+            assert!(lay_out(&quarter, other.unwrap()).is_err());
+        }
     }
 
     #[test]

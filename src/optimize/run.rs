@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::core::animate::animate;
+use crate::core::animate::{animate, lay_out};
 use crate::core::kernel::{KernelSpec, Temporal};
 use crate::core::mask::Mask;
 use crate::core::step_rule::{schedule_between, Plateau, PlateauState, FROM_MASK_START};
@@ -21,7 +21,8 @@ use crate::optimize::backend::{Backend, BackendChoice};
 use crate::optimize::checkpoint;
 use crate::optimize::cpu::CpuRun;
 use crate::optimize::settings::{
-    check_axis_share, RunState, Settings, Start, Until, SPATIAL_BUDGET_SHARE, SPATIAL_ITERATIONS,
+    check_axis_share, RunState, Settings, Start, Until, COARSE_BUDGET_SHARE, COARSE_MIN_QUARTER, SPATIAL_BUDGET_SHARE,
+    SPATIAL_ITERATIONS,
 };
 #[cfg(feature = "vulkan")]
 use crate::optimize::vulkan::{VulkanOptions, VulkanRun};
@@ -214,6 +215,8 @@ pub struct Run {
     options: RunOptions,
     backend: Box<dyn Backend>,
     note: String,
+    /// How a coarse start was made, in words.
+    start_note: Option<String>,
     fingerprint: String,
     resumed_from: Option<u32>,
     next_checkpoint: u32,
@@ -262,15 +265,23 @@ impl Run {
         }
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
-        let animated;
+        if settings.start == Start::Coarse && !matches!(settings.until, Until::Seconds(_)) {
+            return Err(Error::invalid("a coarse start divides a time budget: it takes one (--budget)"));
+        }
+        let left = match settings.until {
+            Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
+            _ => None,
+        };
+        let (started, mut start_note);
+        start_note = None;
         let init = match (init, &saved, settings.start) {
+            (None, None, Start::Coarse) => {
+                (started, start_note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
+                Some(&started)
+            }
             (None, None, start) if start.animates(settings.until, &tile) => {
-                let left = match settings.until {
-                    Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
-                    _ => None,
-                };
-                animated = animated_start(tile, &settings, left)?;
-                Some(&animated)
+                started = animated_start(tile, &settings, left)?;
+                Some(&started)
             }
             _ => init,
         };
@@ -289,6 +300,7 @@ impl Run {
             options,
             backend,
             note,
+            start_note,
             fingerprint,
             resumed_from,
             next_checkpoint,
@@ -326,6 +338,10 @@ impl Run {
     /// The backend in words, and why it was chosen when not the one asked for.
     pub fn note(&self) -> &str {
         &self.note
+    }
+    /// How a coarse start was made, in words (None for other starts).
+    pub fn start_note(&self) -> Option<&str> {
+        self.start_note.as_deref()
     }
     /// The iteration the run resumed from, when it did.
     pub fn resumed_from(&self) -> Option<u32> {
@@ -728,6 +744,34 @@ fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<
     let mut run = Run::start(flat, spatial, None, RunOptions::default().backend(BackendChoice::Cpu))?;
     run.run(&CancelFlag::new(), &mut |_| {})?;
     animate(&run.finish()?, tile.frames)
+}
+
+/// The samples of `Start::Coarse`: a quarter of the tile made by a run of the
+/// same settings and backend in `COARSE_BUDGET_SHARE` of the `left` seconds,
+/// laid out 2x2 (`lay_out`), and what was done, in words.
+fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions) -> Result<(Mask, Option<String>)> {
+    let min = 2 * COARSE_MIN_QUARTER;
+    if tile.width % 2 != 0 || tile.height % 2 != 0 || tile.width < min || tile.height < min {
+        return Err(Error::invalid(format!(
+            "a coarse start makes a quarter of the tile first: its width and height must be even and at least \
+             {min}, not {}",
+            tile.describe()
+        )));
+    }
+    let quarter = Tile::new(tile.width / 2, tile.height / 2, tile.frames, tile.spp, tile.dims)?;
+    let until = Until::Seconds((left * COARSE_BUDGET_SHARE).max(MIN_SPATIAL_SECONDS));
+    let first = Settings { until, start: Start::Auto, ..*settings };
+    let options = RunOptions { checkpoint: None, budget_from: None, ..options.clone() };
+    let began = Instant::now();
+    let mut run = Run::start(quarter, first, None, options)?;
+    run.run(&CancelFlag::new(), &mut |_| {})?;
+    let note = format!(
+        "a quarter, {}, of {} iterations in {:.2} s, laid out 2x2",
+        quarter.describe(),
+        run.iteration(),
+        began.elapsed().as_secs_f64()
+    );
+    Ok((lay_out(&run.finish()?, tile)?, Some(note)))
 }
 
 /// The end-agnostic schedule of a run that stops by a rule: where a saved state

@@ -23,6 +23,13 @@ pub const SPATIAL_ITERATIONS: u32 = 200;
 /// The share of a time budget the one-frame run of an animated start may take.
 pub const SPATIAL_BUDGET_SHARE: f64 = 0.15;
 
+/// The share of a time budget the quarter-tile run of a coarse start may take.
+pub const COARSE_BUDGET_SHARE: f64 = 0.75;
+
+/// The smallest quarter a coarse start makes, in pixels across and down: the
+/// kernel's classes (a few pixels across) should fit inside one copy.
+pub const COARSE_MIN_QUARTER: usize = 16;
+
 /// What defines a run, whatever runs it. `Settings::new` and the setters:
 ///
 /// ```
@@ -67,6 +74,15 @@ pub enum Start {
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
     Animated,
+    /// Under a time budget only: a quarter of the tile (half its width and
+    /// height, all its frames) made first by a run of the same settings in
+    /// `COARSE_BUDGET_SHARE` of the budget (from its own `Auto` start), laid out
+    /// 2x2 with each copy rotated in value (`animate::lay_out`), then the whole
+    /// tile refined for the rest. A quarter takes a quarter of the time per
+    /// iteration, so a budget too short for the whole tile to converge goes
+    /// further; the copies keep the quarter's structure (rotated apart, not
+    /// made anew), which the refinement barely changes.
+    Coarse,
     /// `Animated` under a time budget (`Until::Seconds`), where the short run
     /// gains most from it, `White` otherwise: the default.
     Auto,
@@ -76,7 +92,7 @@ impl Start {
     /// Whether a run of these settings on `tile` starts animated.
     pub fn animates(self, until: Until, tile: &Tile) -> bool {
         let on = match self {
-            Start::White => false,
+            Start::White | Start::Coarse => false,
             Start::Animated => true,
             Start::Auto => matches!(until, Until::Seconds(_)),
         };
@@ -313,6 +329,8 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
     ];
     if s.start.animates(s.until, tile) {
         meta.push(("start".to_string(), "animated".to_string()));
+    } else if s.start == Start::Coarse {
+        meta.push(("start".to_string(), "coarse".to_string()));
     }
     if let Some(share) = recorded_axis_share(tile, s) {
         meta.push(("axis_share".to_string(), share));

@@ -241,6 +241,11 @@ enum StartArg {
     Animated,
     /// White noise.
     White,
+    /// With --budget only: a quarter of the tile (half its width and height) made
+    /// first in three quarters of the budget, laid out 2x2 with each copy rotated
+    /// in value, then the whole tile refined: further within a budget too short
+    /// for the whole tile, but the copies keep the quarter's structure.
+    Coarse,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

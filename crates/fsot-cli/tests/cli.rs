@@ -143,6 +143,8 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--budget", "1e9"], "at most 86400 seconds"),
         (&["--budget", "1s", "--until", "plateau"], "cannot be used with"),
         (&["--budget", "1s", "--checkpoint", "c.ckpt"], "takes no checkpoints"),
+        (&["--start", "coarse"], "a coarse start divides a time budget"),
+        (&["--start", "coarse", "--budget", "1s"], "even and at least 32"),
     ];
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.

@@ -63,6 +63,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         StartArg::Auto => fsot::Start::Auto,
         StartArg::Animated => fsot::Start::Animated,
         StartArg::White => fsot::Start::White,
+        StartArg::Coarse => fsot::Start::Coarse,
     };
     if let Some(share) = args.axis_share {
         settings.axis_share = share;
@@ -94,6 +95,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         spec.describe(),
         run.backend().slices_per_iteration()
     );
+    if let Some(note) = run.start_note() {
+        eprintln!("start: {note}");
+    }
     let bar = iteration_bar(iterations, run.iteration());
     // Ctrl-C or SIGTERM from here on stops between iterations, after a checkpoint.
     let cancel = cmd::env::interrupt_flag()?;
