@@ -11,6 +11,9 @@
 //! (lags default to a quarter and a half of the tile's width)
 use std::process::ExitCode;
 
+/// An integrand of u, by name.
+type Integrand = (&'static str, fn(f64) -> f64);
+
 /// TAA's blend weight, and 1: each frame alone.
 const ALPHAS: [(f64, &str); 2] = [(0.1, "TAA"), (1.0, "one frame")];
 
@@ -36,7 +39,7 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let integrands: [(&str, fn(f64) -> f64); 2] =
+    let integrands: [Integrand; 2] =
         [("u - 1/2", |u| u - 0.5), ("[u < 0.3] - 0.3", |u| (u < 0.3) as u8 as f64 - 0.3)];
     println!("{path}: {}", t.describe());
     for ((alpha, reading), (name, f)) in ALPHAS.iter().flat_map(|a| integrands.iter().map(move |i| (*a, *i)))
