@@ -1,8 +1,8 @@
 //! How much of a mask's error pattern repeats across the tile: for the mask's
 //! first coordinate u, the error each pixel keeps after TAA (an exponential
 //! moving average of weight 0.1 over frames, run twice round the tile's frames
-//! so that its start is forgotten), and in each frame alone, of two integrands, the smooth u - 1/2 and the
-//! step [u < 0.3] - 0.3; then the correlation (Pearson, over every pixel and
+//! so that its start is forgotten), and in each frame alone, of two integrands,
+//! the smooth u - 1/2 and the step [u < 0.3] - 0.3; then the correlation (Pearson, over every pixel and
 //! every frame of the second round) between that error at pixel (x, y) and at
 //! (x + LAG, y), and at (x, y + LAG), both wrapping. Each lag is the mean of the
 //! two. Independent errors give about 0; a tile repeated every LAG pixels gives 1.

@@ -86,16 +86,18 @@ pub fn lay_out(quarter: &Mask, tile: Tile) -> Result<Mask> {
         )));
     }
     let steps = kronecker_step(q.dims);
+    // Copy c's rotation of coordinate k.
+    let rotation: Vec<Vec<f64>> = (0..4).map(|c| steps.iter().map(|a| (c as f64 * a).fract()).collect()).collect();
     let below_one = 1.0f32 - f32::EPSILON / 2.0;
     let per = q.spp * q.dims;
     let mut samples = Vec::with_capacity(tile.values());
     for t in 0..tile.frames {
         for y in 0..tile.height {
             for x in 0..tile.width {
-                let copy = (x / q.width + 2 * (y / q.height)) as f64;
+                let rotation = &rotation[x / q.width + 2 * (y / q.height)];
                 let at = ((t * q.height + y % q.height) * q.width + x % q.width) * per;
                 for (i, &v) in quarter.samples[at..at + per].iter().enumerate() {
-                    let moved = (v as f64 + (copy * steps[i % q.dims]).fract()).fract();
+                    let moved = (v as f64 + rotation[i % q.dims]).fract();
                     samples.push((moved as f32).min(below_one));
                 }
             }

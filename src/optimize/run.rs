@@ -263,20 +263,22 @@ impl Run {
             }
             _ => {}
         }
-        let fingerprint = checkpoint::fingerprint(&tile, &settings);
-        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         if settings.start == Start::Coarse && !matches!(settings.until, Until::Seconds(_)) {
             return Err(Error::invalid("a coarse start divides a time budget: it takes one (--budget)"));
         }
+        let fingerprint = checkpoint::fingerprint(&tile, &settings);
+        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
         let left = match settings.until {
             Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
             _ => None,
         };
-        let (started, mut start_note);
-        start_note = None;
+        let started;
+        let mut start_note = None;
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
-                (started, start_note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
+                let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
+                start_note = Some(note);
+                started = mask;
                 Some(&started)
             }
             (None, None, start) if start.animates(settings.until, &tile) => {
@@ -749,7 +751,7 @@ fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<
 /// The samples of `Start::Coarse`: a quarter of the tile made by a run of the
 /// same settings and backend in `COARSE_BUDGET_SHARE` of the `left` seconds,
 /// laid out 2x2 (`lay_out`), and what was done, in words.
-fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions) -> Result<(Mask, Option<String>)> {
+fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions) -> Result<(Mask, String)> {
     let min = 2 * COARSE_MIN_QUARTER;
     if tile.width % 2 != 0 || tile.height % 2 != 0 || tile.width < min || tile.height < min {
         return Err(Error::invalid(format!(
@@ -771,7 +773,7 @@ fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions
         run.iteration(),
         began.elapsed().as_secs_f64()
     );
-    Ok((lay_out(&run.finish()?, tile)?, Some(note)))
+    Ok((lay_out(&run.finish()?, tile)?, note))
 }
 
 /// The end-agnostic schedule of a run that stops by a rule: where a saved state
