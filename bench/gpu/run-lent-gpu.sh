@@ -13,8 +13,8 @@
 # in as .gl/bin/fsot-NAME; their sort is measured beside this one's.
 # At most 8 files come back from $OUT, so the masks and reports
 # stay in $WORK and come back packed: $OUT/log.txt (everything printed),
-# $OUT/steps.tsv (exit status and seconds of each step) and $OUT/results.tar.gz
-# (reports, JSON, plots, and the masks up to 4 MiB each). Every run prints its mask's
+# $OUT/steps.tsv (exit status and seconds of each step) and $OUT/results.tar.gz.part-*
+# (reports, JSON, plots, and the masks up to 4 MiB each, in parts under 16 MiB). Every run prints its mask's
 # objective in the log.
 # DRY_RUN=1 runs on any device (lavapipe here) with STEP_TIMEOUT=10 by default, to
 # check that every step starts (exit status 0, or 124 or 137 when stopped by the timeout).
@@ -170,5 +170,8 @@ optimize() {
 } 2>&1 | tee "$OUT/log.txt"
 
 # Bring back what fits: masks over 4 MiB stay behind (their scores are in the log).
-(cd "$WORK" && find . -type f ! \( -name '*.exr' -size +4M \) -print0 | tar -czf "$OUT/results.tar.gz" --null -T -)
+# A file comes back only under 16 MiB, so the archive comes in 15 MiB parts
+# (results.tar.gz.part-aa, -ab, ...; `cat results.tar.gz.part-* | tar -xz` joins them).
+(cd "$WORK" && find . -type f ! \( -name '*.exr' -size +4M \) -print0 | tar -czf "$WORK.tar.gz" --null -T -)
+split -b 15M "$WORK.tar.gz" "$OUT/results.tar.gz.part-" && rm -f "$WORK.tar.gz"
 ls -la "$OUT"
