@@ -145,3 +145,23 @@ fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_
     }
     common::assert_no_validation_messages(&ctx);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn contexts_made_and_dropped_one_after_another_keep_working() {
+    // A host may make a context for each job and drop it after: the 64th must
+    // work as the first did (a sort checked against the CPU's), the process
+    // keeping nothing of the ones before.
+    const CONTEXTS: u32 = 64;
+    for n in 1..=CONTEXTS {
+        let ctx = fsot::vk::Context::new(&fsot::vk::ContextOptions { validation: true, device: None })
+            .unwrap_or_else(|e| panic!("context {n} of {CONTEXTS} (the ones before made and dropped): {e}"));
+        if n == 1 || n == CONTEXTS {
+            let mut sort = RadixSort::new(&ctx, 4096, SortCount::Host).unwrap();
+            let (keys, vals) = random_pairs(n, 4096);
+            assert_eq!(sort.sort_pairs(&keys, &vals).unwrap(), cpu_sort(&keys, &vals), "context {n}");
+            drop(sort);
+        }
+        common::assert_no_validation_messages(&ctx);
+    }
+}

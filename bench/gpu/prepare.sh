@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prepares what bench/gpu/run-lent-gpu.sh carries to a GPU machine, on the
 # development machine (no GPU needed), so that the GPU's time goes to measuring:
-#   .gl/*.deb          the Vulkan loader, vulkaninfo and the validation layer
+#   .gl/*.deb          the Vulkan loader, vulkaninfo, the validation layer and
+#                      libglvnd (which the NVIDIA driver's Vulkan ICD loads)
 # packed in .gl/bin.tar.gz:
 #   .gl/bin/fsot       this build's command line (and .gl/bin/fsot-NAME for other
 #                      builds to compare: OLD_FSOT="NAME=path ..." copies them in)
@@ -22,6 +23,14 @@ if ! ls .gl/vulkan-validationlayers_*.deb >/dev/null 2>&1; then
     download vulkan-validationlayers 2>&1 | grep -v 'unsandboxed' || true)
 fi
 ls .gl/vulkan-validationlayers_*.deb >/dev/null
+# The NVIDIA ICD (libGLX_nvidia) needs libglvnd's dispatch libraries: without them
+# the loader finds no driver there.
+if ! ls .gl/libglvnd0_*.deb >/dev/null 2>&1; then
+  mkdir -p /tmp/amd64/partial
+  (cd .gl && apt-get -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64 \
+    download libglvnd0 libegl1 libgl1 libglx0 libgles2 libopengl0 2>&1 | grep -v 'unsandboxed' || true)
+fi
+ls .gl/libglvnd0_*.deb >/dev/null
 
 # The tests that open a device (the others gain nothing from a GPU).
 tests=(gpu_toolchain gpu_sort gpu_sort_look_back gpu_scatter gpu_optimizer gpu_plan gpu_stopping_rule

@@ -137,7 +137,14 @@ optimize() {
     # Tests that run the command line look for it where it was built.
     if [ "$DRY_RUN" != 1 ]; then mkdir -p /work/main/target/release && cp $B/fsot /work/main/target/release/fsot; fi
     # Tests of a CPU implementation's paths cannot run on a GPU: allowed skips.
-    for t in "$T"/*; do FSOT_ALLOW_SKIPS=1 step "$t" --test-threads 1; done
+    # A binary's failed tests run again one by one, each in a process of its own,
+    # to tell a test that fails alone from one failed by what ran before it.
+    for t in "$T"/*; do
+      FSOT_ALLOW_SKIPS=1 step "$t" --test-threads 1 | tee "$WORK/tests-${t##*/}.txt"
+      for f in $(sed -n 's/^test \([^ ]*\) \.\.\. FAILED$/\1/p' "$WORK/tests-${t##*/}.txt"); do
+        FSOT_ALLOW_SKIPS=1 step "$t" --exact "$f" --test-threads 1
+      done
+    done
   fi
 
   if want bench; then
