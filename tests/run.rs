@@ -277,6 +277,13 @@ fn budget_run(backend: BackendChoice, budget: f64) -> (f64, u32, f64, Mask) {
     let s = settings(100_000).until(fsot::Until::Seconds(budget));
     let begun = std::time::Instant::now();
     let mut run = Run::start(tile, s, None, RunOptions::default().backend(backend)).unwrap();
+    // The set-up's parts, timed inside, against the whole of `Run::start` timed here.
+    let whole = begun.elapsed().as_secs_f64();
+    let set_up = run.set_up();
+    assert!(set_up.start > 0.0, "an animated start takes time: {set_up:?}");
+    assert!(set_up.backend > 0.0, "{set_up:?}");
+    let parts = set_up.start + set_up.backend;
+    assert!(parts <= whole && parts >= whole - 0.05, "{set_up:?} of {whole} s in Run::start");
     let mut slowest = 0.0f64;
     let mut last = (begun, 0u32);
     run.run(&CancelFlag::new(), &mut |e| {

@@ -239,6 +239,20 @@ pub struct Run {
     /// What a time budget counts from: `RunOptions::budget_from`, or when
     /// `Run::start` began.
     begun: Instant,
+    /// How long `Run::start` took, and on what.
+    set_up: SetUp,
+}
+
+/// Where `Run::start` spent its time, in seconds: what a run does before its
+/// first iteration, which a time budget counts too.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SetUp {
+    /// Making the start's samples (an animated or coarse start; 0 for white
+    /// noise, a mask handed in or a checkpoint).
+    pub start: f64,
+    /// Starting the backend: for Vulkan the context (unless one was handed
+    /// in), the pipelines, the buffers and the upload; for the CPU its tables.
+    pub backend: f64,
 }
 
 impl Run {
@@ -274,6 +288,7 @@ impl Run {
         };
         let started;
         let mut start_note = None;
+        let making_start = Instant::now();
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
                 let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
@@ -287,10 +302,15 @@ impl Run {
             }
             _ => init,
         };
+        let starting_backend = Instant::now();
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
         if let Some(state) = &saved {
             backend.restore(state)?;
         }
+        let set_up = SetUp {
+            start: (starting_backend - making_start).as_secs_f64(),
+            backend: starting_backend.elapsed().as_secs_f64(),
+        };
         let plateau = schedule(&settings, saved.as_ref());
         let resumed_from = saved.map(|s| s.iteration);
         let every = options.checkpoint.as_ref().map(|c| c.every).unwrap_or(u32::MAX);
@@ -313,6 +333,7 @@ impl Run {
             pace: None,
             iterating_since: None,
             begun,
+            set_up,
         };
         run.hand_over_rule()?;
         Ok(run)
@@ -434,6 +455,12 @@ impl Run {
     /// seconds: what a time budget counts.
     pub fn elapsed(&self) -> f64 {
         self.begun.elapsed().as_secs_f64()
+    }
+
+    /// Where `Run::start` spent its time: making the start and starting the
+    /// backend.
+    pub fn set_up(&self) -> SetUp {
+        self.set_up
     }
 
     /// Seconds spent stepping this run (a step shared with other runs, in

@@ -139,6 +139,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     }
     let seconds = start.elapsed().as_secs_f64();
     let since_start = run.elapsed();
+    let set_up = run.set_up();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let start_samples = run.start_samples()?;
     let mask = run.finish()?;
@@ -165,8 +166,12 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     );
     if let Until::Seconds(budget) = until {
         println!(
-            "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s)",
-            since_start - budget
+            "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s); \
+             before the first iteration {:.3} s, of which the start {:.3} s and the backend {:.3} s",
+            since_start - budget,
+            since_start - seconds,
+            set_up.start,
+            set_up.backend
         );
     }
     backend_report(&report)
