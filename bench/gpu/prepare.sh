@@ -3,9 +3,10 @@
 # development machine (no GPU needed), so that the GPU's time goes to measuring:
 #   .gl/*.deb          the Vulkan loader, vulkaninfo, the validation layer and
 #                      libglvnd (which the NVIDIA driver's Vulkan ICD loads)
-# packed in .gl/bin.tar.gz:
+# packed in .gl/bin.tar.xz:
 #   .gl/bin/fsot       this build's command line (and .gl/bin/fsot-NAME for other
 #                      builds to compare: OLD_FSOT="NAME=path ..." copies them in)
+#   .gl/bin/transport_shapes  examples/transport_shapes.rs
 #   .gl/t/deps/NAME    the test binaries that use a device, .gl/t/examples/ the
 #                      example renderer their test runs
 # all stripped, and .gl/commit naming the build. Then it checks that what travels
@@ -38,8 +39,9 @@ tests=(gpu_toolchain gpu_sort gpu_sort_look_back gpu_scatter gpu_optimizer gpu_p
   gpu_sort_choice)
 rm -rf .gl/bin .gl/t
 mkdir -p .gl/bin .gl/t/deps .gl/t/examples
-cargo build --release --quiet --bin fsot --example taa_renderer
+cargo build --release --quiet --bin fsot --example taa_renderer --example transport_shapes
 cp target/release/fsot .gl/bin/fsot
+cp target/release/examples/transport_shapes .gl/bin/
 cp target/release/examples/taa_renderer .gl/t/examples/
 for pair in ${OLD_FSOT:-}; do cp "${pair#*=}" ".gl/bin/fsot-${pair%%=*}"; done
 args=()
@@ -50,8 +52,11 @@ cargo test --release --no-run --message-format=json "${args[@]}" 2>/dev/null |
 for t in "${tests[@]}"; do [ -x ".gl/t/deps/$t" ] || { echo "prepare: test binary $t is missing" >&2; exit 1; }; done
 strip .gl/bin/* .gl/t/deps/* .gl/t/examples/*
 echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl tests examples || echo -dirty)" > .gl/commit
-# Packed (gzip: about a third of the size; every machine has it); the run unpacks.
-tar -czf .gl/bin.tar.gz -C .gl bin t commit
+# Packed by xz (the binaries share most of their code, which xz's window finds:
+# about a third of gzip's size); the run unpacks, by python3's tarfile where
+# the machine has no xz.
+rm -f .gl/bin.tar.gz
+tar -cJf .gl/bin.tar.xz -C .gl bin t commit
 rm -rf .gl/bin .gl/t .gl/commit
 
 tracked=$(git ls-files -z --cached --others --exclude-standard | xargs -0 stat -c %s 2>/dev/null | awk '{s += $1} END {print s}')

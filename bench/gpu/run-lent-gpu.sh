@@ -6,8 +6,8 @@
 # then on the GPU machine, with .gl/ beside the tree:
 #   OUT=$OUT bash bench/gpu/run-lent-gpu.sh [SECTION...]
 # under a wall-clock limit two minutes above BUDGET_S. Sections, in the order they
-# run (most wanted first; none named runs them all): sort, optimize, curve, swap,
-# tests, bench, stress, cpu. No step starts once BUDGET_S seconds (default 420) have
+# run (most wanted first; none named runs them all): sort, optimize, shapes, curve,
+# swap, tests, bench, stress, cpu. No step starts once BUDGET_S seconds (default 420) have
 # passed, and each step is stopped after STEP_TIMEOUT seconds (default 150), so a
 # run ends inside its limit and says what it skipped. Other builds to compare go
 # in as .gl/bin/fsot-NAME; their sort is measured beside this one's.
@@ -31,7 +31,10 @@ rm -rf "$WORK"
 mkdir -p "$OUT" "$WORK"
 STEPS=$OUT/steps.tsv
 printf 'status\tseconds\tstep\n' > "$STEPS"
-[ -f .gl/bin.tar.gz ] && tar -xzf .gl/bin.tar.gz -C .gl
+if [ -f .gl/bin.tar.xz ]; then
+  tar -xJf .gl/bin.tar.xz -C .gl 2>/dev/null ||
+    python3 -c 'import sys, tarfile; tarfile.open(sys.argv[1]).extractall(sys.argv[2])' .gl/bin.tar.xz .gl
+fi
 B=.gl/bin
 T=.gl/t/deps
 elapsed() { awk -v a="$START" -v b="$EPOCHREALTIME" 'BEGIN {printf "%.1f", b - a}'; }
@@ -110,6 +113,15 @@ optimize() {
     optimize gpu-128x128x30-ptaa-plateau --backend vulkan --size 128x128x30 --dims 2 --kernel perceptual-taa --until plateau --profile
     optimize gpu-128x128x30-ptaa-det --backend vulkan --deterministic --size 128x128x30 --dims 2 --kernel perceptual-taa --profile
     optimize gpu-32x32x16-taa --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --profile
+  fi
+
+  if want shapes; then
+    # The workgroup transport's GPU time in a few shapes (workgroup size, slices
+    # per workgroup, the first pass's class limit), each making the same mask:
+    # the display's eye (classes of 29 on the mean) and sigma 2.1 pixels (148).
+    step $B/transport_shapes --size 128x128x30 --iterations 100
+    step $B/transport_shapes --size 128x128x30 --iterations 100 --sigma 2.1
+    step $B/transport_shapes --size 256x256x64 --iterations 20
   fi
 
   if want curve; then
