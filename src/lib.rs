@@ -199,7 +199,7 @@ pub use crate::core::tile::Tile;
 pub use error::{Error, Result};
 pub use io::ktx2::Format as TexelFormat;
 pub use optimize::backend::{BackendChoice, BackendKind, Profile, Report};
-pub use optimize::run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
+pub use optimize::run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions, SetUp};
 pub use optimize::settings::{Settings, Start, Until};
 pub use render::sampler::{SamplerPart, SamplerPlan};
 pub use scene::file::{Display as SceneDisplay, Group as SceneGroup, Reading, Scene};

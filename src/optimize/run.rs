@@ -247,8 +247,9 @@ pub struct Run {
 /// first iteration, which a time budget counts too.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SetUp {
-    /// Making the start's samples (an animated or coarse start; 0 for white
-    /// noise, a mask handed in or a checkpoint).
+    /// Making the start's samples: an animated or coarse start (next to
+    /// nothing for white noise, a mask handed in or a checkpoint, which the
+    /// backend makes or reads itself).
     pub start: f64,
     /// Starting the backend: for Vulkan the context (unless one was handed
     /// in), the pipelines, the buffers and the upload; for the CPU its tables.
