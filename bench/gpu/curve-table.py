@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The GPU's time-quality table from bench/gpu/run-lent-gpu.sh's log (the
+"""The GPU's time-quality table from bench/gpu/measure.sh's log (the
 optimize and curve sections) and, where the masks came back and were judged,
 `fsot eval --quick`'s JSON: for each tile, the 1000-iteration run from white
 noise and the runs under each budget, with the process's seconds (the step's

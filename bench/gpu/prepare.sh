@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Prepares what bench/gpu/run-lent-gpu.sh carries to a GPU machine, on the
+# Prepares what bench/gpu/measure.sh carries to a GPU machine, on the
 # development machine (no GPU needed), so that the GPU's time goes to measuring:
 #   .gl/*.deb          the Vulkan loader, vulkaninfo, the validation layer and
 #                      libglvnd (which the NVIDIA driver's Vulkan ICD loads)
@@ -65,4 +65,4 @@ total=$((tracked + carried))
 awk -v a="$total" -v b="$tracked" -v c="$carried" \
   'BEGIN {printf "travels: %.1f MiB (tree %.1f, .gl %.1f) of 64 MiB\n", a / 1048576, b / 1048576, c / 1048576}'
 if [ "$total" -gt $((60 * 1048576)) ]; then echo "prepare: over 60 MiB; too much to carry" >&2; exit 1; fi
-echo 'run: carry [".gl"], command "OUT=$OUT bash bench/gpu/run-lent-gpu.sh", timeout_s 540'
+echo 'run: carry [".gl"], command "OUT=$OUT bash bench/gpu/measure.sh", timeout_s 540'

@@ -4,7 +4,7 @@
 #   bench/gpu/prepare.sh     # the loader, the validation layer, fsot and the GPU
 #                            # test binaries into .gl/ (checks the 64 MiB limit)
 # then on the GPU machine, with .gl/ beside the tree:
-#   OUT=$OUT bash bench/gpu/run-lent-gpu.sh [SECTION...]
+#   OUT=$OUT bash bench/gpu/measure.sh [SECTION...]
 # under a wall-clock limit two minutes above BUDGET_S. Sections, in the order they
 # run (most wanted first; none named runs them all): sort, optimize, shapes, curve,
 # swap, tests, bench, stress, cpu. No step starts once BUDGET_S seconds (default 420) have
@@ -78,7 +78,7 @@ optimize() {
 }
 
 {
-  echo "# bench/gpu/run-lent-gpu.sh, build $(cat .gl/commit 2>/dev/null || echo unknown), $(date -u '+%F %T') UTC, budget $BUDGET_S s, step timeout $STEP_TIMEOUT s$([ "$DRY_RUN" = 1 ] && echo ', dry run')"
+  echo "# bench/gpu/measure.sh, build $(cat .gl/commit 2>/dev/null || echo unknown), $(date -u '+%F %T') UTC, budget $BUDGET_S s, step timeout $STEP_TIMEOUT s$([ "$DRY_RUN" = 1 ] && echo ', dry run')"
   nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm,clocks.max.mem --format=csv 2>&1
   lscpu | grep -E "Model name|^CPU\(s\)"
   vulkaninfo --summary 2>&1 | grep -E "deviceName|driverVersion|apiVersion|deviceType" | head -8
