@@ -42,6 +42,12 @@ fn step_of(steps: &[f64], block: &[f64], x: usize, y: usize, k: usize) -> f64 {
     }
 }
 
+/// `v` moved by `by` (at least 0) modulo 1, in f64, and kept below 1 in f32.
+fn rotated(v: f32, by: f64) -> f32 {
+    let below_one = 1.0f32 - f32::EPSILON / 2.0;
+    ((v as f64 + by).fract() as f32).min(below_one)
+}
+
 /// The mask of `frames` frames whose frame t is `spatial` (one frame) with
 /// every coordinate moved by t times its step (`step_of`), modulo 1.
 pub fn animate(spatial: &Mask, frames: usize) -> Result<Mask> {
@@ -52,15 +58,13 @@ pub fn animate(spatial: &Mask, frames: usize) -> Result<Mask> {
     let tile = Tile::new(s.width, s.height, frames, s.spp, s.dims)?;
     let steps = kronecker_step(s.dims);
     let block = kronecker_step(4);
-    let below_one = 1.0f32 - f32::EPSILON / 2.0;
     let per_frame = spatial.samples.len();
     let mut samples = Vec::with_capacity(per_frame * frames);
     for t in 0..frames {
         for (i, &v) in spatial.samples.iter().enumerate() {
             let pixel = i / (s.spp * s.dims);
             let alpha = step_of(&steps, &block, pixel % s.width, pixel / s.width, i % s.dims);
-            let moved = (v as f64 + t as f64 * alpha).fract();
-            samples.push((moved as f32).min(below_one));
+            samples.push(rotated(v, t as f64 * alpha));
         }
     }
     let mut mask = Mask { tile, samples, meta: spatial.meta.clone() };
@@ -88,7 +92,6 @@ pub fn lay_out(quarter: &Mask, tile: Tile) -> Result<Mask> {
     let steps = kronecker_step(q.dims);
     // Copy c's rotation of coordinate k.
     let rotation: Vec<Vec<f64>> = (0..4).map(|c| steps.iter().map(|a| (c as f64 * a).fract()).collect()).collect();
-    let below_one = 1.0f32 - f32::EPSILON / 2.0;
     let per = q.spp * q.dims;
     let mut samples = Vec::with_capacity(tile.values());
     for t in 0..tile.frames {
@@ -97,8 +100,7 @@ pub fn lay_out(quarter: &Mask, tile: Tile) -> Result<Mask> {
                 let rotation = &rotation[x / q.width + 2 * (y / q.height)];
                 let at = ((t * q.height + y % q.height) * q.width + x % q.width) * per;
                 for (i, &v) in quarter.samples[at..at + per].iter().enumerate() {
-                    let moved = (v as f64 + rotation[i % q.dims]).fract();
-                    samples.push((moved as f32).min(below_one));
+                    samples.push(rotated(v, rotation[i % q.dims]));
                 }
             }
         }
