@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The CPU path's time per iteration, an old build against this one in one run, on
-# two problems (32x32x16 and 64x64x16, d = 2, taa, all cores):
-# three alternating runs of each binary per problem, the median, and whether the
-# two binaries' masks are bit-identical (examples/same_samples.rs).
+# the problems in PROBLEMS (SIZE:DIMS:KERNEL:ITERATIONS, space-separated; by
+# default from 32x32x16 to 128x128x64, all cores): three alternating runs of each
+# binary per problem, the median of the optimisation's own seconds, and whether
+# the two binaries' masks are bit-identical (examples/same_samples.rs).
 # BACKEND=vulkan times the Vulkan path instead (deterministic mode, so that the
 # masks can be compared bit for bit; lavapipe unless VK_DRIVER_FILES says otherwise).
 # Usage: [OLD_BIN=path] [BACKEND=cpu|vulkan] bench/cpu-old-new.sh OLD_REV OUT_FILE
@@ -34,15 +35,15 @@ head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)
   echo "# BACKEND=$backend bench/cpu-old-new.sh: $head"
   echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | objective old / new | masks"
   echo "---|---|---|---|---|---|---"
-  for problem in 32x32x16:1000 64x64x16:300; do
-    size=${problem%%:*}
-    its=${problem##*:}
+  problems=${PROBLEMS:-"32x32x16:2:taa:1000 64x64x16:2:taa:300 64x64x32:1:perceptual-taa:200 64x64x32:2:perceptual-taa:100 128x128x16:2:perceptual:60 128x128x64:1:perceptual-taa:30 128x128x64:2:perceptual-taa:12"}
+  for problem in $problems; do
+    IFS=: read -r size dims kernel its <<< "$problem"
     for bin in old new; do : > "$work/$bin.times"; done
     for round in 1 2 3; do
       for bin in old new; do
         exe=$old
         [ "$bin" = new ] && exe=$new
-        line=$("$exe" optimize "${flags[@]}" --size "$size" --dims 2 --kernel taa --seed 7 \
+        line=$("$exe" optimize "${flags[@]}" --size "$size" --dims "$dims" --kernel "$kernel" --seed 7 \
           --iterations "$its" --out "$work/$bin-$size.exr" 2>&1 | grep "iterations in")
         echo "$line" | grep -o "iterations in [0-9.]* s" | awk '{print $3}' >> "$work/$bin.times"
         echo "$line" | grep -o -- "-> [0-9.e-]*" | awk '{print $2}' > "$work/$bin.objective"
@@ -51,6 +52,6 @@ head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)
     o=$(sort -g "$work/old.times" | sed -n 2p)
     n=$(sort -g "$work/new.times" | sed -n 2p)
     same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr" | head -1 || true)
-    echo "$size d=2 taa | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $(cat "$work/old.objective") / $(cat "$work/new.objective") | $same"
+    echo "$size d=$dims $kernel | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $(cat "$work/old.objective") / $(cat "$work/new.objective") | $same"
   done
 } | tee "$out"

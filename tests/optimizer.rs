@@ -77,6 +77,32 @@ fn the_same_seed_gives_a_bit_identical_mask_whatever_the_thread_count() {
 }
 
 #[test]
+fn the_order_slices_are_transported_in_changes_no_sample_and_no_cost() {
+    use fsot::optimize::cpu::{CpuRun, SliceOrder};
+    // A tile past the size from which slices go by centre, and a small one.
+    let big = Tile::new(64, 64, 40, 1, 1).unwrap();
+    let small = Tile::new(12, 10, 6, 2, 3).unwrap();
+    assert_eq!(SliceOrder::for_tile(&big), SliceOrder::Centre);
+    assert_eq!(SliceOrder::for_tile(&small), SliceOrder::Index);
+    for (tile, kernel) in [(big, "taa"), (small, "perceptual-taa")] {
+        let run = |order: SliceOrder, threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                let mut run = CpuRun::new(tile, settings(kernel, 3, 5), None).unwrap();
+                run.set_slice_order(order);
+                let costs: Vec<u64> = (0..3).map(|_| run.step().to_bits()).collect();
+                (costs, run.current().iter().map(|v| v.to_bits()).collect::<Vec<u32>>())
+            })
+        };
+        let by_index = run(SliceOrder::Index, 2);
+        let by_centre = run(SliceOrder::Centre, 2);
+        assert_eq!(by_index.0, by_centre.0, "{tile:?}: the costs of each iteration");
+        assert!(by_index.1 == by_centre.1, "{tile:?}: the samples after three iterations");
+        assert!(by_centre.1 == run(SliceOrder::Centre, 3).1, "{tile:?}: three threads");
+    }
+}
+
+#[test]
 fn every_kernel_dimension_and_sample_count_optimizes_below_white_noise() {
     // Measured ratios 0.341, 0.648, 0.473, 0.205, 0.761; each bound 15% above.
     for (kernel, spp, dims, bound) in [
