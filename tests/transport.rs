@@ -40,6 +40,52 @@ fn one_step_moves_a_1d_set_exactly_onto_its_quantiles() {
 }
 
 #[test]
+fn every_class_size_ranks_its_members_by_projection_then_by_point() {
+    // d = 1, one frame of 32 x 16 pixels, one class the first n taps of a wide
+    // kernel: the member of rank r (by shifted value, ties by point index) moves
+    // to the bin centre (r + 1/2) / n. Sizes from 2 to 512, each with spread
+    // values, with ties, and with most values piled on one.
+    let tile = Tile::new(32, 16, 1, 1, 1).unwrap();
+    let kernel = Kernel::new(KernelSpec::from_name("spatial", 64.0, None, 0.1, 60.0).unwrap(), &tile);
+    assert_eq!(kernel.taps.len(), 512);
+    let mut rng = fsot::core::rng::Stream::new(31);
+    for n in [2usize, 3, 7, 24, 47, 48, 49, 64, 200, 512] {
+        for kind in ["spread", "ties", "piled"] {
+            let samples: Vec<f32> = (0..tile.values())
+                .map(|i| match kind {
+                    "spread" => rng.next_f64() as f32,
+                    "ties" => (rng.below(7) as f32) / 7.0,
+                    _ if i % 5 == 0 => rng.next_f64() as f32,
+                    _ => 0.625,
+                })
+                .collect();
+            let mut theta = [0.0; MAX_DIMS];
+            theta[0] = 1.0;
+            let mut shift = [0.0; MAX_DIMS];
+            shift[0] = 0.25;
+            let slice = Slice { theta, shift, cx: 9, cy: 4, ct: 0, len: n as u32 };
+            let mut moved: Vec<(u32, f64)> = Vec::new();
+            transport_slice(&samples, &tile, &kernel, &slice, &mut Scratch::default(), |p, delta| {
+                moved.push((p, delta))
+            });
+            assert_eq!(moved.len(), n);
+            let shifted = |p: u32| (samples[p as usize] as f64 - 0.25).rem_euclid(1.0);
+            let mut ranked: Vec<u32> = moved.iter().map(|m| m.0).collect();
+            ranked.sort_by(|&a, &b| shifted(a).total_cmp(&shifted(b)).then(a.cmp(&b)));
+            for (rank, &p) in ranked.iter().enumerate() {
+                let delta = moved.iter().find(|m| m.0 == p).unwrap().1;
+                let target = (rank as f64 + 0.5) / n as f64;
+                assert!(
+                    (shifted(p) + delta - target).abs() < 1e-9,
+                    "n = {n}, {kind}: point {p} of rank {rank} goes to {} instead of {target}",
+                    shifted(p) + delta
+                );
+            }
+        }
+    }
+}
+
+#[test]
 fn classes_follow_the_kernel_prefix_and_wrap_around_the_tile() {
     let tile = Tile::new(8, 8, 4, 2, 2).unwrap();
     let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);

@@ -77,6 +77,14 @@ fn wrap_unit(y: f64) -> f64 {
 /// packed keys outright.
 fn sort_class(scratch: &mut Scratch, (low, high): (f64, f64)) {
     let n = scratch.points.len();
+    if n <= SMALL_CLASS {
+        scratch.order.clear();
+        scratch.order.extend(
+            scratch.projections.iter().zip(&scratch.points).map(|(&v, &p)| ((order_bits(v) as u128) << 32) | p as u128),
+        );
+        insertion_sort(&mut scratch.order);
+        return;
+    }
     let scale = n as f64 / (high - low).max(1e-300);
     let bucket = |v: f64| (((v - low) * scale).max(0.0) as usize).min(n - 1);
     scratch.buckets.clear();
@@ -98,12 +106,19 @@ fn sort_class(scratch: &mut Scratch, (low, high): (f64, f64)) {
         scratch.buckets[b] += 1;
         scratch.order[at] = ((order_bits(v) as u128) << 32) | p as u128;
     }
-    let order = &mut scratch.order;
     if pairs > 4 * n {
-        order.sort_unstable();
-        return;
+        scratch.order.sort_unstable();
+    } else {
+        insertion_sort(&mut scratch.order);
     }
-    for i in 1..n {
+}
+
+/// Classes of at most this many members are sorted by insertion outright: for
+/// so few keys the buckets' passes cost more than they save.
+const SMALL_CLASS: usize = 48;
+
+fn insertion_sort(order: &mut [u128]) {
+    for i in 1..order.len() {
         let key = order[i];
         let mut j = i;
         while j > 0 && order[j - 1] > key {
