@@ -120,8 +120,9 @@ pub enum SliceOrder {
 }
 
 /// Accumulator lanes of more bytes than this outgrow a core's own cache, and a
-/// tile's slices are transported by centre (measured in BENCHMARKS.md: 13% to
-/// 45% less time a whole iteration from 2 MiB a lane up; 8% more at 128 KiB).
+/// tile's slices are transported by centre (BENCHMARKS.md: from 1.1 times as
+/// fast at 2 MiB a lane to 2 times at 16 MiB); below it the second draw and the
+/// sort cost about what the cache saves.
 const CENTRE_ORDER_ABOVE_BYTES: usize = 1 << 20;
 
 impl SliceOrder {
