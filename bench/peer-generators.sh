@@ -2,7 +2,7 @@
 # The time the peers' generators take for the published masks' shape (128x128x64,
 # scalar), with fsot's own implementations on this machine's CPU: STBN's
 # void-and-cluster in full, FAST's swap search for one pass (its default is 32
-# passes of the same cost each).
+# passes of the same cost each); beside them fsot's optimizer, 1000 iterations.
 # Usage: bench/peer-generators.sh OUT_FILE
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,7 +12,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 {
   echo "# commit $(git rev-parse --short HEAD), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
-  for flags in "--method stbn" "--method fast --passes 1"; do
+  for flags in "--method stbn" "--method fast --passes 1" "--method fsot --iterations 1000"; do
     echo "\$ fsot optimize --backend cpu --size 128x128x64 --dims 1 $flags --seed 1"
     # shellcheck disable=SC2086
     /usr/bin/time -f "wall %e s" target/release/fsot optimize --backend cpu --size 128x128x64 --dims 1 \
