@@ -3,7 +3,8 @@
 //! whatever the thread count: slices are pure functions of
 //! (seed, iteration, index), displacements are summed in 64-bit fixed point (integer
 //! addition is associative, so the order in which threads add does not matter), and
-//! the update is element-wise.
+//! the update is element-wise. The same freedom lets a large tile's slices go in the
+//! order of their kernel centres (`SliceOrder`), which keeps what they touch in cache.
 
 use std::sync::atomic::{AtomicI64, Ordering};
 
