@@ -71,7 +71,7 @@ struct PlanArgs {
     #[arg(long)]
     device: Option<String>,
     /// Plan every mask within this wall time (1s, 500ms, 2m) instead of the
-    /// scene's [plan] budget, or without one, until iterations no longer pay.
+    /// scene's `[plan]` budget, or without one, until iterations no longer pay.
     #[arg(long)]
     budget: Option<String>,
 }
@@ -375,7 +375,7 @@ struct OptimizeArgs {
     /// step size follows the cosine schedule over the time, and the run ends at
     /// most about one iteration past it. --iterations caps it [default: 10000].
     /// With --scene: every mask of the plan within it (instead of the scene's
-    /// [plan] budget).
+    /// `[plan]` budget).
     #[arg(long, conflicts_with = "until", allow_negative_numbers = true)]
     budget: Option<String>,
     /// Where the optimizer starts without --init (--init takes a mask of the
