@@ -79,9 +79,7 @@ fn sort_class(scratch: &mut Scratch, (low, high): (f64, f64)) {
     let n = scratch.points.len();
     if n <= SMALL_CLASS {
         scratch.order.clear();
-        scratch.order.extend(
-            scratch.projections.iter().zip(&scratch.points).map(|(&v, &p)| ((order_bits(v) as u128) << 32) | p as u128),
-        );
+        scratch.order.extend(scratch.projections.iter().zip(&scratch.points).map(|(&v, &p)| sort_key(v, p)));
         insertion_sort(&mut scratch.order);
         return;
     }
@@ -104,7 +102,7 @@ fn sort_class(scratch: &mut Scratch, (low, high): (f64, f64)) {
         let b = bucket(v);
         let at = scratch.buckets[b] as usize;
         scratch.buckets[b] += 1;
-        scratch.order[at] = ((order_bits(v) as u128) << 32) | p as u128;
+        scratch.order[at] = sort_key(v, p);
     }
     if pairs > 4 * n {
         scratch.order.sort_unstable();
@@ -127,6 +125,13 @@ fn insertion_sort(order: &mut [u128]) {
         }
         order[j] = key;
     }
+}
+
+/// A member's key in `Scratch::order`: its projection's order bits above, its
+/// point below.
+#[inline]
+fn sort_key(projection: f64, point: u32) -> u128 {
+    ((order_bits(projection) as u128) << 32) | point as u128
 }
 
 /// Maps an f64 to a u64 in the same total order (`f64::total_cmp`).

@@ -172,29 +172,37 @@ pub fn iterate(
     order: SliceOrder,
 ) -> f64 {
     let d = tile.dims;
-    let mut costs = vec![SliceCost::default(); slices as usize];
-    {
+    let indices = order.indices(sampler, tile, iteration, slices);
+    // Each slice's cost, in the order transported.
+    let transported: Vec<SliceCost> = {
         let samples: &[f32] = samples;
-        let done: Vec<(u32, SliceCost)> = order.indices(sampler, tile, iteration, slices)
-            .into_par_iter()
-            .map_init(Scratch::default, |scratch, index| {
+        indices
+            .par_iter()
+            .map_init(Scratch::default, |scratch, &index| {
                 let slice = sampler.draw(iteration, index);
                 let lane = acc.lane();
-                let cost = transport_slice(samples, tile, kernel, &slice, scratch, |point, delta| {
+                transport_slice(samples, tile, kernel, &slice, scratch, |point, delta| {
                     let base = point as usize * d;
                     for k in 0..d {
                         if slice.theta[k] != 0.0 {
                             lane.add(base + k, delta * slice.theta[k]);
                         }
                     }
-                });
-                (index, cost)
+                })
             })
-            .collect();
-        for (index, cost) in done {
-            costs[index as usize] = cost;
+            .collect()
+    };
+    // In index order, so that their sum is the same in either order.
+    let costs = match order {
+        SliceOrder::Index => transported,
+        SliceOrder::Centre => {
+            let mut costs = vec![SliceCost::default(); transported.len()];
+            for (&index, cost) in indices.iter().zip(transported) {
+                costs[index as usize] = cost;
+            }
+            costs
         }
-    }
+    };
     state.steps += 1;
     let t = state.steps;
     let rule = state.rule;
