@@ -91,7 +91,8 @@ struct EvalArgs {
     /// Eye sigmas to evaluate [default: 2.1 and 1.9, as in the tables of Korać et al. 2023; 2.1 with --quick].
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     sigma: Vec<f64>,
-    /// Mask seeds per method (each with its own renders) [default: 3 with --quick, else 5].
+    /// Mask seeds per method (each with its own renders), 2 to 10000; a published
+    /// mask is judged at as many placements [default: 3 with --quick, else 5].
     #[arg(long, allow_negative_numbers = true)]
     seeds: Option<u32>,
     /// Masks `fsot-planned` makes per display and TAA setting, each judged at

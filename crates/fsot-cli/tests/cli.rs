@@ -289,6 +289,32 @@ fn swap_methods_refuse_bad_settings() {
     refused(dir.path(), &["optimize", "--size", "4x4x2", "--out", "m.exr"], cases);
 }
 
+#[test]
+fn eval_refuses_counts_it_cannot_judge_and_keeps_the_results_already_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("results.md"), b"keep me").unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--seeds", "1"], "--seeds must be in 2..=10000 (an interval needs two), got 1"),
+        (&["--seeds", "10001"], "--seeds must be in 2..=10000 (an interval needs two), got 10001"),
+        (&["--seeds", "-2"], "invalid value"),
+        (&["--seeds", "3", "--planned-masks", "4"], "--planned-masks must be in 1..=3 (the seeds), got 4"),
+        (&["--sigma", "9"], "--sigma must be in (0, 8], got 9"),
+        (&["--iterations", "0"], "--iterations must be in 1..=1000000, got 0"),
+    ];
+    for (extra, expect) in cases {
+        let mut args =
+            vec!["eval", "--quick", "--scenes", "light-pick", "--methods", "white", "--out", "out"];
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert_eq!(std::fs::read(out.join("results.md")).unwrap(), b"keep me", "{extra:?}");
+    }
+}
+
 /// Each case, `base` then its flags, fails with its message, no panic, and
 /// leaves no `m.exr` in `dir`.
 fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {
