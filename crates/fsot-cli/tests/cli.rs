@@ -290,7 +290,7 @@ fn swap_methods_refuse_bad_settings() {
 }
 
 #[test]
-fn eval_refuses_counts_it_cannot_judge_and_keeps_the_results_already_there() {
+fn eval_refuses_counts_it_cannot_judge_keeps_the_results_already_there_and_makes_no_folder() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
     std::fs::create_dir(&out).unwrap();
@@ -309,6 +309,14 @@ fn eval_refuses_counts_it_cannot_judge_and_keeps_the_results_already_there() {
         cases,
     );
     assert_eq!(std::fs::read(out.join("results.md")).unwrap(), b"keep me");
+    // Nor does a bad flag make an output folder.
+    refused(dir.path(), &["eval", "--quick", "--out", "fresh"], cases);
+    refused(
+        dir.path(),
+        &["eval", "--quick", "--out", "fresh"],
+        &[(&["--methods", "nothing"], "unknown method")],
+    );
+    assert!(!dir.path().join("fresh").exists(), "a refused eval made its output folder");
 }
 
 /// Each case, `base` then its flags, fails with its message, no panic, and

@@ -47,12 +47,6 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         }
         own.push((name.to_string(), fsot::io::exr::read(std::path::Path::new(file))?));
     }
-    fsot::io::atomic::make_folder(&args.out)?;
-    // Reserve the outputs before the long work: a bad path fails now.
-    let md = AtomicFile::create(&args.out.join("results.md"))?;
-    let js = AtomicFile::create(&args.out.join("results.json"))?;
-    let rb = AtomicFile::create(&args.out.join("robustness.json"))?;
-    let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     size.anatomy = args.anatomy;
     size.flip = args.flip.clone();
@@ -60,7 +54,6 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         GreyArg::Luminance => fsot_cli::eval::jod::Grey::Luminance,
         GreyArg::Rgb => fsot_cli::eval::jod::Grey::Rgb,
     };
-    let anatomy_file = args.anatomy.then(|| AtomicFile::create(&args.out.join("anatomy.md"))).transpose()?;
     if let Some(i) = args.iterations {
         if !(1..=1_000_000).contains(&i) {
             return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
@@ -142,6 +135,15 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             known.join(", ")
         )));
     }
+    // Every flag and input is checked; now the folder is made and the outputs
+    // reserved, before the long work: a bad path fails here, a bad flag left
+    // nothing behind.
+    fsot::io::atomic::make_folder(&args.out)?;
+    let md = AtomicFile::create(&args.out.join("results.md"))?;
+    let js = AtomicFile::create(&args.out.join("results.json"))?;
+    let rb = AtomicFile::create(&args.out.join("robustness.json"))?;
+    let extra = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
+    let anatomy_file = args.anatomy.then(|| AtomicFile::create(&args.out.join("anatomy.md"))).transpose()?;
     let only = match args.methods.is_empty() {
         true => fsot_cli::eval::suite::Only::All,
         false => fsot_cli::eval::suite::Only::Named(&args.methods),
