@@ -140,7 +140,7 @@ impl SamplerPlan {
         })
     }
 
-    /// A plan made in memory (`renderer::make_plan_into_image`): `masks[i]` is
+    /// A plan made in memory (`fsot::make_plan_into_image`): `masks[i]` is
     /// the mask of `plan.masks[i]`; laid out as `read` lays out the folder
     /// `Plan::execute` writes.
     pub fn from_plan(plan: &crate::scene::plan::Plan, masks: Vec<Mask>) -> Result<Self> {

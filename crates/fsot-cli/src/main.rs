@@ -37,7 +37,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Optimize a mask and write it as EXR (and optionally PNG slices).
+    /// Optimize a mask and write it (.exr, .ktx2 or .h by --out's extension; PNG
+    /// slices with --png).
     Optimize(Box<OptimizeArgs>),
     /// Print the filtered sliced-Wasserstein objective of a mask, on a fixed set of
     /// slices, beside that of white noise of the same shape.
@@ -58,7 +59,7 @@ enum Command {
 
 #[derive(Args)]
 struct PlanArgs {
-    /// The scene file (TOML; see the README).
+    /// The scene file (TOML; see docs/scene-plans.md).
     scene: PathBuf,
     /// Print the plan as JSON.
     #[arg(long)]
@@ -450,7 +451,7 @@ struct OptimizeArgs {
     #[arg(long)]
     scene: Option<PathBuf>,
     /// Output file, by its extension: .exr (every value exact), .ktx2 (a 2-D array
-    /// texture, one layer per frame) or .h (a C header); with --scene, the output
+    /// texture, one layer per frame and sample) or .h (a C header); with --scene, the output
     /// folder.
     #[arg(long, default_value = "mask.exr")]
     out: PathBuf,
