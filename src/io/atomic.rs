@@ -24,9 +24,29 @@ pub struct AtomicFile {
 }
 
 impl AtomicFile {
+    /// Reserves `target`. A symbolic link is written through (its target is
+    /// replaced, the link kept); a target that exists and is not a regular file
+    /// (a folder, a device, a pipe) or a link to nothing is refused.
     pub fn create(target: &Path) -> Result<Self> {
+        let named = target;
+        let resolved;
+        let target = match fs::symlink_metadata(named) {
+            Ok(m) if m.file_type().is_symlink() => {
+                resolved = fs::canonicalize(named).map_err(|e| {
+                    Error::io(format!("output {} is a link to nothing that can be written", named.display()), e)
+                })?;
+                resolved.as_path()
+            }
+            _ => named,
+        };
         if target.is_dir() {
-            return Err(Error::invalid(format!("output {} is a directory", target.display())));
+            return Err(Error::invalid(format!("output {} is a directory", named.display())));
+        }
+        if target.exists() && !target.is_file() {
+            return Err(Error::invalid(format!(
+                "output {} exists and is not a regular file (a device or a pipe); it is left as it is",
+                named.display()
+            )));
         }
         let dir = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -70,5 +90,55 @@ impl Drop for AtomicFile {
         if !self.temp.as_os_str().is_empty() && self.temp.exists() {
             let _ = fs::remove_file(&self.temp); // best effort: nothing to report from drop
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("fsot-atomic-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn a_commit_replaces_a_regular_file() {
+        let dir = scratch("regular");
+        let p = dir.join("m.exr");
+        fs::write(&p, b"old").unwrap();
+        AtomicFile::create(&p).unwrap().commit(b"new").unwrap();
+        assert_eq!(fs::read(&p).unwrap(), b"new");
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1, "no temporary file left");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_link_is_written_through_and_kept() {
+        let dir = scratch("link");
+        let real = dir.join("real.exr");
+        let link = dir.join("link.exr");
+        fs::write(&real, b"old").unwrap();
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        AtomicFile::create(&link).unwrap().commit(b"new").unwrap();
+        assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
+        assert_eq!(fs::read(&real).unwrap(), b"new", "its target holds the new bytes");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_dangling_link_a_device_and_a_folder_are_refused() {
+        let dir = scratch("refused");
+        let dangling = dir.join("dangling.exr");
+        std::os::unix::fs::symlink(dir.join("nowhere/x.exr"), &dangling).unwrap();
+        assert!(AtomicFile::create(&dangling).is_err());
+        let err = AtomicFile::create(Path::new("/dev/null")).err().expect("a device is refused");
+        assert!(err.to_string().contains("not a regular file"), "{err}");
+        assert!(AtomicFile::create(&dir).is_err());
+        fs::remove_dir_all(&dir).unwrap();
     }
 }

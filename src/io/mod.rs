@@ -21,15 +21,22 @@ pub enum MaskFile {
 }
 
 impl MaskFile {
-    /// The kind of `path` by its extension (`.exr`, `.ktx2`, `.h`); `ktx2_format`
-    /// only for `.ktx2` (default: by d, see `ktx2::Format::default_for`). Checked
+    /// The kind of `path` by its extension (`.exr`, `.ktx2`, `.h`; any other is an
+    /// error); `ktx2_format` only for `.ktx2` (default: by d, see `ktx2::Format::default_for`). Checked
     /// before any work: a format that cannot hold d is an error.
     pub fn for_path(path: &Path, dims: usize, ktx2_format: Option<&str>) -> Result<Self> {
         let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
         let kind = match ext.as_str() {
             "ktx2" => return Ok(MaskFile::Ktx2(ktx2::format_for(dims, ktx2_format)?)),
             "h" => MaskFile::CHeader,
-            _ => MaskFile::Exr,
+            "exr" => MaskFile::Exr,
+            _ => {
+                return Err(Error::invalid(format!(
+                    "cannot tell the format of {} by its name: give it .exr, .ktx2 or .h \
+                     (PNG slices are written beside a mask by --png)",
+                    path.display()
+                )))
+            }
         };
         if let Some(f) = ktx2_format {
             return Err(Error::invalid(format!(
@@ -54,7 +61,7 @@ impl Mask {
     /// Saves the mask by the file's extension: `.exr` (exact, 32-bit float, the
     /// format `open` reads), `.ktx2` (an array texture, 16-bit UNORM with the
     /// fewest channels that hold its dimensions: `Mask::ktx2` for another
-    /// format) or `.h` (a C header); any other extension is written as EXR. The
+    /// format) or `.h` (a C header); any other extension is an error. The
     /// file is written beside the target and renamed into place, so a failed save
     /// leaves what was there.
     ///
