@@ -16,6 +16,11 @@
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 
+/// The Gaussians' widths a kernel accepts, in pixels or frames: under 0.01 every
+/// weight but the centre's is far below the tolerance (the kernel is a point
+/// already at 0.3), and the square of a far smaller width underflows.
+pub(crate) const SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=64.0;
+
 /// The temporal part of a kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Temporal {
@@ -23,7 +28,7 @@ pub enum Temporal {
     Spatial,
     /// Symmetric Gaussian over time, exp(-dt^2 / sigma_t^2) (akin to STBN).
     Gaussian {
-        /// Width in frames, in (0, 64].
+        /// Width in frames, in [0.01, 64].
         sigma_t: f64,
     },
     /// TAA: exponential moving average, weight alpha (1 - alpha)^k at lag k.
@@ -50,7 +55,7 @@ pub enum Temporal {
 pub enum Spatial {
     /// exp(-(dx^2 + dy^2) / sigma^2), pixels (no factor 2, as in the paper).
     Gaussian {
-        /// Width in pixels, in (0, 64].
+        /// Width in pixels, in [0.01, 64].
         sigma: f64,
     },
     /// The eye's contrast sensitivity on a display of `ppd` pixels per degree.
@@ -144,8 +149,8 @@ impl KernelSpec {
 
     /// Builds a spec from a kernel name and its parameters, validating each.
     pub fn from_name(name: &str, sigma: f64, sigma_t: Option<f64>, alpha: f64, fps: f64) -> Result<Self> {
-        if !(sigma.is_finite() && sigma > 0.0 && sigma <= 64.0) {
-            return Err(Error::invalid(format!("sigma must be in (0, 64], got {sigma}")));
+        if !SIGMA_RANGE.contains(&sigma) {
+            return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma}")));
         }
         let check_alpha = || -> Result<()> {
             if !(alpha.is_finite() && alpha > 0.0 && alpha <= 1.0) {
@@ -161,12 +166,15 @@ impl KernelSpec {
             }
             Ok(())
         };
+        if let Some(sigma_t) = sigma_t.filter(|s| !SIGMA_RANGE.contains(s)) {
+            return Err(Error::invalid(format!("temporal sigma must be in [0.01, 64] frames, got {sigma_t}")));
+        }
         let temporal = match name {
             "spatial" => Temporal::Spatial,
             "gaussian" => {
                 let sigma_t = sigma_t.unwrap_or(sigma);
-                if !(sigma_t.is_finite() && sigma_t > 0.0 && sigma_t <= 64.0) {
-                    return Err(Error::invalid(format!("temporal sigma must be in (0, 64], got {sigma_t}")));
+                if !SIGMA_RANGE.contains(&sigma_t) {
+                    return Err(Error::invalid(format!("temporal sigma must be in [0.01, 64] frames, got {sigma_t}")));
                 }
                 Temporal::Gaussian { sigma_t }
             }

@@ -286,6 +286,11 @@ pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) ->
     }
 }
 
+/// The most slices an iteration or a score draws: 2^24, thirty times the default
+/// of a 128x128x64 scalar tile (each slice holds its direction and its classes'
+/// sums while it is transported).
+pub const MAX_SLICES: u32 = 1 << 24;
+
 /// Slices per iteration (the setting, or enough for DEFAULT_HITS class
 /// memberships per sample) and the resulting expected hits per sample; an
 /// error for slice settings no run can draw (no slices, an axis share outside
@@ -294,7 +299,9 @@ pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Res
     check_axis_share(settings.axis_share)?;
     let mean_points = kernel.mean_class_len() * tile.spp as f64;
     let slices = match settings.slices {
-        Some(0) => return Err(Error::invalid("slices per iteration must be at least 1")),
+        Some(s) if !(1..=MAX_SLICES).contains(&s) => {
+            return Err(Error::invalid(format!("slices per iteration must be 1 to {MAX_SLICES}, got {s}")))
+        }
         Some(s) => s,
         None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
     };

@@ -96,7 +96,7 @@ impl Filter {
     fn validate(&self) -> Result<()> {
         let ok = match *self {
             Filter::None => true,
-            Filter::Gaussian { sigma } => sigma > 0.0 && sigma <= 64.0,
+            Filter::Gaussian { sigma } => crate::core::kernel::SIGMA_RANGE.contains(&sigma),
             Filter::Box { n } => (1..=64).contains(&n),
             Filter::Binomial { n } => n <= 64,
             Filter::Ema { alpha, beta } => alpha > 0.0 && alpha <= 1.0 && (0.0..1.0).contains(&beta),
@@ -105,7 +105,7 @@ impl Filter {
             Ok(())
         } else {
             Err(Error::invalid(format!(
-                "filter {self:?} out of range (sigma in (0, 64], box 1..64, binomial 0..64, alpha in (0, 1], beta in [0, 1))"
+                "filter {self:?} out of range (sigma in [0.01, 64], box 1..64, binomial 0..64, alpha in (0, 1], beta in [0, 1))"
             )))
         }
     }

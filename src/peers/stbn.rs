@@ -293,8 +293,8 @@ pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<c
 
 fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {
     for (name, s) in [("sigma", sigma_xy), ("temporal sigma", sigma_t)] {
-        if !(s.is_finite() && s > 0.0 && s <= 64.0) {
-            return Err(Error::invalid(format!("STBN {name} must be in (0, 64], got {s}")));
+        if !crate::core::kernel::SIGMA_RANGE.contains(&s) {
+            return Err(Error::invalid(format!("STBN {name} must be in [0.01, 64], got {s}")));
         }
     }
     Ok(())

@@ -220,6 +220,9 @@ pub fn mask_kernel(spec: KernelSpec, dims: usize) -> KernelSpec {
     }
 }
 
+/// The most frames the planner gives a tile.
+const MAX_PLANNED_FRAMES: usize = 256;
+
 /// The tile's size, and why.
 pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
     if let Some(size) = scene.size {
@@ -229,22 +232,23 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
     let (t, why) = match (d.animated, d.taa_alpha) {
         (false, _) => (16, "a still camera: 16 frames to accumulate over".to_string()),
         (true, Some(a)) => {
-            // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight.
-            let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (1.0 - a).ln()).ceil() };
+            // Frames k with (1 - a)^k >= 5% carry 95% of the blend's weight
+            // (ln_1p: 1 - a rounds to 1 for a tiny a).
+            let frames = if a >= 1.0 { 1.0 } else { (0.05f64.ln() / (-a).ln_1p()).ceil() };
             // Twice that, so a pattern does not return within the history the
             // judge integrates: at alpha 0.1, T = 32 scored level with or up
             // to 0.06 JOD below T = 64 (RESULTS.md, the leads).
-            let t = (2 * frames as usize).clamp(1, 256).next_power_of_two();
-            (
-                t,
-                format!(
-                    "TAA alpha {a}: {frames} frames carry 95% of the history; twice that, rounded up to {t}"
-                ),
-            )
+            let t = ((2.0 * frames).clamp(1.0, MAX_PLANNED_FRAMES as f64) as usize).next_power_of_two();
+            let why = if 2.0 * frames > MAX_PLANNED_FRAMES as f64 {
+                format!("TAA alpha {a}: more than {} frames carry 95% of the history; the most frames planned, {t}", MAX_PLANNED_FRAMES / 2)
+            } else {
+                format!("TAA alpha {a}: {frames} frames carry 95% of the history; twice that, rounded up to {t}")
+            };
+            (t, why)
         }
         (true, None) => {
             let frames = (0.25 * d.fps).ceil() as usize;
-            let t = frames.clamp(1, 256).next_power_of_two();
+            let t = frames.clamp(1, MAX_PLANNED_FRAMES).next_power_of_two();
             (t, format!("no TAA: the eye's temporal response spans about a quarter second, {frames} frames, rounded up to {t}"))
         }
     };

@@ -288,9 +288,9 @@ impl Backend {
 
 #[derive(Args, Clone)]
 struct KernelArgs {
-    /// Temporal filter of the kernel.
-    #[arg(long, value_enum, default_value = "perceptual-taa")]
-    kernel: KernelName,
+    /// Temporal filter of the kernel [default: perceptual-taa].
+    #[arg(long, value_enum)]
+    kernel: Option<KernelName>,
     /// The display the mask is seen on; the kernel's spatial filter is the eye's
     /// contrast sensitivity at its pixels per degree: a number (pixels per
     /// degree), a display's name (standard_fhd, standard_4k, sdr_4k_30,
@@ -305,24 +305,34 @@ struct KernelArgs {
     /// Temporal sigma of the gaussian kernel, in frames [default: --sigma, else 2.1].
     #[arg(long, allow_negative_numbers = true)]
     sigma_t: Option<f64>,
-    /// TAA blend weight of the current frame, in (0, 1].
-    #[arg(long, default_value_t = DEFAULT_ALPHA, allow_negative_numbers = true)]
-    alpha: f64,
-    /// Frame rate for the perceptual filter.
-    #[arg(long, default_value_t = DEFAULT_FPS, allow_negative_numbers = true)]
-    fps: f64,
+    /// TAA blend weight of the current frame, in (0, 1] [default: 0.1].
+    #[arg(long, allow_negative_numbers = true)]
+    alpha: Option<f64>,
+    /// Frame rate for the perceptual filter [default: 60].
+    #[arg(long, allow_negative_numbers = true)]
+    fps: Option<f64>,
 }
 
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
         kernel_spec(
-            self.kernel.as_str(),
+            self.kernel.unwrap_or(KernelName::PerceptualTaa).as_str(),
             self.display.as_deref(),
             self.sigma,
             self.sigma_t,
-            self.alpha,
-            self.fps,
+            self.alpha.unwrap_or(DEFAULT_ALPHA),
+            self.fps.unwrap_or(DEFAULT_FPS),
         )
+    }
+
+    /// Whether any flag of the kernel was given.
+    fn any_given(&self) -> bool {
+        self.kernel.is_some()
+            || self.display.is_some()
+            || self.sigma.is_some()
+            || self.sigma_t.is_some()
+            || self.alpha.is_some()
+            || self.fps.is_some()
     }
 }
 
@@ -385,8 +395,8 @@ struct OptimizeArgs {
     /// with --scene every mask starts `animated`.
     #[arg(long, value_enum, default_value = "auto")]
     start: StartArg,
-    /// Slices per iteration [default: enough for each sample to be in 16 classes
-    /// per iteration].
+    /// Slices per iteration, at most 2^24 [default: enough for each sample to be in
+    /// 16 classes per iteration].
     #[arg(long, allow_negative_numbers = true)]
     slices: Option<u32>,
     /// The share of slices along one coordinate, 0 to 1 (d >= 2): higher spreads
@@ -412,7 +422,7 @@ struct OptimizeArgs {
     /// Vulkan: print the time per pass (timestamp queries).
     #[arg(long)]
     profile: bool,
-    /// Worker threads for the CPU path [default: every core].
+    /// Worker threads for the CPU path, 1 to 1024 [default: every core].
     #[arg(long, allow_negative_numbers = true)]
     threads: Option<usize>,
     /// Start from this mask (EXR written by fsot or laid out the same way); with
@@ -556,10 +566,13 @@ fn hint(e: &Error) -> &'static str {
     }
 }
 
+/// The most worker threads `--threads` starts.
+const MAX_THREADS: usize = 1024;
+
 fn set_threads(threads: Option<usize>) -> Result<()> {
     if let Some(n) = threads {
-        if n == 0 {
-            return Err(Error::invalid("--threads must be at least 1"));
+        if !(1..=MAX_THREADS).contains(&n) {
+            return Err(Error::invalid(format!("--threads must be 1 to {MAX_THREADS}, got {n}")));
         }
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)

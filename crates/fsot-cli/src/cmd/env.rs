@@ -21,11 +21,20 @@ pub(crate) fn context(flag: Option<String>) -> Result<Context> {
     Ok(Context::new(&ContextOptions { validation: validation(), device: device(flag) })?)
 }
 
-/// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set. Once per process.
+/// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops between
+/// iterations (and saves its checkpoint). A second signal ends the process at
+/// once, exit status 130: outputs are renamed into place whole, so what was
+/// there stays. Once per process.
 pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
     let flag = fsot::optimize::run::CancelFlag::new();
     let set = flag.clone();
-    ctrlc::set_handler(move || set.cancel())
-        .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
+    ctrlc::set_handler(move || {
+        if set.is_cancelled() {
+            std::process::exit(130);
+        }
+        set.cancel();
+        eprintln!("\ninterrupted: stopping at the next iteration (again to quit at once)");
+    })
+    .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
     Ok(flag)
 }

@@ -8,6 +8,9 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         return super::plan::optimize_scene(&args, scene);
     }
     let spec = args.kernel.spec()?;
+    if args.init.is_some() && args.start != StartArg::Auto {
+        return Err(Error::invalid("--init and --start both say where the run starts: give one"));
+    }
     let init = args.init.as_deref().map(fsot::io::exr::read).transpose()?;
     let (w, h, t) = match (&args.size, &init) {
         (Some(s), _) => Tile::parse_size(s)?,

@@ -99,6 +99,11 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         (!args.also.is_empty(), "--also (each mask is written into the folder --out)"),
         (args.start != StartArg::Auto, "--start (a plan's masks start from the animated start)"),
         (args.axis_share.is_some(), "--axis-share (a plan gives a channel read alone a scalar mask)"),
+        (
+            args.kernel.any_given(),
+            "--kernel, --display, --sigma, --sigma-t, --alpha or --fps (the scene's [display] sets the eye and the kernel)",
+        ),
+        (args.png.is_some(), "--png (a plan writes EXR, and KTX2 with --ktx2-format)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));

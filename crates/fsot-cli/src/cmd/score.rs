@@ -3,8 +3,12 @@
 use crate::*;
 
 pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
-    if args.slices == 0 {
-        return Err(Error::invalid("--slices must be at least 1"));
+    if !(1..=fsot::optimize::settings::MAX_SLICES).contains(&args.slices) {
+        return Err(Error::invalid(format!(
+            "--slices must be 1 to {}, got {}",
+            fsot::optimize::settings::MAX_SLICES,
+            args.slices
+        )));
     }
     let mask = fsot::io::exr::read(&args.mask)?;
     let chosen = args.kernel.is_some()
