@@ -308,7 +308,8 @@ fn eval_refuses_counts_it_cannot_judge_keeps_the_results_already_there_and_makes
         (&["--seeds", "10001"], "--seeds must be in 2..=10000 (an interval needs two), got 10001"),
         (&["--seeds", "-2"], "invalid value"),
         (&["--seeds", "3", "--planned-masks", "4"], "--planned-masks must be in 1..=3 (the seeds), got 4"),
-        (&["--sigma", "9"], "--sigma must be in (0, 8], got 9"),
+        (&["--sigma", "9"], "--sigma must be in [0.01, 8], got 9"),
+        (&["--sigma", "1e-200"], "--sigma must be in [0.01, 8]"),
         (&["--iterations", "0"], "--iterations must be in 1..=1000000, got 0"),
     ];
     refused(

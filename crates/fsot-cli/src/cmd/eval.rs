@@ -17,8 +17,8 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         (given, _) => given.to_vec(),
     };
     for &s in &sigmas {
-        if !(s.is_finite() && s > 0.0 && s <= 8.0) {
-            return Err(Error::invalid(format!("--sigma must be in (0, 8], got {s}")));
+        if !(0.01..=8.0).contains(&s) {
+            return Err(Error::invalid(format!("--sigma must be in [0.01, 8], got {s}")));
         }
     }
     let scenes: Vec<_> = if args.scenes.is_empty() {
