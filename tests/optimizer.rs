@@ -45,6 +45,14 @@ fn an_optimized_mask_has_a_lower_objective_than_white_noise() {
 }
 
 #[test]
+fn a_tile_of_one_pixel_and_frame_scores_as_white_noise_not_nan() {
+    let one = Mask::white(Tile::new(1, 1, 1, 1, 2).unwrap(), 1);
+    let s = score(&one, spec("taa"), 64);
+    assert_eq!((s.objective, s.white), (0.0, 0.0), "one sample per class: nothing to transport");
+    assert_eq!(s.ratio(), 1.0);
+}
+
+#[test]
 fn under_taa_a_taa_mask_beats_a_spatial_mask_and_both_beat_white_noise() {
     let tile = Tile::new(32, 32, 16, 1, 2).unwrap();
     let setup = quick_setup(true);

@@ -32,8 +32,12 @@ pub struct Score {
 }
 
 impl Score {
-    /// The objective as a fraction of white noise's (lower is better).
+    /// The objective as a fraction of white noise's (lower is better); 1 where
+    /// both are 0 (a tile of one pixel and frame, which no order changes).
     pub fn ratio(&self) -> f64 {
+        if self.white == 0.0 && self.objective == 0.0 {
+            return 1.0;
+        }
         self.objective / self.white
     }
 }

@@ -21,7 +21,7 @@ use crate::optimize::backend::{Backend, BackendChoice};
 use crate::optimize::checkpoint;
 use crate::optimize::cpu::CpuRun;
 use crate::optimize::settings::{
-    check_axis_share, RunState, Settings, Start, Until, COARSE_BUDGET_SHARE, COARSE_MIN_QUARTER, SPATIAL_BUDGET_SHARE,
+    check_axis_share, RunState, Settings, Start, Until, COARSE_BUDGET_SHARE, MAX_BUDGET_SECONDS, COARSE_MIN_QUARTER, SPATIAL_BUDGET_SHARE,
     SPATIAL_ITERATIONS,
 };
 #[cfg(feature = "vulkan")]
@@ -203,9 +203,6 @@ const BUDGET_STEPS: f64 = 32.0;
 
 /// The least time the one-frame run of an animated start is given.
 const MIN_SPATIAL_SECONDS: f64 = 1e-3;
-
-/// The longest time budget a run takes (a day).
-const MAX_BUDGET_SECONDS: f64 = 86_400.0;
 
 /// An optimization in progress, on whichever backend it was given.
 pub struct Run {

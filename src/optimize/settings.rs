@@ -131,6 +131,7 @@ pub enum Until {
 /// assert_eq!(parse_budget("500ms"), Ok(0.5));
 /// assert_eq!(parse_budget("2m"), Ok(120.0));
 /// assert!(parse_budget("-1s").is_err());
+/// assert!(parse_budget("2d").is_err() && parse_budget("1e20s").is_err());
 /// ```
 pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
     let t = text.trim();
@@ -141,10 +142,16 @@ pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
         _ => (t, 1.0),
     };
     match number.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 => Ok(x * unit),
+        Ok(x) if x.is_finite() && x > 0.0 && x * unit <= MAX_BUDGET_SECONDS => Ok(x * unit),
+        Ok(x) if x.is_finite() && x > 0.0 => {
+            Err(format!("must be at most {MAX_BUDGET_SECONDS} seconds (a day), got {text:?}"))
+        }
         _ => Err(format!("must be a time above zero such as 1s, 500ms or 2m, got {text:?}")),
     }
 }
+
+/// The longest time budget a run takes: a day.
+pub const MAX_BUDGET_SECONDS: f64 = 86_400.0;
 
 impl Until {
     /// The end-agnostic schedule the rule runs, if any.
