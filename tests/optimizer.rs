@@ -45,6 +45,16 @@ fn an_optimized_mask_has_a_lower_objective_than_white_noise() {
 }
 
 #[test]
+fn a_gaussian_too_narrow_to_square_is_a_point_not_a_panic() {
+    // Past the checks of the named kernels: a spec built by hand.
+    let tile = Tile::new(8, 8, 4, 1, 1).unwrap();
+    let spec = KernelSpec { spatial: fsot::Spatial::Gaussian { sigma: 1e-200 }, ..spec("spatial") };
+    let kernel = fsot::core::kernel::Kernel::new(spec, &tile);
+    assert_eq!(kernel.taps.len(), 1, "the centre alone");
+    assert_eq!(kernel.max_weight(), 1.0);
+}
+
+#[test]
 fn a_tile_of_one_pixel_and_frame_scores_as_white_noise_not_nan() {
     let one = Mask::white(Tile::new(1, 1, 1, 1, 2).unwrap(), 1);
     let s = score(&one, spec("taa"), 64);

@@ -71,6 +71,7 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("[display]\ntaa_alpha = 0\n{group}"), "line 2", "taa_alpha must be in (0, 1]"),
         (format!("[display]\nfps = -5\n{group}"), "line 2", "fps"),
         (format!("[display]\nsigma = nan\n{group}"), "line 2", "sigma"),
+        (format!("[display]\nsigma = 1e-200\n{group}"), "line 2", "sigma must be in [0.01, 8]"),
         (format!("[tile]\nsize = \"64xx\"\n{group}"), "line 2", "size must look like"),
         (format!("{group}spp = 0\n"), "line 4", "spp must be 1 to 64"),
         (format!("{group}dims = 3\n"), "line 4", "duplicate key"),

@@ -74,7 +74,12 @@ impl Spatial {
             Spatial::Gaussian { sigma } => {
                 let r = (sigma * (1.0 / tolerance).ln().sqrt()).floor() as i64;
                 let s2 = sigma * sigma;
-                (r, Box::new(move |dx, dy| (-((dx * dx + dy * dy) as f64) / s2).exp()))
+                // The centre is 1 whatever the width (0 / 0 where sigma^2 underflows).
+                let w = move |dx: i64, dy: i64| match dx * dx + dy * dy {
+                    0 => 1.0,
+                    r2 => (-(r2 as f64) / s2).exp(),
+                };
+                (r, Box::new(w))
             }
             Spatial::Display { ppd } => {
                 let parts: Vec<(f64, Vec<f64>)> = crate::core::csf::mixture(ppd)

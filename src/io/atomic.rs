@@ -19,7 +19,10 @@ pub fn make_folder(dir: &Path) -> Result<()> {
 /// temporary file, syncs it and renames it over the target; dropping it
 /// uncommitted leaves the target untouched.
 pub struct AtomicFile {
+    /// The path as given (what a C header is named for).
     target: PathBuf,
+    /// The file replaced: the target, or where its link leads.
+    dest: PathBuf,
     temp: PathBuf,
 }
 
@@ -62,9 +65,10 @@ impl AtomicFile {
         let temp = dir.join(format!(".{}.fsot-{}.tmp", name.to_string_lossy(), std::process::id()));
         File::create(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
         fs::remove_file(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
-        Ok(Self { target: target.to_path_buf(), temp })
+        Ok(Self { target: named.to_path_buf(), dest: target.to_path_buf(), temp })
     }
 
+    /// The output's path as given (a link's own name, not where it leads).
     pub fn target(&self) -> &Path {
         &self.target
     }
@@ -76,8 +80,8 @@ impl AtomicFile {
         file.write_all(bytes).map_err(|e| Error::io(ctx(), e))?;
         file.sync_all().map_err(|e| Error::io(ctx(), e))?;
         drop(file);
-        fs::rename(&self.temp, &self.target)
-            .map_err(|e| Error::io(format!("renaming into {}", self.target.display()), e))?;
+        fs::rename(&self.temp, &self.dest)
+            .map_err(|e| Error::io(format!("renaming into {}", self.dest.display()), e))?;
         self.temp = PathBuf::new();
         Ok(())
     }
@@ -123,7 +127,9 @@ mod tests {
         let link = dir.join("link.exr");
         fs::write(&real, b"old").unwrap();
         std::os::unix::fs::symlink(&real, &link).unwrap();
-        AtomicFile::create(&link).unwrap().commit(b"new").unwrap();
+        let out = AtomicFile::create(&link).unwrap();
+        assert_eq!(out.target(), link.as_path(), "named as given");
+        out.commit(b"new").unwrap();
         assert!(fs::symlink_metadata(&link).unwrap().file_type().is_symlink(), "the link stays a link");
         assert_eq!(fs::read(&real).unwrap(), b"new", "its target holds the new bytes");
         fs::remove_dir_all(&dir).unwrap();

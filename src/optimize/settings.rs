@@ -131,7 +131,8 @@ pub enum Until {
 /// assert_eq!(parse_budget("500ms"), Ok(0.5));
 /// assert_eq!(parse_budget("2m"), Ok(120.0));
 /// assert!(parse_budget("-1s").is_err());
-/// assert!(parse_budget("2d").is_err() && parse_budget("1e20s").is_err());
+/// assert_eq!(parse_budget("86400"), Ok(86400.0));
+/// assert!(parse_budget("86401").is_err() && parse_budget("1441m").is_err()); // past a day
 /// ```
 pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
     let t = text.trim();

@@ -269,8 +269,8 @@ fn viewing(
     };
     if let Some(s) = &d.sigma {
         let sigma = *s.get_ref();
-        if !(sigma.is_finite() && sigma > 0.0 && sigma <= 8.0) {
-            return Err(at(s.span(), format!("sigma must be in (0, 8] pixels, got {sigma}")));
+        if !(0.01..=8.0).contains(&sigma) {
+            return Err(at(s.span(), format!("sigma must be in [0.01, 8] pixels, got {sigma}")));
         }
         return Ok((Spatial::Gaussian { sigma }, format!("the eye as a Gaussian of sigma {sigma} pixels")));
     }

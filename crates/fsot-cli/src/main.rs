@@ -382,7 +382,8 @@ struct OptimizeArgs {
     /// estimate is at most X).
     #[arg(long)]
     until: Option<String>,
-    /// The best mask reachable in this wall time (`1s`, `500ms`, `2.5s`, `1m`),
+    /// The best mask reachable in this wall time (`1s`, `500ms`, `2.5s`, `1m`; at
+    /// most a day),
     /// counted from the process's start (setting up the backend included): the
     /// step size follows the cosine schedule over the time, and the run ends at
     /// most about one iteration past it. --iterations caps it [default: 10000].

@@ -24,7 +24,8 @@ pub(crate) fn context(flag: Option<String>) -> Result<Context> {
 /// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops between
 /// iterations (and saves its checkpoint). A second signal ends the process at
 /// once, exit status 130: outputs are renamed into place whole, so what was
-/// there stays. Once per process.
+/// there stays (a signal while one is written may leave its `.tmp` file beside
+/// it). Once per process.
 pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
     let flag = fsot::optimize::run::CancelFlag::new();
     let set = flag.clone();
@@ -33,7 +34,7 @@ pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
             std::process::exit(130);
         }
         set.cancel();
-        eprintln!("\ninterrupted: stopping at the next iteration (again to quit at once)");
+        eprintln!("\ninterrupted: the run stops between iterations (again to quit at once)");
     })
     .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
     Ok(flag)
