@@ -163,7 +163,7 @@ struct BenchArgs {
 /// One GPU kernel measured on its own.
 #[derive(Args)]
 struct KernelBench {
-    /// Input size.
+    /// Input size, at most 2^28.
     #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
     n: u32,
     /// Timed runs (median reported), after two warm-up runs.

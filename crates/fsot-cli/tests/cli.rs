@@ -328,6 +328,19 @@ fn eval_refuses_counts_it_cannot_judge_keeps_the_results_already_there_and_makes
     assert!(!dir.path().join("fresh").exists(), "a refused eval made its output folder");
 }
 
+#[test]
+fn kernel_benchmarks_refuse_sizes_no_machine_holds_before_they_allocate() {
+    let dir = tempfile::tempdir().unwrap();
+    for suite in ["sort", "scatter"] {
+        let cases: &[(&[&str], &str)] = &[
+            (&["--n", "0"], "--n must be 1 to 268435456"),
+            (&["--n", "4294967295"], "--n must be 1 to 268435456"),
+            (&["--repeats", "0"], "--repeats at least 1"),
+        ];
+        refused(dir.path(), &["bench", suite], cases);
+    }
+}
+
 /// Each case, `base` then its flags, fails with its message, no panic, and
 /// leaves no `m.exr` in `dir`.
 fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {

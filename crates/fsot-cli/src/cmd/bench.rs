@@ -7,6 +7,11 @@ use crate::*;
 use fsot::vk::{Context, SortPath};
 use fsot_cli::bench::convergence::Point;
 
+/// The most pairs (or contributions) a kernel benchmark takes: 2^28, 2 GiB of
+/// pairs of 32-bit keys and payloads, eight times the most the benchmarks measure
+/// (2^25).
+const MAX_BENCH_N: u32 = 1 << 28;
+
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
         None => bench_suites(&args),
@@ -20,7 +25,9 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
         Some(
             BenchSuite::Sort(KernelBench { n, repeats, .. })
             | BenchSuite::Scatter(KernelBench { n, repeats, .. }),
-        ) if n == 0 || repeats == 0 => Err(Error::invalid("--n and --repeats must be at least 1")),
+        ) if !(1..=MAX_BENCH_N).contains(&n) || repeats == 0 => Err(Error::invalid(format!(
+            "--n must be 1 to {MAX_BENCH_N} and --repeats at least 1, got {n} and {repeats}"
+        ))),
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
             let b = fsot_cli::bench::bench_sort(&ctx, n, repeats, SortPath::Auto)?;
