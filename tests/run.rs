@@ -87,6 +87,47 @@ fn checkpointed(options: RunOptions, dir: &tempfile::TempDir) -> RunOptions {
 }
 
 #[test]
+fn a_run_refuses_settings_and_masks_built_by_hand_out_of_range_before_any_work() {
+    use fsot::{Spatial, StepRule, Temporal, Until};
+    let _others = others();
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let cpu = || RunOptions::default().backend(BackendChoice::Cpu);
+    let refused = |tile: Tile, s: Settings, init: Option<&Mask>, why: &str| {
+        let err = Run::start(tile, s, init, cpu()).err().unwrap_or_else(|| panic!("{why}: started"));
+        assert!(matches!(err, Error::Invalid(_)), "{why}: {err}");
+    };
+    let with = |f: &dyn Fn(&mut Settings)| {
+        let mut s = settings(3);
+        f(&mut s);
+        s
+    };
+    refused(Tile { width: 0, ..tile }, settings(3), None, "a tile without width");
+    refused(Tile { dims: 9, ..tile }, settings(3), None, "nine dimensions");
+    refused(tile, with(&|s| s.kernel.tolerance = 0.0), None, "a tolerance of 0 (an endless kernel)");
+    refused(tile, with(&|s| s.kernel.tolerance = f64::NAN), None, "a NaN tolerance");
+    refused(tile, with(&|s| s.kernel.spatial = Spatial::Gaussian { sigma: 1e6 }), None, "a huge sigma");
+    refused(tile, with(&|s| s.kernel.spatial = Spatial::Display { ppd: f64::NAN }), None, "a NaN ppd");
+    refused(tile, with(&|s| s.kernel.temporal = Temporal::Taa { alpha: 0.0 }), None, "alpha 0");
+    refused(tile, with(&|s| s.kernel.temporal = Temporal::Perceptual { fps: 1e12 }), None, "fps 1e12");
+    refused(tile, with(&|s| s.rule = StepRule::Momentum { step: f32::NAN, beta: 0.8 }), None, "a NaN step");
+    refused(
+        tile,
+        with(&|s| s.rule = StepRule::Adam { lr: 0.01, beta1: 1.0, beta2: 1.0, eps: 0.0 }),
+        None,
+        "Adam's decays at 1",
+    );
+    refused(tile, with(&|s| s.until = Until::Objective(f64::NAN)), None, "a NaN objective to stop at");
+    let mut short = Mask::white(tile, 1);
+    short.samples.truncate(10);
+    refused(tile, settings(3), Some(&short), "an initial mask of too few values");
+    let mut nan = Mask::white(tile, 1);
+    nan.samples[3] = f32::NAN;
+    refused(tile, settings(3), Some(&nan), "an initial mask holding NaN");
+    // Each field at its constructors' value starts.
+    assert!(Run::start(tile, settings(3), Some(&Mask::white(tile, 1)), cpu()).is_ok());
+}
+
+#[test]
 fn a_cancelled_and_resumed_cpu_run_equals_an_uninterrupted_one() {
     let _others = others();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();

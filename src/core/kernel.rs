@@ -206,6 +206,39 @@ impl KernelSpec {
         Ok(Self { spatial: Spatial::Gaussian { sigma }, temporal, tolerance: DEFAULT_TOLERANCE })
     }
 
+    /// An error unless every parameter is one the constructors accept: for a
+    /// spec whose public fields were set by hand. `Run::start` checks its kernel.
+    pub fn check(&self) -> Result<()> {
+        match self.spatial {
+            Spatial::Gaussian { sigma } if !SIGMA_RANGE.contains(&sigma) => {
+                return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma}")))
+            }
+            Spatial::Gaussian { .. } => {}
+            Spatial::Display { ppd } => {
+                crate::core::display::check_ppd(ppd)?;
+            }
+        }
+        let alpha_ok = |a: f64| a > 0.0 && a <= 1.0;
+        let fps_ok = |f: f64| (8.0..=1000.0).contains(&f);
+        let ok = match self.temporal {
+            Temporal::Spatial => true,
+            Temporal::Gaussian { sigma_t } => SIGMA_RANGE.contains(&sigma_t),
+            Temporal::Taa { alpha } => alpha_ok(alpha),
+            Temporal::Perceptual { fps } => fps_ok(fps),
+            Temporal::PerceptualTaa { fps, alpha } => fps_ok(fps) && alpha_ok(alpha),
+        };
+        if !ok {
+            return Err(Error::invalid(format!(
+                "temporal filter {:?} out of range (sigma_t in [0.01, 64], alpha in (0, 1], fps in [8, 1000])",
+                self.temporal
+            )));
+        }
+        if !(1e-12..=0.5).contains(&self.tolerance) {
+            return Err(Error::invalid(format!("tolerance must be in [1e-12, 0.5], got {}", self.tolerance)));
+        }
+        Ok(())
+    }
+
     /// The same kernel with the eye of a display of `ppd` pixels per degree as
     /// its spatial filter.
     pub fn on_display(self, ppd: f64) -> Result<Self> {

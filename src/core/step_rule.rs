@@ -30,6 +30,24 @@ impl StepRule {
     pub const DEFAULT: StepRule = StepRule::Momentum { step: 2.0, beta: 0.8 };
     /// Adam with lr 0.01, beta1 0.9, beta2 0.99 and eps 1e-8.
     pub const DEFAULT_ADAM: StepRule = StepRule::Adam { lr: 1e-2, beta1: 0.9, beta2: 0.99, eps: 1e-8 };
+
+    /// An error unless every step is finite and above 0 and every decay in
+    /// [0, 1): a rule outside them moves samples to NaN.
+    pub fn check(&self) -> crate::error::Result<()> {
+        let positive = |x: f32| x.is_finite() && x > 0.0;
+        let decay = |x: f32| (0.0..1.0).contains(&x);
+        let ok = match *self {
+            StepRule::Momentum { step, beta } => positive(step) && decay(beta),
+            StepRule::Adam { lr, beta1, beta2, eps } => positive(lr) && decay(beta1) && decay(beta2) && positive(eps),
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(crate::error::Error::invalid(format!(
+                "step rule {self:?} out of range (steps finite and above 0, decays in [0, 1))"
+            )))
+        }
+    }
 }
 
 /// Step size over the run: cosine decay from 1 to `FINAL_FRACTION` of the rule's

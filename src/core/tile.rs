@@ -32,6 +32,12 @@ pub struct Tile {
 
 impl Tile {
     /// Checks every parameter; the error says which one is wrong and why.
+    /// An error unless `Tile::new` would make this tile: for one whose public
+    /// fields were set by hand.
+    pub fn check(&self) -> Result<()> {
+        Tile::new(self.width, self.height, self.frames, self.spp, self.dims).map(|_| ())
+    }
+
     pub fn new(width: usize, height: usize, frames: usize, spp: usize, dims: usize) -> Result<Self> {
         for (name, v) in [("width", width), ("height", height), ("frames", frames)] {
             if v == 0 {

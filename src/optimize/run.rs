@@ -261,7 +261,15 @@ impl Run {
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
+        tile.check()?;
+        settings.kernel.check()?;
+        settings.rule.check()?;
         check_axis_share(settings.axis_share)?;
+        if let Until::Objective(x) = settings.until {
+            if !(x.is_finite() && x > 0.0) {
+                return Err(Error::invalid(format!("an objective to stop at must be finite and above 0, got {x}")));
+            }
+        }
         match settings.until {
             Until::Seconds(s) if !(s.is_finite() && s > 0.0 && s <= MAX_BUDGET_SECONDS) => {
                 return Err(Error::invalid(format!(
