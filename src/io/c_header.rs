@@ -18,11 +18,20 @@ pub fn identifier(stem: &str) -> Result<String> {
     if id.is_empty() {
         return Err(Error::invalid("a C header needs a file name to name its array"));
     }
-    if id.starts_with(|c: char| c.is_ascii_digit()) {
+    if id.starts_with(|c: char| c.is_ascii_digit()) || C_KEYWORDS.contains(&id.as_str()) {
         id.insert_str(0, "mask_");
     }
     Ok(id)
 }
+
+/// C's keywords (C23 and C++'s, which a header may also be read as): not names.
+const C_KEYWORDS: &[&str] = &[
+    "alignas", "alignof", "auto", "bool", "break", "case", "char", "class", "const", "constexpr", "continue",
+    "default", "delete", "do", "double", "else", "enum", "extern", "false", "float", "for", "goto", "if",
+    "inline", "int", "long", "namespace", "new", "nullptr", "register", "restrict", "return", "short",
+    "signed", "sizeof", "static", "static_assert", "struct", "switch", "template", "this", "true",
+    "typedef", "typeof", "union", "unsigned", "void", "volatile", "while",
+];
 
 /// The header text, the array named `name`.
 pub fn encode(mask: &Mask, name: &str) -> Result<String> {
@@ -70,4 +79,19 @@ pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
     let stem = out.target().file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
     let text = encode(mask, &identifier(&stem)?)?;
     out.commit(text.as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::identifier;
+
+    #[test]
+    fn a_file_name_becomes_a_c_name_that_is_neither_a_keyword_nor_a_number() {
+        assert_eq!(identifier("blue-noise 2").unwrap(), "blue_noise_2");
+        assert_eq!(identifier("4k").unwrap(), "mask_4k");
+        assert_eq!(identifier("int").unwrap(), "mask_int");
+        assert_eq!(identifier("static").unwrap(), "mask_static");
+        assert_eq!(identifier("integer").unwrap(), "integer");
+        assert!(identifier("").is_err());
+    }
 }
