@@ -176,13 +176,8 @@ impl KernelSpec {
         }
         let temporal = match name {
             "spatial" => Temporal::Spatial,
-            "gaussian" => {
-                let sigma_t = sigma_t.unwrap_or(sigma);
-                if !SIGMA_RANGE.contains(&sigma_t) {
-                    return Err(Error::invalid(format!("temporal sigma must be in [0.01, 64] frames, got {sigma_t}")));
-                }
-                Temporal::Gaussian { sigma_t }
-            }
+            // Both widths are checked above.
+            "gaussian" => Temporal::Gaussian { sigma_t: sigma_t.unwrap_or(sigma) },
             "taa" => {
                 check_alpha()?;
                 Temporal::Taa { alpha }
