@@ -108,7 +108,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         args.budget
     );
     if args.score {
-        let score = mask.score(kernel);
+        let score = mask.score(kernel)?;
         println!("objective {:.4e}, {:.3} x white noise", score.objective, score.ratio());
     }
     println!("wrote {}", args.out.display());

@@ -145,8 +145,8 @@ fn mask_image(ctx: &Context, tile: &Tile, masks: usize, name: &str) -> Result<Im
 
 /// A plan written into a new image of the renderer's, with its block.
 fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
-    let tile = plan.masks[0].tile;
-    let mut image = mask_image(ctx, &tile, plan.masks.len(), name)?;
+    let tile = plan.masks()[0].tile;
+    let mut image = mask_image(ctx, &tile, plan.masks().len(), name)?;
     write_plan(ctx, &plan, &image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL))?;
     image.layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let block = Buffer::with_data(ctx, &plan.plan_block()?, Location::Device, "plan-block")?;
@@ -157,11 +157,11 @@ fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
 fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     if let Some(path) = &args.mask {
         let plan = SamplerPlan::load(path)?;
-        if plan.parts[0].dims < 2 {
+        if plan.parts()[0].dims < 2 {
             return Err(Error::invalid(format!(
                 "{}: the scene's light sample is 2-D, the first part of the mask has d = {}",
                 path.display(),
-                plan.parts[0].dims
+                plan.parts()[0].dims
             )));
         }
         if plan.max_dims() > 2 {
@@ -247,7 +247,7 @@ fn run(args: &Args) -> Result<()> {
     eprintln!("device: {device}");
 
     let (fsot, mask_note) = fsot_plan(&ctx, args)?;
-    let white_mask = Mask::white(fsot.plan.masks[0].tile, 1234);
+    let white_mask = Mask::white(fsot.plan.masks()[0].tile, 1234);
     let white = bind_plan(&ctx, SamplerPlan::single(white_mask)?, "white-mask")?;
 
     let (pixels, frames) = (width * height, args.frames);

@@ -142,7 +142,8 @@ fn reading_rejects_bad_masks_with_reasons() {
     for (bad, what) in [(f32::NAN, "NaN"), (1.0, "1"), (-0.25, "-0.25"), (f32::INFINITY, "inf")] {
         let mut mask = Mask::white(tile, 3);
         mask.samples[5] = bad;
-        let err = exr::decode(&exr::encode(&mask).unwrap()).unwrap_err();
+        assert!(exr::encode(&mask).is_err(), "{what} encoded");
+        let err = exr::decode(&exr::encode_unchecked(&mask).unwrap()).unwrap_err();
         assert!(err.contains("outside [0, 1)") && err.contains(what), "{err}");
     }
 }
@@ -159,4 +160,61 @@ fn an_uncommitted_output_leaves_the_existing_file_untouched() {
     assert_eq!(std::fs::read(&path).unwrap(), b"precious");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file left behind");
     assert!(AtomicFile::create(&dir.path().join("no/such/dir/m.exr")).is_err());
+}
+
+/// Masks whose public fields were set out of range by hand: a NaN, a value
+/// of 1, too few values, a tile `Tile::new` refuses.
+fn masks_set_out_of_range_by_hand() -> Vec<(&'static str, Mask)> {
+    let good = || Mask::white(Tile::new(4, 3, 2, 1, 2).unwrap(), 3);
+    let mut nan = good();
+    nan.samples[5] = f32::NAN;
+    let mut one = good();
+    one.samples[0] = 1.0;
+    let mut short = good();
+    short.samples.truncate(7);
+    let mut empty = good();
+    empty.samples.clear();
+    let mut wide = good();
+    wide.tile.dims = 9;
+    vec![
+        ("a NaN", nan),
+        ("a value of 1", one),
+        ("too few values", short),
+        ("no values", empty),
+        ("d = 9", wide),
+    ]
+}
+
+#[test]
+fn every_writer_refuses_a_mask_set_out_of_range_by_hand_and_leaves_the_file_that_was_there() {
+    use fsot::TexelFormat;
+    let dir = tempfile::tempdir().unwrap();
+    for (what, mask) in masks_set_out_of_range_by_hand() {
+        assert!(mask.check().is_err(), "{what}: check");
+        for name in ["m.exr", "m.ktx2", "m.h"] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, b"what the user had").unwrap();
+            assert!(mask.save(&path).is_err(), "{what}: {name} was written");
+            assert_eq!(std::fs::read(&path).unwrap(), b"what the user had", "{what}: {name} was touched");
+        }
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+        assert_eq!(names.len(), 3, "{what}: a temporary file stayed: {names:?}");
+        assert!(mask.ktx2(None).is_err(), "{what}: KTX2 bytes");
+        assert!(mask.ktx2(Some(TexelFormat::R32G32Sfloat)).is_err(), "{what}: float KTX2 bytes");
+        assert!(exr::encode(&mask).is_err(), "{what}: EXR bytes");
+        assert!(png_io::write(&mask, &dir.path().join("png"), 16).is_err(), "{what}: PNG slices");
+        assert!(!dir.path().join("png").exists(), "{what}: a PNG folder was made");
+        let kernel = fsot::KernelSpec::named("taa").unwrap();
+        assert!(mask.score(kernel).is_err(), "{what}: score");
+    }
+}
+
+#[test]
+fn a_mask_reads_a_sample_only_inside_its_tile() {
+    let mask = Mask::white(Tile::new(4, 3, 2, 1, 2).unwrap(), 3);
+    assert_eq!(mask.sample(3, 2, 1, 0), &mask.samples[mask.samples.len() - 2..]);
+    for (x, y, t, s) in [(4, 0, 0, 0), (0, 3, 0, 0), (0, 0, 2, 0), (0, 0, 0, 1)] {
+        let read = std::panic::catch_unwind(|| mask.sample(x, y, t, s).to_vec());
+        assert!(read.is_err(), "({x}, {y}, {t}, {s}) read {read:?}");
+    }
 }

@@ -19,7 +19,7 @@ use fsot::io::ktx2::{quantize, texels, Format};
 use fsot::optimize::run::{optimize, CancelFlag};
 use fsot::optimize::settings::Settings;
 use fsot::render::device::{
-    layers_for, make_into_image, vk_format, write_mask_to_buffer, write_plan, write_plan_block,
+    layers_for, make_into_image, vk_format, write_mask, write_mask_to_buffer, write_plan, write_plan_block,
 };
 use fsot::render::sampler::{SamplerPart, SamplerPlan};
 use fsot::vk::{BufferTarget, ComputeDesc, ComputePipeline};
@@ -94,14 +94,15 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     let host = Host::new(true);
     let Some(spirv) = common::compile_glsl(PROBE) else { return };
     let tile = |d| Tile::new(8, 4, 3, 1, d).unwrap();
-    let plan = SamplerPlan {
-        masks: vec![Mask::white(tile(2), 1), Mask::white(tile(1), 2)],
-        parts: vec![
+    let plan = SamplerPlan::new(
+        vec![Mask::white(tile(2), 1), Mask::white(tile(1), 2)],
+        vec![
             SamplerPart { mask: 0, dims: 2, offset: [0; 3], shift: vec![0.0, 0.0] },
             SamplerPart { mask: 1, dims: 1, offset: [5, 3, 2], shift: vec![0.75] },
             SamplerPart { mask: 0, dims: 2, offset: [3, 1, 1], shift: vec![0.25, 0.5] },
         ],
-    };
+    )
+    .unwrap();
     let format = Format::R16G16Unorm;
     let image = host.image(vk_format(format), 8, 4, layers_for(&tile(2), 2), SAMPLED);
     let block_bytes = plan.plan_block().unwrap().len() as u64;
@@ -135,7 +136,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     let view = unsafe { d.create_image_view(&view_info, None) }.unwrap();
     // SAFETY: a default sampler.
     let sampler = unsafe { d.create_sampler(&vk::SamplerCreateInfo::default(), None) }.unwrap();
-    let reads = plan.parts.len() + 1;
+    let reads = plan.parts().len() + 1;
     let count = 8 * 4 * 9;
     let out = fsot::vk::Buffer::new(&ctx, (count * reads * 16) as u64, fsot::vk::Location::Device, "probe")
         .unwrap();
@@ -166,7 +167,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
             let v = got[i * reads + k];
             match plan.value(k, x, y, f, 0, format) {
                 Some(want) => {
-                    for j in 0..plan.parts[k].dims {
+                    for j in 0..plan.parts()[k].dims {
                         assert!(
                             (v[j] - want[j]).abs() < 1e-6,
                             "pixel ({x}, {y}) frame {f} part {k}: {v:?} vs {want:?}"
@@ -233,8 +234,17 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
     let target = BufferTarget { offset: 0, usage: vk::BufferUsageFlags::STORAGE_BUFFER, ..target };
     let err = write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap_err();
     assert!(err.to_string().contains("lacks TRANSFER_DST"), "{err}");
-    // And one that fits: the texels land as the KTX2 file lays them out.
+    // A mask whose values were set out of range by hand: refused, image or buffer.
     let target = BufferTarget { usage: vk::BufferUsageFlags::TRANSFER_DST, ..target };
+    let mut nan = mask.clone();
+    nan.samples[9] = f32::NAN;
+    let err = write_mask_to_buffer(&ctx, &nan, Format::R16G16Unorm, &target).unwrap_err();
+    assert!(err.to_string().contains("outside [0, 1)"), "{err}");
+    let image = host.image(vk::Format::R16G16_UNORM, 8, 8, layers, SAMPLED);
+    let err = write_mask(&ctx, &nan, &image.target).unwrap_err();
+    assert!(err.to_string().contains("outside [0, 1)"), "{err}");
+    host.free_image(image);
+    // And one that fits: the texels land as the KTX2 file lays them out.
     write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap();
     assert_eq!(host.read_memory(memory, bytes as usize), texels(&mask, Format::R16G16Unorm).unwrap());
     drop(ctx);
@@ -289,16 +299,16 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     // group reads white noise, made from its seed.
     assert_eq!(done.iter().map(|d| d.0.as_str()).collect::<Vec<_>>(), ["pick.exr", "lens.exr"]);
     assert!(done.iter().all(|d| d.1 > 0 && d.1 < 10_000), "{done:?}");
-    assert_eq!(sampler.masks[2].samples, Mask::white(tile, plan.masks[2].seed).samples);
+    assert_eq!(sampler.masks()[2].samples, Mask::white(tile, plan.masks[2].seed).samples);
     for k in 0..2 {
         // Each mask under the kernel it is made for (a scalar mask's eye is wider).
-        let ratio = fsot::core::objective::score(&sampler.masks[k], plan.masks[k].spec, 4096).ratio();
+        let ratio = fsot::core::objective::score(&sampler.masks()[k], plan.masks[k].spec, 4096).ratio();
         assert!(ratio < 0.8, "mask {k}: {ratio} x white");
     }
     // Parts as the plan says, in the order the groups consume them.
     let parts: Vec<_> = plan.groups.iter().flat_map(|g| &g.parts).collect();
-    assert_eq!(sampler.parts.len(), parts.len());
-    for (s, p) in sampler.parts.iter().zip(&parts) {
+    assert_eq!(sampler.parts().len(), parts.len());
+    for (s, p) in sampler.parts().iter().zip(&parts) {
         assert_eq!((s.dims, s.offset, &s.shift), (p.dims, p.offset, &p.shift));
         assert_eq!(plan.masks[s.mask].file, p.mask);
     }

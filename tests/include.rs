@@ -128,7 +128,7 @@ fn two_masks() -> SamplerPlan {
         SamplerPart { mask: 1, dims: 2, offset: [0; 3], shift: vec![0.0, 0.0] },
         SamplerPart { mask: 1, dims: 2, offset: [3, 1, 1], shift: vec![0.25, 0.5] },
     ];
-    SamplerPlan { masks, parts }
+    SamplerPlan::new(masks, parts).unwrap()
 }
 
 #[test]
@@ -152,7 +152,7 @@ fn the_plan_block_holds_the_tile_the_parts_and_each_masks_base_layer() {
 #[test]
 fn a_get_reads_the_offset_texel_adds_the_shift_and_a_new_r4_turn_per_loop_of_the_tile() {
     let plan = two_masks();
-    let m = &plan.masks[1];
+    let m = &plan.masks()[1];
     let fmt = Format::R32G32Sfloat;
     // Part 2 at pixel (2, 2), frame 0: texel ((2 + 3) % 4, (2 + 1) % 3, (0 + 1) % 2).
     let v = plan.value(2, 2, 2, 0, 0, fmt).unwrap();
@@ -174,10 +174,56 @@ fn a_get_reads_the_offset_texel_adds_the_shift_and_a_new_r4_turn_per_loop_of_the
     assert!((phi.powi(5) - phi - 1.0).abs() < 1e-8);
     // UNORM: the texel as q / 65535.
     let v = plan.value(0, 0, 0, 0, 0, Format::R16Unorm).unwrap();
-    let q = (plan.masks[0].sample(0, 0, 0, 0)[0] as f64 * 65535.0).round() / 65535.0;
+    let q = (plan.masks()[0].sample(0, 0, 0, 0)[0] as f64 * 65535.0).round() / 65535.0;
     assert!((v[0] as f64 - q.fract()).abs() < 1e-6);
     // Past the last part: the include's hash fallback, not a mask.
     assert_eq!(plan.value(3, 0, 0, 0, 0, fmt), None);
+}
+
+#[test]
+fn a_sampler_plan_is_refused_unless_every_part_reads_a_mask_it_holds() {
+    let tile = |d| Tile::new(4, 3, 2, 1, d).unwrap();
+    let part = |mask, dims, shift: &[f32]| SamplerPart { mask, dims, offset: [0; 3], shift: shift.to_vec() };
+    let mut nan_mask = Mask::white(tile(1), 1);
+    nan_mask.samples[0] = f32::NAN;
+    let cases: Vec<(&str, Vec<Mask>, Vec<SamplerPart>)> = vec![
+        ("no masks", vec![], vec![]),
+        ("a mask index past the list", vec![Mask::white(tile(1), 1)], vec![part(1, 1, &[0.0])]),
+        ("more dimensions than its mask", vec![Mask::white(tile(1), 1)], vec![part(0, 2, &[0.0, 0.0])]),
+        ("no dimensions", vec![Mask::white(tile(1), 1)], vec![part(0, 0, &[])]),
+        ("a shift per dimension missing", vec![Mask::white(tile(2), 1)], vec![part(0, 2, &[0.0])]),
+        ("a NaN shift", vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[f32::NAN])]),
+        ("a mask of 5 dimensions", vec![Mask::white(tile(5), 1)], vec![part(0, 1, &[0.0])]),
+        (
+            "masks of two sizes",
+            vec![Mask::white(tile(1), 1), Mask::white(Tile::new(4, 3, 4, 1, 1).unwrap(), 2)],
+            vec![part(0, 1, &[0.0])],
+        ),
+        ("a NaN value", vec![nan_mask], vec![part(0, 1, &[0.0])]),
+        ("more parts than a block holds", vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[0.0]); 2048]),
+    ];
+    for (what, masks, parts) in cases {
+        assert!(SamplerPlan::new(masks, parts).is_err(), "{what}");
+    }
+    // Past the default block, a larger FSOT_MAX_PARTS holds them, up to 64 KiB.
+    let plan = SamplerPlan::new(vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[0.0]); 20]).unwrap();
+    assert!(plan.plan_block().unwrap_err().to_string().contains("FSOT_MAX_PARTS"));
+    assert_eq!(plan.plan_block_for(64).unwrap().len(), 32 + 32 * 64);
+    assert!(plan.plan_block_for(1 << 40).is_err(), "a block of 2^40 parts");
+}
+
+#[test]
+fn a_get_at_an_offset_past_u32_wraps_as_the_includes_unsigned_arithmetic() {
+    let tile = Tile::new(4, 3, 2, 1, 1).unwrap();
+    let mask = Mask::white(tile, 1);
+    let far = SamplerPart { mask: 0, dims: 1, offset: [u32::MAX, u32::MAX - 1, u32::MAX], shift: vec![0.0] };
+    let plan = SamplerPlan::new(vec![mask.clone()], vec![far]).unwrap();
+    // x = 5: (5 + 2^32 - 1) mod 2^32 = 4, 4 mod 4 = 0; y = 2: (2 + 2^32 - 2) mod 2^32 = 0.
+    let v = plan.value(0, 5, 2, 0, 0, Format::R32Sfloat).unwrap();
+    let turn = ((u32::MAX / 2).wrapping_mul(R4[0]) >> 8) as f64 / 16_777_216.0;
+    let frame = (u32::MAX % 2) as usize;
+    let want = (mask.sample(0, 0, frame, 0)[0] as f64 + turn).fract();
+    assert!((v[0] as f64 - want).abs() < 1e-6, "{} against {want}", v[0]);
 }
 
 #[test]
@@ -191,9 +237,9 @@ fn a_plan_folder_reads_into_a_sampler_plan_and_a_bad_one_is_refused() {
     plan.execute(dir.path(), &options, 100, false, &fsot::optimize::run::CancelFlag::new(), &mut |_| {})
         .unwrap();
     let sp = SamplerPlan::read(dir.path()).unwrap();
-    assert_eq!(sp.masks.len(), 1, "bsdf shares light's mask");
-    assert_eq!(sp.parts.len(), 2);
-    assert_eq!(sp.parts[1].offset, fsot::scene::plan::share_offset(1, [4, 4, 2]));
+    assert_eq!(sp.masks().len(), 1, "bsdf shares light's mask");
+    assert_eq!(sp.parts().len(), 2);
+    assert_eq!(sp.parts()[1].offset, fsot::scene::plan::share_offset(1, [4, 4, 2]));
     std::fs::write(dir.path().join("plan.json"), "{\"tile\": [4, 4, 2], \"groups\": 3}").unwrap();
     assert!(SamplerPlan::read(dir.path()).unwrap_err().to_string().contains("not a plan file"));
     assert!(SamplerPlan::read(&dir.path().join("missing")).is_err());

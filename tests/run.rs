@@ -425,7 +425,7 @@ fn a_coarse_start_makes_a_quarter_first_within_the_budget_and_says_so() {
     assert!(seconds <= budget + 0.3, "{seconds} s for a budget of {budget} s");
     assert_eq!(mask.meta("start"), Some("coarse"));
     assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
-    let score = mask.score(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap());
+    let score = mask.score(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap()).unwrap();
     assert!(score.ratio() < 0.8, "{} x white noise", score.ratio());
 }
 

@@ -70,6 +70,7 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("[display]\ntaa_alpha = 1.5\n{group}"), "line 2", "taa_alpha must be in (0, 1]"),
         (format!("[display]\ntaa_alpha = 0\n{group}"), "line 2", "taa_alpha must be in (0, 1]"),
         (format!("[display]\nfps = -5\n{group}"), "line 2", "fps"),
+        (format!("[display]\nfps = 4\ntaa_alpha = 0.1\n{group}"), "line 2", "fps must be in [8, 1000]"),
         (format!("[display]\nsigma = nan\n{group}"), "line 2", "sigma"),
         (format!("[display]\nsigma = 1e-200\n{group}"), "line 2", "sigma must be in [0.01, 8]"),
         (format!("[tile]\nsize = \"64xx\"\n{group}"), "line 2", "size must look like"),
@@ -93,6 +94,40 @@ fn every_mistake_is_refused_naming_its_line() {
             err.contains(line) && err.contains(what),
             "{text:?}: expected {line:?} and {what:?} in {err:?}"
         );
+    }
+}
+
+#[test]
+fn a_scene_set_out_of_range_by_hand_is_refused_by_its_check_and_by_the_planner() {
+    let good = || Scene::parse(EXAMPLE, "example").unwrap();
+    assert!(good().check().is_ok());
+    type SetByHand = fn(&mut Scene);
+    let cases: [(&str, SetByHand); 14] = [
+        ("no groups", |s| s.groups.clear()),
+        ("a group named for another folder", |s| s.groups[0].name = "../pick".into()),
+        ("two groups of one name", |s| s.groups[1].name = "pick".into()),
+        ("d = 0", |s| s.groups[0].dims = 0),
+        ("d = 9", |s| s.groups[0].dims = 9),
+        ("spp = 0", |s| s.groups[0].spp = 0),
+        ("fps NaN", |s| s.display.fps = f64::NAN),
+        ("fps 4", |s| s.display.fps = 4.0),
+        ("TAA alpha 0", |s| s.display.taa_alpha = Some(0.0)),
+        ("sigma 0", |s| s.display.spatial = Spatial::Gaussian { sigma: 0.0 }),
+        ("ppd NaN", |s| s.display.spatial = Spatial::Display { ppd: f64::NAN }),
+        ("a tile 0 wide", |s| s.size = Some((0, 64, 32))),
+        ("a NaN budget", |s| s.budget = Some(f64::NAN)),
+        ("a budget of a year", |s| s.budget = Some(3.2e7)),
+    ];
+    let cost = fsot::scene::plan::CostModel::unmeasured();
+    for (what, set) in cases {
+        let mut scene = good();
+        set(&mut scene);
+        assert!(scene.check().is_err(), "{what}: check");
+        assert!(fsot::scene::plan::Plan::new(&scene, &cost).is_err(), "{what}: planned");
+    }
+    for bad in [f64::NAN, -1.0, f64::INFINITY] {
+        let cost = fsot::scene::plan::CostModel { seconds_per_point: bad, backend: "by hand".into() };
+        assert!(fsot::scene::plan::Plan::new(&good(), &cost).is_err(), "{bad} s a point: planned");
     }
 }
 

@@ -20,6 +20,8 @@ use crate::error::{Error, Result};
 /// weight but the centre's is far below the tolerance (the kernel is a point
 /// already at 0.3), and the square of a far smaller width underflows.
 pub(crate) const SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=64.0;
+/// The frame rates the eye's temporal response is defined for.
+pub(crate) const FPS_RANGE: std::ops::RangeInclusive<f64> = 8.0..=1000.0;
 
 /// The temporal part of a kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -166,7 +168,7 @@ impl KernelSpec {
             Ok(())
         };
         let check_fps = || -> Result<()> {
-            if !(fps.is_finite() && (8.0..=1000.0).contains(&fps)) {
+            if !FPS_RANGE.contains(&fps) {
                 return Err(Error::invalid(format!("fps must be in [8, 1000], got {fps}")));
             }
             Ok(())
@@ -214,7 +216,7 @@ impl KernelSpec {
             }
         }
         let alpha_ok = |a: f64| a > 0.0 && a <= 1.0;
-        let fps_ok = |f: f64| (8.0..=1000.0).contains(&f);
+        let fps_ok = |f: f64| FPS_RANGE.contains(&f);
         let ok = match self.temporal {
             Temporal::Spatial => true,
             Temporal::Gaussian { sigma_t } => SIGMA_RANGE.contains(&sigma_t),

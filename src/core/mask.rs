@@ -2,6 +2,7 @@
 
 use crate::core::rng::{derive, seed_key, Stream};
 use crate::core::tile::Tile;
+use crate::error::{Error, Result};
 
 /// A tile's samples: `tile.spp` samples of `tile.dims` coordinates for each
 /// pixel of each frame. Saved and opened by `save` and `open`; written into a
@@ -28,10 +29,54 @@ impl Mask {
         }
     }
 
+    /// An error unless the tile is one `Tile::new` makes and `samples` holds
+    /// its `tile.values()` coordinates, each finite and in [0, 1): for a mask
+    /// whose public fields were set by hand. Every writer (files, KTX2 bytes,
+    /// a renderer's image or buffer) and `score` check the mask first.
+    ///
+    /// ```
+    /// let mut mask = fsot::Mask::white(fsot::Tile::new(4, 4, 2, 1, 2)?, 1);
+    /// assert!(mask.check().is_ok());
+    /// mask.samples[3] = f32::NAN;
+    /// assert!(mask.check().is_err());
+    /// mask.samples.pop();
+    /// assert!(mask.check().is_err());
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn check(&self) -> Result<()> {
+        self.tile.check()?;
+        if self.samples.len() != self.tile.values() {
+            return Err(Error::invalid(format!(
+                "a mask of {} holds {} values, not {}",
+                self.tile.describe(),
+                self.tile.values(),
+                self.samples.len()
+            )));
+        }
+        match self.samples.iter().position(|v| !(v.is_finite() && (0.0..1.0).contains(v))) {
+            Some(i) => Err(Error::invalid(format!(
+                "a mask's value {i} is {}, outside [0, 1)",
+                self.samples[i]
+            ))),
+            None => Ok(()),
+        }
+    }
+
     /// Sample `s` of pixel (x, y) in frame t.
+    ///
+    /// # Panics
+    ///
+    /// Unless x < W, y < H, t < T and s < spp, or where `samples` holds fewer
+    /// values than the tile (`check` tells).
     pub fn sample(&self, x: usize, y: usize, t: usize, s: usize) -> &[f32] {
-        let i = (self.tile.pixel_index(x, y, t) * self.tile.spp + s) * self.tile.dims;
-        &self.samples[i..i + self.tile.dims]
+        let tile = &self.tile;
+        assert!(
+            x < tile.width && y < tile.height && t < tile.frames && s < tile.spp,
+            "sample ({x}, {y}, {t}, {s}) outside the tile {}",
+            tile.describe()
+        );
+        let i = (tile.pixel_index(x, y, t) * tile.spp + s) * tile.dims;
+        &self.samples[i..i + tile.dims]
     }
 
     /// The provenance value under `key` (for example `kernel`, `seed`, `iterations`).

@@ -9,6 +9,7 @@ use crate::core::rng::seed_key;
 use crate::core::slice::{Slice, SliceSampler, DEFAULT_AXIS_SHARE};
 use crate::core::tile::Tile;
 use crate::core::transport::objective;
+use crate::error::Result;
 
 /// Slices in the fixed scoring set.
 pub const SCORE_SLICES: u32 = 16384;
@@ -45,17 +46,21 @@ impl Score {
 impl Mask {
     /// The mask's objective under `kernel` on `SCORE_SLICES` fixed slices (the
     /// same for every mask of the tile), beside white noise's: a measure of how
-    /// far the optimization got that does not depend on the run.
+    /// far the optimization got that does not depend on the run. An error,
+    /// before any work, for a mask (`Mask::check`) or a kernel
+    /// (`KernelSpec::check`) set out of range by hand.
     ///
     /// ```
     /// use fsot::{KernelSpec, Mask, Tile};
     /// let kernel = KernelSpec::named("taa")?;
-    /// let white = Mask::white(Tile::new(8, 8, 4, 1, 1)?, 3).score(kernel);
+    /// let white = Mask::white(Tile::new(8, 8, 4, 1, 1)?, 3).score(kernel)?;
     /// assert!((0.5..2.0).contains(&white.ratio()));
     /// # Ok::<(), fsot::Error>(())
     /// ```
-    pub fn score(&self, kernel: KernelSpec) -> Score {
-        score(self, kernel, SCORE_SLICES)
+    pub fn score(&self, kernel: KernelSpec) -> Result<Score> {
+        self.check()?;
+        kernel.check()?;
+        Ok(score(self, kernel, SCORE_SLICES))
     }
 }
 

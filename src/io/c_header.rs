@@ -35,6 +35,7 @@ const C_KEYWORDS: &[&str] = &[
 
 /// The header text, the array named `name`.
 pub fn encode(mask: &Mask, name: &str) -> Result<String> {
+    mask.check()?;
     let t = mask.tile;
     let upper = name.to_ascii_uppercase();
     let provenance: Vec<String> = mask.meta.iter().map(|(k, v)| format!("{k} {v}")).collect();

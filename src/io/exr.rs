@@ -33,8 +33,19 @@ pub fn channel_name(tile: &Tile, s: usize, k: usize) -> String {
     }
 }
 
-/// Encodes a mask as EXR bytes.
+/// Encodes a mask as EXR bytes (an error for a mask `Mask::check` refuses).
 pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
+    mask.check()?;
+    encode_unchecked(mask)
+}
+
+/// Encodes a mask of a valid tile whatever its values: how the reader's tests
+/// make files with values outside [0, 1).
+pub fn encode_unchecked(mask: &Mask) -> Result<Vec<u8>> {
+    mask.tile.check()?;
+    if mask.samples.len() != mask.tile.values() {
+        return Err(Error::invalid("a mask's values do not fill its tile"));
+    }
     let tile = mask.tile;
     let (w, h) = (tile.width, tile.height);
     let mut layers = Vec::with_capacity(tile.frames);

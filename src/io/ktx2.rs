@@ -165,6 +165,7 @@ pub fn quantize(v: f32, bits: u32) -> u32 {
 /// The texels of a mask in a format: layer (frame, sample) by layer, row by
 /// row, each texel's channels in order.
 pub fn texels(mask: &Mask, format: Format) -> Result<Vec<u8>> {
+    mask.check()?;
     let t = mask.tile;
     format.check_holds(t.dims)?;
     let mut out = Vec::with_capacity(t.width * t.height * t.frames * t.spp * format.texel_bytes());

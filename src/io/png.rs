@@ -26,6 +26,7 @@ pub fn quantize_bits(v: f32, bits: u32) -> u32 {
 /// Writes the slices into `dir` (created if missing) with `bits` bits per
 /// channel, 8 or 16. Returns the file names.
 pub fn write(mask: &Mask, dir: &Path, bits: u32) -> Result<Vec<String>> {
+    mask.check()?;
     let depth = match bits {
         8 => png::BitDepth::Eight,
         16 => png::BitDepth::Sixteen,

@@ -276,18 +276,7 @@ impl RunState {
 /// from the seed.
 pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) -> Result<Vec<f32>> {
     if let Some(m) = init {
-        m.tile.check()?;
-        if m.samples.len() != m.tile.values() {
-            return Err(Error::invalid(format!(
-                "the initial mask holds {} values where its tile {} has {}",
-                m.samples.len(),
-                m.tile.describe(),
-                m.tile.values()
-            )));
-        }
-        if let Some(v) = m.samples.iter().find(|v| !(0.0..1.0).contains(*v)) {
-            return Err(Error::invalid(format!("the initial mask holds {v}, outside [0, 1)")));
-        }
+        m.check().map_err(|e| Error::invalid(format!("the initial mask: {e}")))?;
     }
     let animated;
     let init = match init {

@@ -59,9 +59,15 @@ pub fn vk_format(format: Format) -> vk::Format {
     vk::Format::from_raw(format.vk_format() as i32)
 }
 
-/// Layers the image of `masks` masks of tile `tile` needs.
+/// Layers the image of `masks` masks of tile `tile` needs; `u32::MAX` where
+/// the count does not fit in 32 bits (no device makes such an image, and
+/// fsot's writes refuse it).
 pub fn layers_for(tile: &Tile, masks: usize) -> u32 {
-    (masks * tile.frames * tile.spp) as u32
+    layers_needed(tile, masks).unwrap_or(u32::MAX)
+}
+
+fn layers_needed(tile: &Tile, masks: usize) -> Option<u32> {
+    masks.checked_mul(tile.frames)?.checked_mul(tile.spp)?.try_into().ok()
 }
 
 /// What an image must be to hold `masks` masks of `tile`: the format's
@@ -76,7 +82,12 @@ fn check_image(ctx: &Context, image: &ImageTarget, tile: &Tile, masks: usize, di
             image.width, image.height, tile.width, tile.height
         )));
     }
-    let layers = layers_for(tile, masks);
+    let layers = layers_needed(tile, masks).ok_or_else(|| {
+        Error::invalid(format!(
+            "{masks} masks of {} frames x {} spp need more than 2^32 layers",
+            tile.frames, tile.spp
+        ))
+    })?;
     if image.layers != layers {
         return Err(Error::invalid(format!(
             "the image has {} layers; {masks} mask{} of {} frames x {} spp need {layers}",
@@ -94,8 +105,8 @@ fn check_image(ctx: &Context, image: &ImageTarget, tile: &Tile, masks: usize, di
 /// Writes a plan's masks, stacked, into the renderer's image (see the module's
 /// notes); bind the plan block (`write_plan_block`) beside it.
 pub fn write_plan(ctx: &Context, plan: &SamplerPlan, image: &ImageTarget) -> Result<()> {
-    let tile = plan.masks.first().ok_or_else(|| Error::invalid("the plan has no masks"))?.tile;
-    let format = check_image(ctx, image, &tile, plan.masks.len(), plan.max_dims())?;
+    let tile = plan.masks()[0].tile;
+    let format = check_image(ctx, image, &tile, plan.masks().len(), plan.max_dims())?;
     Ok(fill(ctx, image, &plan.texels(format)?, format.texel_bytes() as u32)?)
 }
 

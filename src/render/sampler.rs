@@ -17,6 +17,9 @@ use crate::io::ktx2::Format;
 
 /// Parts the include's plan block holds by default (`FSOT_MAX_PARTS`).
 pub const MAX_PARTS: usize = 16;
+/// The most parts a plan block holds: 32 + 32 x this bytes is 64 KiB, the
+/// largest uniform block a device is likely to bind.
+pub const MAX_BLOCK_PARTS: usize = 2047;
 
 /// Roberts' R4 sequence in 0.32 fixed point (`FSOT_R4` in the include).
 pub const R4: [u32; 4] = [3_679_390_609, 3_152_041_523, 2_700_274_806, 2_313_257_605];
@@ -53,14 +56,13 @@ pub struct SamplerPart {
     pub shift: Vec<f32>,
 }
 
-/// A plan ready to bind.
+/// A plan ready to bind: masks that share W, H, T and spp (each of at most 4
+/// dimensions), and the parts that read them. Made only by its constructors,
+/// which check it, so every method below holds.
 #[derive(Clone, Debug)]
 pub struct SamplerPlan {
-    /// The masks, in the order the parts first read them; all share W, H, T
-    /// and spp.
-    pub masks: Vec<Mask>,
-    /// The reads, in the order the renderer consumes them.
-    pub parts: Vec<SamplerPart>,
+    masks: Vec<Mask>,
+    parts: Vec<SamplerPart>,
 }
 
 #[derive(Deserialize)]
@@ -83,16 +85,34 @@ struct PartFile {
 }
 
 impl SamplerPlan {
+    /// A plan of `masks` read by `parts`, checked: at least one mask, every
+    /// mask valid (`Mask::check`) of at most 4 dimensions, all of one W, H, T
+    /// and spp; every part reading a mask of the list, 1 to that mask's
+    /// dimensions, with a finite shift per dimension it reads; at most
+    /// `MAX_BLOCK_PARTS` parts.
+    pub fn new(masks: Vec<Mask>, parts: Vec<SamplerPart>) -> Result<Self> {
+        let plan = Self { masks, parts };
+        plan.check()?;
+        Ok(plan)
+    }
+
     /// One mask read as one part: offset 0, no shift.
     pub fn single(mask: Mask) -> Result<Self> {
         let dims = mask.tile.dims;
         if dims > 4 {
             return Err(Error::invalid(format!("a part reads at most 4 dimensions, the mask has {dims}")));
         }
-        Ok(Self {
-            masks: vec![mask],
-            parts: vec![SamplerPart { mask: 0, dims, offset: [0; 3], shift: vec![0.0; dims] }],
-        })
+        Self::new(vec![mask], vec![SamplerPart { mask: 0, dims, offset: [0; 3], shift: vec![0.0; dims] }])
+    }
+
+    /// The masks, in the order the parts first read them.
+    pub fn masks(&self) -> &[Mask] {
+        &self.masks
+    }
+
+    /// The reads, in the order the renderer consumes them.
+    pub fn parts(&self) -> &[SamplerPart] {
+        &self.parts
     }
 
     /// A plan folder (`read`) or a mask file (`.exr`, a one-part plan).
@@ -192,6 +212,7 @@ impl SamplerPlan {
     fn check(&self) -> Result<()> {
         let first = self.masks.first().ok_or_else(|| Error::invalid("a plan without masks"))?.tile;
         for m in &self.masks {
+            m.check()?;
             let t = m.tile;
             if (t.width, t.height, t.frames, t.spp) != (first.width, first.height, first.frames, first.spp) {
                 return Err(Error::invalid("the masks of one sampler plan share W, H, T and spp"));
@@ -203,11 +224,28 @@ impl SamplerPlan {
                 )));
             }
         }
-        if self.parts.len() > MAX_PARTS {
+        if self.parts.len() > MAX_BLOCK_PARTS {
             return Err(Error::invalid(format!(
-                "{} parts, the include's block holds {MAX_PARTS} (define FSOT_MAX_PARTS and use plan_block_for)",
+                "{} parts, a plan block holds at most {MAX_BLOCK_PARTS}",
                 self.parts.len()
             )));
+        }
+        for (k, p) in self.parts.iter().enumerate() {
+            let mask = self.masks.get(p.mask).ok_or_else(|| {
+                Error::invalid(format!("part {k} reads mask {}, the plan has {}", p.mask, self.masks.len()))
+            })?;
+            if p.dims == 0 || p.dims > mask.tile.dims {
+                return Err(Error::invalid(format!(
+                    "part {k} reads {} dimensions of a mask of {}",
+                    p.dims, mask.tile.dims
+                )));
+            }
+            if p.shift.len() != p.dims || !p.shift.iter().all(|s| s.is_finite()) {
+                return Err(Error::invalid(format!(
+                    "part {k} needs a finite shift per dimension it reads ({}), got {:?}",
+                    p.dims, p.shift
+                )));
+            }
         }
         Ok(())
     }
@@ -229,10 +267,23 @@ impl SamplerPlan {
         self.masks.iter().map(|m| m.tile.dims).max().unwrap_or(1)
     }
 
-    /// The plan block for the include with `FSOT_MAX_PARTS` = `capacity`.
+    /// The plan block for the include with `FSOT_MAX_PARTS` = `capacity`, at
+    /// most `MAX_BLOCK_PARTS`.
     pub fn plan_block_for(&self, capacity: usize) -> Result<Vec<u8>> {
+        if capacity > MAX_BLOCK_PARTS {
+            return Err(Error::invalid(format!(
+                "a plan block of {capacity} parts; at most {MAX_BLOCK_PARTS} (64 KiB)"
+            )));
+        }
         if self.parts.len() > capacity {
-            return Err(Error::invalid(format!("{} parts, the block holds {capacity}", self.parts.len())));
+            let hint = match capacity == MAX_PARTS {
+                true => " (define FSOT_MAX_PARTS and use plan_block_for)",
+                false => "",
+            };
+            return Err(Error::invalid(format!(
+                "{} parts, the block holds {capacity}{hint}",
+                self.parts.len()
+            )));
         }
         let head = PlanHead { tile: self.tile(), count: [self.parts.len() as u32, 0, 0, 0] };
         let mut out = bytemuck::bytes_of(&head).to_vec();
@@ -290,9 +341,10 @@ impl SamplerPlan {
         let f = frame.wrapping_add(p.offset[2]);
         let turn = f / t;
         let m = &self.masks[p.mask];
+        // 32-bit unsigned arithmetic, as the include's.
         let texel = m.sample(
-            ((x + p.offset[0]) % w) as usize,
-            ((y + p.offset[1]) % h) as usize,
+            (x.wrapping_add(p.offset[0]) % w) as usize,
+            (y.wrapping_add(p.offset[1]) % h) as usize,
             (f % t) as usize,
             (sample % spp) as usize,
         );

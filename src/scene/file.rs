@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! [display]
-//! fps = 60            # frame rate, for the perceptual filter
+//! fps = 60            # frame rate, 8 to 1000, for the perceptual filter
 //! taa_alpha = 0.1     # TAA blend weight of the current frame; absent: no TAA
 //! name = "standard_fhd"  # the display the frames are seen on (default), or:
 //! # ppd = 60          #   its pixels per degree, or:
@@ -36,14 +36,14 @@ use std::path::Path;
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::core::kernel::Spatial;
+use crate::core::kernel::{Spatial, FPS_RANGE};
 use crate::core::tile::{Tile, MAX_DIMS, MAX_SPP};
 use crate::error::{Error, Result};
 
 /// How the renderer's frames are shown and seen.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Display {
-    /// Frame rate in frames per second, in (0, 1000] [default: 60].
+    /// Frame rate in frames per second, 8 to 1000 [default: 60].
     pub fps: f64,
     /// TAA's blend weight of the current frame; None: no TAA.
     pub taa_alpha: Option<f64>,
@@ -199,6 +199,54 @@ impl Scene {
         };
         Ok(Self { name: name.to_string(), display, size, reading, budget, groups })
     }
+
+    /// An error unless `parse` would accept every value: for a scene whose
+    /// public fields were set by hand. `Plan::new` checks its scene.
+    pub fn check(&self) -> Result<()> {
+        let d = &self.display;
+        if !FPS_RANGE.contains(&d.fps) {
+            return Err(Error::invalid(format!("fps must be in [8, 1000], got {}", d.fps)));
+        }
+        if let Some(a) = d.taa_alpha.filter(|a| !(*a > 0.0 && *a <= 1.0)) {
+            return Err(Error::invalid(format!("taa_alpha must be in (0, 1], got {a}")));
+        }
+        match d.spatial {
+            Spatial::Gaussian { sigma } if !SCENE_SIGMA_RANGE.contains(&sigma) => {
+                return Err(Error::invalid(format!("sigma must be in [0.01, 8] pixels, got {sigma}")))
+            }
+            Spatial::Gaussian { .. } => {}
+            Spatial::Display { ppd } => {
+                crate::core::display::check_ppd(ppd)?;
+            }
+        }
+        if let Some((w, h, t)) = self.size {
+            Tile::new(w, h, t, 1, 1)?;
+        }
+        if let Some(b) = self.budget {
+            let most = crate::optimize::settings::MAX_BUDGET_SECONDS;
+            if !(b.is_finite() && b > 0.0 && b <= most) {
+                return Err(Error::invalid(format!("budget must be above 0 and at most {most} seconds, got {b}")));
+            }
+        }
+        if self.groups.is_empty() {
+            return Err(Error::invalid("no group: a scene needs at least one sampling decision"));
+        }
+        for (k, g) in self.groups.iter().enumerate() {
+            if !valid_group_name(&g.name) {
+                return Err(Error::invalid(format!("group name {:?} must be non-empty [a-z0-9_]", g.name)));
+            }
+            if self.groups[..k].iter().any(|o| o.name == g.name) {
+                return Err(Error::invalid(format!("a second group named {:?}", g.name)));
+            }
+            if !(1..=MAX_DIMS).contains(&g.dims) {
+                return Err(Error::invalid(format!("group {}: dims must be 1 to {MAX_DIMS}, got {}", g.name, g.dims)));
+            }
+            if !(1..=MAX_SPP).contains(&g.spp) {
+                return Err(Error::invalid(format!("group {}: spp must be 1 to {MAX_SPP}, got {}", g.name, g.spp)));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// `budget`: a time as text (`"10s"`, `"500ms"`, `"2m"`) or a number of seconds.
@@ -217,8 +265,8 @@ fn check_display(
     at: &impl Fn(Range<usize>, String) -> String,
 ) -> std::result::Result<Display, String> {
     let fps = match &d.fps {
-        Some(f) if !(f.get_ref().is_finite() && *f.get_ref() > 0.0 && *f.get_ref() <= 1000.0) => {
-            return Err(at(f.span(), format!("fps must be in (0, 1000], got {}", f.get_ref())))
+        Some(f) if !FPS_RANGE.contains(f.get_ref()) => {
+            return Err(at(f.span(), format!("fps must be in [8, 1000], got {}", f.get_ref())))
         }
         Some(f) => *f.get_ref(),
         None => 60.0,
@@ -269,7 +317,7 @@ fn viewing(
     };
     if let Some(s) = &d.sigma {
         let sigma = *s.get_ref();
-        if !(0.01..=8.0).contains(&sigma) {
+        if !SCENE_SIGMA_RANGE.contains(&sigma) {
             return Err(at(s.span(), format!("sigma must be in [0.01, 8] pixels, got {sigma}")));
         }
         return Ok((Spatial::Gaussian { sigma }, format!("the eye as a Gaussian of sigma {sigma} pixels")));
@@ -321,9 +369,7 @@ fn check_group(
     at: &impl Fn(Range<usize>, String) -> String,
 ) -> std::result::Result<Group, String> {
     let name = g.name.get_ref();
-    let valid =
-        !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
-    if !valid {
+    if !valid_group_name(name) {
         return Err(at(g.name.span(), format!("group name {name:?} must be non-empty [a-z0-9_]")));
     }
     let dims = *g.dims.get_ref();
@@ -345,6 +391,14 @@ fn check_group(
         share: g.share.unwrap_or(true),
     })
 }
+
+/// A group's name: non-empty [a-z0-9_] (it names the group's mask files).
+fn valid_group_name(name: &str) -> bool {
+    !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+/// A scene's eye as a Gaussian: sigma in pixels.
+const SCENE_SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=8.0;
 
 /// The 1-based line of a byte offset.
 fn line_of(text: &str, offset: usize) -> usize {

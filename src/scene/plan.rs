@@ -296,6 +296,18 @@ impl CostModel {
         Self { seconds_per_point: 0.0, backend: "not measured".into() }
     }
 
+    /// An error unless the cost per point is finite and not negative: for a
+    /// model whose public fields were set by hand. `Plan::new` checks its model.
+    pub fn check(&self) -> Result<()> {
+        match self.seconds_per_point.is_finite() && self.seconds_per_point >= 0.0 {
+            true => Ok(()),
+            false => Err(Error::invalid(format!(
+                "a cost model's seconds per point must be finite and not negative, got {}",
+                self.seconds_per_point
+            ))),
+        }
+    }
+
     /// Estimated seconds per iteration on `tile`.
     pub fn seconds_per_iteration(&self, tile: &Tile) -> f64 {
         let d = DIMS_FACTOR[tile.dims.clamp(1, 8) - 1];
@@ -362,6 +374,8 @@ pub fn share_shift(k: u32, dims: usize) -> Vec<f32> {
 impl Plan {
     /// Plans a scene with the cost model `cost`.
     pub fn new(scene: &Scene, cost: &CostModel) -> Result<Self> {
+        scene.check()?;
+        cost.check()?;
         let (kernel, kernel_reason) = kernel_for(&scene.display)?;
         let (reading, reading_reason) = reading_for(scene);
         let ((w, h, t), tile_reason) = tile_size(scene);
