@@ -262,6 +262,39 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
 }
 
 #[test]
+fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n";
+    let good = || Plan::new(&Scene::parse(text, "small").unwrap(), &model()).unwrap();
+    assert!(good().check().is_ok());
+    type SetByHand = fn(&mut Plan);
+    let cases: [(&str, SetByHand); 11] = [
+        ("no masks", |p| p.masks.clear()),
+        ("a mask file in another folder", |p| p.masks[0].file = "../pick.exr".into()),
+        ("a hidden mask file", |p| p.masks[0].file = ".pick.exr".into()),
+        ("a mask file that is not EXR", |p| p.masks[0].file = "pick.ktx2".into()),
+        ("two masks of one file", |p| p.masks[1].file = p.masks[0].file.clone()),
+        ("a tile 0 wide", |p| p.tile[0] = 0),
+        ("a mask of d = 9", |p| p.masks[0].dims = 9),
+        ("a kernel of NaN sigma", |p| p.masks[0].spec.spatial = Spatial::Gaussian { sigma: f64::NAN }),
+        ("a part reading no mask of the plan", |p| p.groups[0].parts[0].mask = "other.exr".into()),
+        ("a part of a NaN shift", |p| p.groups[1].parts[0].shift[1] = f32::NAN),
+        ("a NaN budget", |p| p.budget = Some(f64::NAN)),
+    ];
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
+    for (what, set) in cases {
+        let mut plan = good();
+        set(&mut plan);
+        assert!(plan.check().is_err(), "{what}: check");
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("plan");
+        let result = plan.execute(&out, &options, 50, false, &CancelFlag::new(), &mut |_| {});
+        assert!(result.is_err(), "{what}: executed");
+        assert!(!out.exists(), "{what}: the folder was made");
+    }
+}
+
+#[test]
 fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";

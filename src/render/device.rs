@@ -164,7 +164,8 @@ pub fn make_plan_into_image(
     cancel: &CancelFlag,
     on: &mut dyn FnMut(PlanEvent),
 ) -> Result<Option<SamplerPlan>> {
-    let first = plan.masks.first().ok_or_else(|| Error::invalid("the plan has no masks"))?;
+    plan.check()?;
+    let first = &plan.masks[0];
     if plan.masks.iter().any(|m| m.spp != first.spp) {
         return Err(Error::invalid("the masks of one image share their spp (one image per spp)"));
     }

@@ -53,7 +53,7 @@ use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, DEFAULT_CAP};
+use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, DEFAULT_CAP, MAX_BUDGET_SECONDS};
 use crate::scene::file::{Display, Reading, Scene};
 
 /// Tile width and height when the scene does not give them.
@@ -570,6 +570,63 @@ impl Plan {
     pub fn tile(&self, mask: &PlannedMask) -> Result<Tile> {
         Tile::new(self.tile[0], self.tile[1], self.tile[2], mask.spp, mask.dims)
     }
+
+    /// An error unless the plan is one `Plan::new` could make: for a plan
+    /// whose public fields were set by hand. At least one mask; each named
+    /// `NAME.exr`, a plain file name (no folder, not hidden), once; each of a
+    /// valid tile and kernel; every part reading a mask of the plan, within its
+    /// dimensions, with a finite shift each; a budget above 0 and at most a
+    /// day. `Plan::execute` and `make_plan_into_image` check their plan.
+    pub fn check(&self) -> Result<()> {
+        if self.masks.is_empty() {
+            return Err(Error::invalid("a plan without masks"));
+        }
+        for (k, m) in self.masks.iter().enumerate() {
+            let plain = m.file.ends_with(".exr")
+                && m.file.len() > 4
+                && !m.file.starts_with('.')
+                && !m.file.contains(['/', '\\', ':', '\0']);
+            if !plain {
+                return Err(Error::invalid(format!(
+                    "a plan's mask file must be a plain NAME.exr, got {:?}",
+                    m.file
+                )));
+            }
+            if self.masks[..k].iter().any(|o| o.file == m.file) {
+                return Err(Error::invalid(format!("a plan names the mask {} twice", m.file)));
+            }
+            self.tile(m)?;
+            m.spec.check()?;
+        }
+        for g in &self.groups {
+            for p in &g.parts {
+                let mask = self.masks.iter().find(|m| m.file == p.mask).ok_or_else(|| {
+                    Error::invalid(format!("group {} reads {}, which the plan does not make", g.name, p.mask))
+                })?;
+                if p.dims == 0 || p.dims > mask.dims || p.shift.len() != p.dims {
+                    return Err(Error::invalid(format!(
+                        "group {} reads {} dimensions of {} (d = {}) with {} shifts",
+                        g.name,
+                        p.dims,
+                        p.mask,
+                        mask.dims,
+                        p.shift.len()
+                    )));
+                }
+                if !p.shift.iter().all(|s| s.is_finite()) {
+                    return Err(Error::invalid(format!("group {}: a shift is not finite", g.name)));
+                }
+            }
+        }
+        if let Some(b) = self.budget {
+            if !(b.is_finite() && b > 0.0 && b <= MAX_BUDGET_SECONDS) {
+                return Err(Error::invalid(format!(
+                    "a plan's budget must be above 0 and at most {MAX_BUDGET_SECONDS} seconds, got {b}"
+                )));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// What running a plan tells its observer.
@@ -665,6 +722,7 @@ impl Plan {
         cancel: &CancelFlag,
         on: &mut dyn FnMut(PlanEvent),
     ) -> Result<Outcome> {
+        self.check()?;
         let origin = options.budget_from.unwrap_or_else(Instant::now);
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
