@@ -218,3 +218,23 @@ fn a_mask_reads_a_sample_only_inside_its_tile() {
         assert!(read.is_err(), "({x}, {y}, {t}, {s}) read {read:?}");
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn a_device_or_a_pipe_given_as_a_file_to_read_is_refused_before_it_is_opened() {
+    use std::path::Path;
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("pipe.exr");
+    assert!(std::process::Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    // /dev/zero never ends and a pipe with no writer never begins: either would hang.
+    for path in [Path::new("/dev/zero"), fifo.as_path(), dir.path()] {
+        let says = |e: fsot::Error| e.to_string().contains("not a regular file");
+        assert!(exr::read(path).is_err_and(says), "{}: EXR", path.display());
+        assert!(fsot::Scene::read(path).is_err_and(says), "{}: scene", path.display());
+        assert!(fsot::io::stacked_png::read(path).is_err_and(says), "{}: PNG", path.display());
+    }
+    assert!(fsot::SamplerPlan::load(Path::new("/dev/zero")).is_err(), "a plan from /dev/zero");
+    std::fs::remove_file(dir.path().join("pipe.exr")).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("plan.json")).unwrap();
+    assert!(fsot::SamplerPlan::read(dir.path()).is_err(), "a plan.json linked to /dev/zero");
+}

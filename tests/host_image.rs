@@ -315,6 +315,34 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     // The image holds the three masks, stacked, as the include reads them.
     let got = host.read_image(&image, 4);
     assert_eq!(got, sampler.texels(Format::R16G16Unorm).unwrap());
+
+    // Under the plan's budget: each mask in its share of it, one after another.
+    let budgeted = fsot::scene::plan::Plan { budget: Some(0.6), ..plan.clone() };
+    let ctx = host.fsot();
+    let began = std::time::Instant::now();
+    let mut slowest = 0.0f64;
+    let mut last = std::time::Instant::now();
+    let sampler = fsot::render::device::make_plan_into_image(
+        &ctx,
+        &budgeted,
+        &image.target,
+        &CancelFlag::new(),
+        &mut |e| {
+            if let fsot::scene::plan::PlanEvent::Run { .. } = e {
+                slowest = slowest.max(last.elapsed().as_secs_f64());
+                last = std::time::Instant::now();
+            }
+        },
+    )
+    .unwrap()
+    .expect("not cancelled");
+    let seconds = began.elapsed().as_secs_f64();
+    drop(ctx);
+    for k in 0..2 {
+        let budget = sampler.masks()[k].meta("budget_seconds");
+        assert!(budget.is_some_and(|b| b.parse::<f64>().unwrap() <= 0.6), "mask {k}: {budget:?}");
+    }
+    assert!(seconds <= 0.6 + slowest + 1.0, "{seconds} s for a budget of 0.6 s ({slowest} s a step)");
     host.free_image(image);
     host.assert_silent();
 }

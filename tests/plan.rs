@@ -8,7 +8,7 @@ use fsot::optimize::backend::BackendChoice;
 use fsot::optimize::run::{CancelFlag, Outcome, RunOptions};
 use fsot::scene::file::Scene;
 use fsot::scene::plan::{
-    kernel_for, share_offset, share_shift, tile_size, CostModel, Plan, PlanEvent, SCALAR_EYE_PPD,
+    kernel_for, share_offset, share_shift, tile_size, CostModel, Plan, PlanEvent, PlannedMask, SCALAR_EYE_PPD,
 };
 
 fn scene(display: &str, groups: &str) -> Scene {
@@ -268,8 +268,14 @@ fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
     let good = || Plan::new(&Scene::parse(text, "small").unwrap(), &model()).unwrap();
     assert!(good().check().is_ok());
     type SetByHand = fn(&mut Plan);
-    let cases: [(&str, SetByHand); 11] = [
+    let cases: [(&str, SetByHand); 14] = [
         ("no masks", |p| p.masks.clear()),
+        ("no groups", |p| p.groups.clear()),
+        ("a group that reads no mask", |p| p.groups[0].parts.clear()),
+        ("a mask no group reads", |p| {
+            let extra = PlannedMask { file: "extra.exr".into(), ..p.masks[1].clone() };
+            p.masks.push(extra)
+        }),
         ("a mask file in another folder", |p| p.masks[0].file = "../pick.exr".into()),
         ("a hidden mask file", |p| p.masks[0].file = ".pick.exr".into()),
         ("a mask file that is not EXR", |p| p.masks[0].file = "pick.ktx2".into()),
@@ -292,6 +298,10 @@ fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
         assert!(result.is_err(), "{what}: executed");
         assert!(!out.exists(), "{what}: the folder was made");
     }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("plan");
+    assert!(good().execute(&out, &options, 0, false, &CancelFlag::new(), &mut |_| {}).is_err(), "every 0");
+    assert!(!out.exists(), "every 0: the folder was made");
 }
 
 #[test]

@@ -117,6 +117,17 @@ fn a_run_refuses_settings_and_masks_built_by_hand_out_of_range_before_any_work()
         "Adam's decays at 1",
     );
     refused(tile, with(&|s| s.until = Until::Objective(f64::NAN)), None, "a NaN objective to stop at");
+    use fsot::Plateau;
+    let plateau = |p: Plateau| move |s: &mut Settings| s.until = Until::Plateau(p);
+    let endless = Plateau { window: u32::MAX, ..Plateau::DEFAULT };
+    refused(tile, with(&plateau(endless)), None, "a plateau window of 2^32 - 1");
+    let empty = Plateau { window: 0, ..Plateau::DEFAULT };
+    refused(tile, with(&plateau(empty)), None, "a plateau window of 0");
+    let infinite =
+        Plateau { window: 1, decay_below: f64::INFINITY, factor: f32::INFINITY, ..Plateau::DEFAULT };
+    refused(tile, with(&plateau(infinite)), None, "an infinite plateau factor");
+    let nan_gain = Plateau { stop_below: f64::NAN, ..Plateau::DEFAULT };
+    refused(tile, with(&plateau(nan_gain)), None, "a NaN gain");
     let mut short = Mask::white(tile, 1);
     short.samples.truncate(10);
     refused(tile, settings(3), Some(&short), "an initial mask of too few values");

@@ -74,6 +74,13 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("[display]\nsigma = nan\n{group}"), "line 2", "sigma"),
         (format!("[display]\nsigma = 1e-200\n{group}"), "line 2", "sigma must be in [0.01, 8]"),
         (format!("[tile]\nsize = \"64xx\"\n{group}"), "line 2", "size must look like"),
+        (format!("[tile]\nsize = \"0x0\"\n{group}"), "line 2", "tile width must be at least 1"),
+        (format!("[tile]\nsize = \"65536x65536x65536\"\n{group}"), "line 2", "holds more than"),
+        (
+            (0..2048).map(|k| format!("[[group]]\nname = \"g{k}\"\ndims = 1\n")).collect(),
+            "line 6142",
+            "more than 2047 groups",
+        ),
         (format!("{group}spp = 0\n"), "line 4", "spp must be 1 to 64"),
         (format!("{group}dims = 3\n"), "line 4", "duplicate key"),
         ("[[group]\nname = 1".to_string(), "line 1", ""),
@@ -102,8 +109,13 @@ fn a_scene_set_out_of_range_by_hand_is_refused_by_its_check_and_by_the_planner()
     let good = || Scene::parse(EXAMPLE, "example").unwrap();
     assert!(good().check().is_ok());
     type SetByHand = fn(&mut Scene);
-    let cases: [(&str, SetByHand); 14] = [
+    let cases: [(&str, SetByHand); 15] = [
         ("no groups", |s| s.groups.clear()),
+        ("2048 groups", |s| {
+            let g = s.groups[0].clone();
+            s.groups =
+                (0..2048).map(|k| fsot::scene::file::Group { name: format!("g{k}"), ..g.clone() }).collect()
+        }),
         ("a group named for another folder", |s| s.groups[0].name = "../pick".into()),
         ("two groups of one name", |s| s.groups[1].name = "pick".into()),
         ("d = 0", |s| s.groups[0].dims = 0),

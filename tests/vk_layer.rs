@@ -82,6 +82,14 @@ fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_
     assert_eq!(image.read_back(4, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap(), bytes);
     let err = image.fill(&bytes[4..], 4, vk::ImageLayout::GENERAL).unwrap_err();
     assert!(err.to_string().contains("holds 240 bytes, the data is 236"), "{err}");
+    // A texel size other than the format's (1-byte texels of 4-byte R16G16: the
+    // copy would read four times past the data), and an image left UNDEFINED.
+    let err = image.fill(&bytes[..5 * 3 * 4], 1, vk::ImageLayout::GENERAL).unwrap_err();
+    assert!(err.to_string().contains("4-byte texels, the copy was given 1"), "{err}");
+    let err = image.read_back(16, vk::ImageLayout::GENERAL).unwrap_err();
+    assert!(err.to_string().contains("4-byte texels, the copy was given 16"), "{err}");
+    let err = image.fill(&bytes, 4, vk::ImageLayout::UNDEFINED).unwrap_err();
+    assert!(err.to_string().contains("cannot be left in UNDEFINED"), "{err}");
     let _sampler = fsot::vk::Sampler::nearest(&ctx).unwrap();
     drop(image);
     common::assert_no_validation_messages(&ctx);
@@ -164,4 +172,16 @@ fn contexts_made_and_dropped_one_after_another_keep_working() {
         }
         common::assert_no_validation_messages(&ctx);
     }
+}
+
+#[test]
+fn the_vulkan_layers_texel_sizes_agree_with_the_ktx2_formats_own() {
+    for f in fsot::TexelFormat::ALL {
+        let vk_format = vk::Format::from_raw(f.vk_format() as i32);
+        assert_eq!(fsot::vk::texel_bytes_of(vk_format), Some(f.texel_bytes() as u32), "{}", f.name());
+    }
+    assert_eq!(fsot::vk::texel_bytes_of(vk::Format::B8G8R8A8_SRGB), Some(4));
+    assert_eq!(fsot::vk::texel_bytes_of(vk::Format::R64G64B64A64_SFLOAT), Some(32));
+    assert_eq!(fsot::vk::texel_bytes_of(vk::Format::BC1_RGB_UNORM_BLOCK), None, "a compressed block");
+    assert_eq!(fsot::vk::texel_bytes_of(vk::Format::D32_SFLOAT), None, "depth");
 }

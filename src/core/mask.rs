@@ -19,7 +19,15 @@ pub struct Mask {
 
 impl Mask {
     /// Independent uniform samples (white noise) from a seed.
+    ///
+    /// # Panics
+    ///
+    /// For a tile `Tile::check` refuses (one whose public fields were set by
+    /// hand), with its reason: such a tile may hold more values than memory.
     pub fn white(tile: Tile, seed: u64) -> Self {
+        if let Err(e) = tile.check() {
+            panic!("white noise of a tile out of range: {e}");
+        }
         let mut rng = Stream::new(derive(seed_key(seed), 0x0417e));
         let samples = (0..tile.values()).map(|_| rng.next_f32()).collect();
         Self {

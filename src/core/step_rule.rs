@@ -98,6 +98,27 @@ pub struct Plateau {
 impl Plateau {
     /// The default rule (chosen by measurement, see BENCHMARKS.md).
     pub const DEFAULT: Plateau = Plateau { window: 32, decay_below: 0.01, stop_below: 0.002, factor: 0.5 };
+
+    /// The longest window: 2^16 iterations.
+    pub const MAX_WINDOW: u32 = 1 << 16;
+
+    /// An error unless the window is 1 to `MAX_WINDOW` iterations, both gains
+    /// are in [0, 1] and the factor is in (0, 1): for a rule set by hand.
+    /// `Run::start` checks its rule.
+    pub fn check(&self) -> crate::error::Result<()> {
+        let gains = [self.decay_below, self.stop_below];
+        let ok = (1..=Self::MAX_WINDOW).contains(&self.window)
+            && gains.iter().all(|g| (0.0..=1.0).contains(g))
+            && self.factor > 0.0
+            && self.factor < 1.0;
+        match ok {
+            true => Ok(()),
+            false => Err(crate::error::Error::invalid(format!(
+                "a plateau rule needs a window of 1 to {} iterations, gains in [0, 1] and a factor in (0, 1), got {self:?}",
+                Self::MAX_WINDOW
+            ))),
+        }
+    }
 }
 
 /// Where a plateau schedule stands: enough to resume it exactly.

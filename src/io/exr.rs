@@ -143,7 +143,7 @@ pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
 /// Reads and validates a mask: parts named frame0000.. in order, one size, a
 /// complete channel layout, every value finite and in [0, 1).
 pub fn read(path: &Path) -> Result<Mask> {
-    let bytes = std::fs::read(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
+    let bytes = crate::io::read_regular(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
     decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
 }
 

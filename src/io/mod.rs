@@ -12,6 +12,25 @@ use std::path::Path;
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 
+/// The bytes of a regular file (through links); a device, a pipe or a folder is
+/// an error before it is opened: reading one would never end, or never begin.
+pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    let kind = std::fs::metadata(path)?.file_type();
+    if !kind.is_file() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a regular file (a folder, a device or a pipe)",
+        ));
+    }
+    std::fs::read(path)
+}
+
+/// `read_regular` as UTF-8 text.
+pub fn read_regular_text(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_regular(path)?)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::InvalidData, "not UTF-8 text"))
+}
+
 /// What a mask file is, from its name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MaskFile {

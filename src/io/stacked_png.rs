@@ -11,9 +11,9 @@ use crate::error::{Error, Result};
 
 pub fn read(path: &Path) -> Result<Mask> {
     let bad = |what: String| Error::invalid(format!("{}: {what}", path.display()));
-    let file = std::fs::File::open(path).map_err(|e| bad(format!("cannot read: {e}")))?;
+    let bytes = crate::io::read_regular(path).map_err(|e| bad(format!("cannot read: {e}")))?;
     let mut reader =
-        png::Decoder::new(file).read_info().map_err(|e| bad(format!("not a readable PNG: {e}")))?;
+        png::Decoder::new(std::io::Cursor::new(bytes)).read_info().map_err(|e| bad(format!("not a readable PNG: {e}")))?;
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).map_err(|e| bad(format!("not a readable PNG: {e}")))?;
     if info.bit_depth != png::BitDepth::Eight {

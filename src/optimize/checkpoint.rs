@@ -160,7 +160,7 @@ pub fn write(path: &Path, fingerprint: &str, state: &RunState) -> Result<()> {
 }
 
 pub fn read(path: &Path, fingerprint: &str, tile: &Tile) -> Result<RunState> {
-    let bytes = std::fs::read(path)
+    let bytes = crate::io::read_regular(path)
         .map_err(|e| Error::io(format!("cannot read the checkpoint {}", path.display()), e))?;
     decode(&bytes, fingerprint, tile).map_err(|why| Error::bad_file(path, format!("cannot resume: {why}")))
 }

@@ -264,6 +264,9 @@ impl Run {
         tile.check()?;
         settings.kernel.check()?;
         settings.rule.check()?;
+        if let Some(p) = settings.until.plateau() {
+            p.check()?;
+        }
         check_axis_share(settings.axis_share)?;
         if let Until::Objective(x) = settings.until {
             if !(x.is_finite() && x > 0.0) {

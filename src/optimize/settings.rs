@@ -314,7 +314,7 @@ pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Res
             return Err(Error::invalid(format!("slices per iteration must be 1 to {MAX_SLICES}, got {s}")))
         }
         Some(s) => s,
-        None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).max(16),
+        None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).clamp(16, MAX_SLICES),
     };
     Ok((slices, slices as f64 * mean_points / tile.points() as f64))
 }
@@ -358,4 +358,24 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
     }
     meta.sort();
     Mask { tile: *tile, samples, meta }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::core::kernel::{Kernel, KernelSpec};
+
+    #[test]
+    fn the_default_slice_count_is_at_most_max_slices_however_large_the_tile_and_small_the_classes() {
+        // 2^28 points under a point-like eye: 16 hits per point would be 2^32 slices.
+        let tile = Tile::new(16384, 16384, 1, 1, 1).unwrap();
+        let spec = KernelSpec::from_name("spatial", 0.01, None, 0.1, 60.0).unwrap();
+        let kernel = Kernel::new(spec, &tile);
+        let settings = Settings::new(spec, 0);
+        let (slices, _) = slices_and_hits(&tile, &kernel, &settings).unwrap();
+        assert_eq!(slices, MAX_SLICES);
+        let small = Tile::new(1, 1, 1, 1, 1).unwrap();
+        let (slices, _) = slices_and_hits(&small, &Kernel::new(spec, &small), &settings).unwrap();
+        assert_eq!(slices, 16, "at least 16");
+    }
 }

@@ -38,7 +38,7 @@ use crate::error::{Error, Result};
 use crate::io::ktx2::Format;
 use crate::optimize::backend::BackendChoice;
 use crate::optimize::run::{CancelFlag, Event, Outcome, Run, RunOptions};
-use crate::optimize::settings::Settings;
+use crate::optimize::settings::{Settings, Until};
 use crate::optimize::vulkan::VulkanOptions;
 use crate::render::sampler::SamplerPlan;
 use crate::scene::plan::{Plan, PlanEvent};
@@ -141,6 +141,7 @@ pub fn make_into_image(
     cancel: &CancelFlag,
     on: &mut dyn FnMut(Event),
 ) -> Result<Option<Mask>> {
+    tile.check()?;
     check_image(ctx, image, &tile, 1, tile.dims)?;
     let mut run = Run::start(tile, settings, None, device_options(ctx))?;
     if let Outcome::Cancelled { .. } = run.run(cancel, on)? {
@@ -152,8 +153,9 @@ pub fn make_into_image(
 }
 
 /// Makes every mask of a scene plan on the context's device (as
-/// `fsot optimize --scene` would, the plateau rule stopping each; white noise
-/// for what is not visible; the deterministic mode) and writes them, stacked,
+/// `fsot optimize --scene` would: the plateau rule stopping each, or under the
+/// plan's budget each in its share of it, one after another; white noise for
+/// what is not visible; the deterministic mode) and writes them, stacked,
 /// into the renderer's image. The image is checked before the first run.
 /// Returns the plan as the include reads it, for its block (None when `cancel`
 /// stopped a run: nothing is written then).
@@ -171,6 +173,10 @@ pub fn make_plan_into_image(
     }
     let dims = plan.masks.iter().map(|m| m.dims).max().unwrap_or(1);
     check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
+    // Under the plan's budget each run ends at the end of its share of it.
+    let origin = std::time::Instant::now();
+    let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
+    let mut ends = plan.run_ends(&optimized, origin, false)?.into_iter();
     let mut masks = Vec::with_capacity(plan.masks.len());
     for (index, m) in plan.masks.iter().enumerate() {
         let tile = plan.tile(m)?;
@@ -178,7 +184,12 @@ pub fn make_plan_into_image(
             masks.push(Mask::white(tile, m.seed));
             continue;
         }
-        let mut run = Run::start(tile, plan.settings(m), None, device_options(ctx))?;
+        let mut settings = plan.settings(m);
+        if let Some(Some(end)) = ends.next() {
+            settings.until = Until::Seconds(end);
+        }
+        let options = RunOptions { budget_from: Some(origin), ..device_options(ctx) };
+        let mut run = Run::start(tile, settings, None, options)?;
         on(PlanEvent::Start { index, file: &m.file, iteration: 0 });
         let start = std::time::Instant::now();
         if let Outcome::Cancelled { .. } =

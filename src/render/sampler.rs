@@ -126,7 +126,7 @@ impl SamplerPlan {
     /// The plan `fsot optimize --scene` wrote into `dir` (`plan.json` and its masks).
     pub fn read(dir: &Path) -> Result<Self> {
         let path = dir.join("plan.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| Error::io(path.display().to_string(), e))?;
+        let text = crate::io::read_regular_text(&path).map_err(|e| Error::io(path.display().to_string(), e))?;
         let file: PlanFile = serde_json::from_str(&text)
             .map_err(|e| Error::invalid(format!("{}: not a plan file: {e}", path.display())))?;
         let parts = file

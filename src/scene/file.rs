@@ -147,7 +147,7 @@ struct FileGroup {
 impl Scene {
     /// Reads and checks a scene file.
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path)
+        let text = crate::io::read_regular_text(path)
             .map_err(|e| Error::io(format!("cannot read the scene {}", path.display()), e))?;
         let name =
             path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
@@ -166,11 +166,21 @@ impl Scene {
             None => Display::default(),
         };
         let size = match file.tile.as_ref().and_then(|t| t.size.as_ref()) {
-            Some(s) => Some(Tile::parse_size(s.get_ref()).map_err(|e| at(s.span(), e.to_string()))?),
+            Some(s) => {
+                let (w, h, t) = Tile::parse_size(s.get_ref()).map_err(|e| at(s.span(), e.to_string()))?;
+                Tile::new(w, h, t, 1, 1).map_err(|e| at(s.span(), e.to_string()))?;
+                Some((w, h, t))
+            }
             None => None,
         };
         if file.group.is_empty() {
             return Err("no [[group]]: a scene needs at least one sampling decision".into());
+        }
+        if file.group.len() > MAX_GROUPS {
+            return Err(at(
+                file.group[MAX_GROUPS].span(),
+                format!("more than {MAX_GROUPS} groups: a renderer reads at most {MAX_GROUPS} parts"),
+            ));
         }
         let mut groups: Vec<Group> = Vec::new();
         for g in &file.group {
@@ -230,6 +240,9 @@ impl Scene {
         }
         if self.groups.is_empty() {
             return Err(Error::invalid("no group: a scene needs at least one sampling decision"));
+        }
+        if self.groups.len() > MAX_GROUPS {
+            return Err(Error::invalid(format!("{} groups, more than {MAX_GROUPS}", self.groups.len())));
         }
         for (k, g) in self.groups.iter().enumerate() {
             if !valid_group_name(&g.name) {
@@ -396,6 +409,10 @@ fn check_group(
 fn valid_group_name(name: &str) -> bool {
     !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
 }
+
+/// The most groups a scene holds: each reads at least one part of the plan
+/// block, which holds at most this many.
+pub const MAX_GROUPS: usize = crate::render::sampler::MAX_BLOCK_PARTS;
 
 /// A scene's eye as a Gaussian: sigma in pixels.
 const SCENE_SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=8.0;

@@ -574,7 +574,8 @@ impl Plan {
     /// An error unless the plan is one `Plan::new` could make: for a plan
     /// whose public fields were set by hand. At least one mask; each named
     /// `NAME.exr`, a plain file name (no folder, not hidden), once; each of a
-    /// valid tile and kernel; every part reading a mask of the plan, within its
+    /// valid tile and kernel, read by some part; at least one group, each
+    /// with parts, every part reading a mask of the plan, within its
     /// dimensions, with a finite shift each; a budget above 0 and at most a
     /// day. `Plan::execute` and `make_plan_into_image` check their plan.
     pub fn check(&self) -> Result<()> {
@@ -598,7 +599,13 @@ impl Plan {
             self.tile(m)?;
             m.spec.check()?;
         }
+        if self.groups.is_empty() {
+            return Err(Error::invalid("a plan without groups"));
+        }
         for g in &self.groups {
+            if g.parts.is_empty() {
+                return Err(Error::invalid(format!("group {} reads no mask", g.name)));
+            }
             for p in &g.parts {
                 let mask = self.masks.iter().find(|m| m.file == p.mask).ok_or_else(|| {
                     Error::invalid(format!("group {} reads {}, which the plan does not make", g.name, p.mask))
@@ -617,6 +624,10 @@ impl Plan {
                     return Err(Error::invalid(format!("group {}: a shift is not finite", g.name)));
                 }
             }
+        }
+        let read = |m: &PlannedMask| self.groups.iter().flat_map(|g| &g.parts).any(|p| p.mask == m.file);
+        if let Some(m) = self.masks.iter().find(|m| !read(m)) {
+            return Err(Error::invalid(format!("the plan makes {}, which no group reads", m.file)));
         }
         if let Some(b) = self.budget {
             if !(b.is_finite() && b > 0.0 && b <= MAX_BUDGET_SECONDS) {
@@ -723,6 +734,9 @@ impl Plan {
         on: &mut dyn FnMut(PlanEvent),
     ) -> Result<Outcome> {
         self.check()?;
+        if every == 0 {
+            return Err(Error::invalid("checkpoints every 0 iterations: give at least 1"));
+        }
         let origin = options.budget_from.unwrap_or_else(Instant::now);
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
@@ -786,7 +800,7 @@ impl Plan {
     /// Where each run of the masks `indices` ends, in seconds from `origin`,
     /// under the plan's budget: on one device every run at its end; on the CPU
     /// each at the end of its share of what is left of it. None: no budget.
-    fn run_ends(&self, indices: &[usize], origin: Instant, together: bool) -> Result<Vec<Option<f64>>> {
+    pub(crate) fn run_ends(&self, indices: &[usize], origin: Instant, together: bool) -> Result<Vec<Option<f64>>> {
         let Some(budget) = self.budget else { return Ok(vec![None; indices.len()]) };
         if together {
             return Ok(vec![Some(budget); indices.len()]);
@@ -868,6 +882,7 @@ impl Plan {
 
     /// `plan.json` with what making each mask took.
     pub fn document(&self, made: &[Made]) -> Result<String> {
+        self.check()?;
         let took = |file: &str| made.iter().find(|m| m.file == file);
         let groups = self
             .groups

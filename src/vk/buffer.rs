@@ -131,7 +131,9 @@ impl Buffer {
     /// The first `count` values of type T in the buffer (through a staging buffer
     /// made for it when the buffer is device-local).
     pub fn download<T: Pod>(&self, count: usize) -> Result<Vec<T>> {
-        let bytes = (count * std::mem::size_of::<T>()) as u64;
+        let bytes = count
+            .checked_mul(std::mem::size_of::<T>())
+            .ok_or_else(|| Error::invalid("a read past the end of a buffer"))? as u64;
         match self.location {
             Location::Readback | Location::Upload => self.read(count),
             Location::Device => {
@@ -144,7 +146,9 @@ impl Buffer {
     /// The first `count` values of a host-visible buffer, as they are now (after
     /// the submission that wrote them has completed).
     pub fn read<T: Pod>(&self, count: usize) -> Result<Vec<T>> {
-        let bytes = count * std::mem::size_of::<T>();
+        let bytes = count
+            .checked_mul(std::mem::size_of::<T>())
+            .ok_or_else(|| Error::invalid("a read past the end of a buffer"))?;
         let mapped = self
             .allocation
             .as_ref()

@@ -74,10 +74,8 @@ pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk
         return Err(Error::VulkanUnavailable("no Vulkan device with a compute queue".into()));
     }
     if let Some(want) = wanted.filter(|w| !w.is_empty()) {
-        let hit = candidates.iter().find(|c| {
-            want.parse::<usize>().map(|i| i == c.1).unwrap_or(false)
-                || c.2.to_lowercase().contains(&want.to_lowercase())
-        });
+        let hit = matching(want, candidates.iter().map(|c| (c.1, c.2.as_str())))
+            .and_then(|i| candidates.iter().find(|c| c.1 == i));
         return match hit {
             Some(c) => Ok((c.3, c.4)),
             None => Err(Error::VulkanUnavailable(format!(
@@ -88,6 +86,18 @@ pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk
     }
     candidates.sort_by_key(|c| (c.0, c.1));
     Ok((candidates[0].3, candidates[0].4))
+}
+
+/// The index of the device `want` names among (index, name) pairs: a number
+/// is an index alone, never part of a name; text, the first name holding it
+/// (any case).
+fn matching<'a>(want: &str, devices: impl Iterator<Item = (usize, &'a str)>) -> Option<usize> {
+    let mut devices = devices;
+    match want.trim().parse::<usize>() {
+        Ok(i) => devices.find(|d| d.0 == i),
+        Err(_) => devices.find(|d| d.1.to_lowercase().contains(&want.to_lowercase())),
+    }
+    .map(|d| d.0)
 }
 
 /// What the device offers.
@@ -137,5 +147,22 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         subgroup_vote: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::VOTE),
         float64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::matching;
+
+    #[test]
+    fn a_device_is_named_by_its_index_alone_or_by_part_of_its_name() {
+        let devices = [(0, "llvmpipe (LLVM 17.0.6, 256 bits)"), (1, "NVIDIA H100 80GB HBM3")];
+        let pick = |want| matching(want, devices.iter().copied());
+        assert_eq!(pick("1"), Some(1), "index 1, not the first name holding a 1");
+        assert_eq!(pick(" 0 "), Some(0));
+        assert_eq!(pick("7"), None, "a number names no device past the list");
+        assert_eq!(pick("nvidia"), Some(1));
+        assert_eq!(pick("LLVMpipe"), Some(0));
+        assert_eq!(pick("radeon"), None);
     }
 }

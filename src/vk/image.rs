@@ -230,9 +230,29 @@ fn all_layers(layers: u32) -> vk::ImageSubresourceRange {
     }
 }
 
+/// Bytes per texel of the plain colour formats (the core formats 9 to 121 of
+/// `VkFormat`: 8-, 16-, 32- and 64-bit channels, and the packed 32-bit ones);
+/// None for any other.
+pub fn texel_bytes_of(format: vk::Format) -> Option<u32> {
+    Some(match format.as_raw() {
+        9..=15 => 1,
+        16..=22 | 70..=76 => 2,
+        23..=36 => 3,
+        37..=69 | 77..=83 | 98..=100 => 4,
+        84..=90 => 6,
+        91..=97 | 101..=103 | 110..=112 => 8,
+        104..=106 => 12,
+        107..=109 | 113..=115 => 16,
+        116..=118 => 24,
+        119..=121 => 32,
+        _ => return None,
+    })
+}
+
 /// Checks a target against a copy of `bytes` bytes of `texel_bytes`-byte texels
 /// needing `usage`, on the context's device: every layer covered exactly, the
-/// usage present, the format able to take the copy with optimal tiling.
+/// usage present, the format able to take the copy with optimal tiling, the
+/// texel size the format's (for the plain colour formats).
 pub fn check_copy(
     ctx: &Context,
     target: &ImageTarget,
@@ -243,10 +263,22 @@ pub fn check_copy(
     if target.image == vk::Image::null() {
         return Err(Error::invalid("the image handle is null"));
     }
+    if [vk::ImageLayout::UNDEFINED, vk::ImageLayout::PREINITIALIZED].contains(&target.layout_after) {
+        return Err(Error::invalid(format!(
+            "an image cannot be left in {:?}: give the layout it is read in (layout_after)",
+            target.layout_after
+        )));
+    }
     if !target.usage.contains(usage) {
         return Err(Error::invalid(format!(
             "the image's usage {:?} lacks {usage:?}, which this copy needs",
             target.usage
+        )));
+    }
+    if let Some(real) = texel_bytes_of(target.format).filter(|b| *b != texel_bytes) {
+        return Err(Error::invalid(format!(
+            "{:?} has {real}-byte texels, the copy was given {texel_bytes}",
+            target.format
         )));
     }
     let needed = target.width as u64 * target.height as u64 * target.layers as u64 * texel_bytes as u64;

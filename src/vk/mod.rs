@@ -46,7 +46,7 @@ pub use commands::Recording;
 pub use context::{Context, ContextOptions, ExternalDevice};
 pub use device::DeviceInfo;
 pub use error::{Error, Result};
-pub use image::{Image, ImageDesc, ImageTarget, Sampler};
+pub use image::{texel_bytes_of, Image, ImageDesc, ImageTarget, Sampler};
 internal!(use pipeline::{ComputeDesc, ComputePipeline});
 pub use requirements::{missing, requirements, Requirement, API_VERSION};
 internal!(use sort::SortPath);
