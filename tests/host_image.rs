@@ -198,6 +198,15 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
 #[test]
 fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work() {
     let host = Host::new(true);
+    // A queue the device does not have: refused before it is asked for.
+    for (family, index, says) in
+        [(99, 0, "queue family 99 of a device with"), (0, 99, "queue 99 of a family of")]
+    {
+        let external =
+            fsot::vk::ExternalDevice { queue_family: family, queue_index: index, ..host.external() };
+        let err = fsot::vk::Context::wrap(external).err().expect("a queue the device lacks was taken");
+        assert!(err.to_string().contains(says), "{err}");
+    }
     let ctx = host.fsot();
     let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
     let mask = Mask::white(tile, 3);

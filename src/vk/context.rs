@@ -135,7 +135,31 @@ impl Context {
     /// Works on a device that a host application made (see `ExternalDevice`); fsot
     /// allocates its own memory and command pool on it and submits to the given
     /// queue under the queue lock.
+    ///
+    /// The queue family must be one of the physical device's, with compute, and
+    /// the queue's index within its queue count: an error otherwise, before the
+    /// queue is asked for.
     pub fn wrap(external: ExternalDevice) -> Result<Self> {
+        // SAFETY: a plain query on the host's live instance.
+        let families = unsafe {
+            external.instance.get_physical_device_queue_family_properties(external.physical_device)
+        };
+        let family = families.get(external.queue_family as usize).ok_or_else(|| {
+            Error::invalid(format!(
+                "queue family {} of a device with {}",
+                external.queue_family,
+                families.len()
+            ))
+        })?;
+        if !family.queue_flags.contains(vk::QueueFlags::COMPUTE) {
+            return Err(Error::invalid(format!("queue family {} has no compute", external.queue_family)));
+        }
+        if external.queue_index >= family.queue_count {
+            return Err(Error::invalid(format!(
+                "queue {} of a family of {}",
+                external.queue_index, family.queue_count
+            )));
+        }
         let mut info = device::info(&external.instance, external.physical_device);
         info.int64_atomics &= external.int64_atomics;
         info.float_atomic_add &= external.float_atomic_add;

@@ -117,7 +117,13 @@ impl Host {
 
     /// fsot's context on the host's device, sharing its queue lock.
     pub fn fsot(&self) -> Context {
-        Context::wrap(ExternalDevice {
+        Context::wrap(self.external()).unwrap()
+    }
+
+    /// What the host hands fsot: its device, queue and queue lock.
+    #[allow(dead_code)] // not every test binary wraps by hand
+    pub fn external(&self) -> ExternalDevice {
+        ExternalDevice {
             entry: self.entry.clone(),
             instance: self.instance.clone(),
             physical_device: self.physical,
@@ -128,8 +134,7 @@ impl Host {
             float_atomic_add: false,
             float64: false,
             queue_lock: Some(self.lock.clone()),
-        })
-        .unwrap()
+        }
     }
 
     fn memory_type(&self, bits: u32, flags: vk::MemoryPropertyFlags) -> u32 {
