@@ -148,7 +148,7 @@ fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
     let tile = plan.masks()[0].tile;
     let mut image = mask_image(ctx, &tile, plan.masks().len(), name)?;
     write_plan(ctx, &plan, &image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL))?;
-    image.layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     let block = Buffer::with_data(ctx, &plan.plan_block()?, Location::Device, "plan-block")?;
     Ok(Bound { image, block, plan })
 }
@@ -190,7 +190,7 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     let mask = make_into_image(ctx, tile, settings, &target, &CancelFlag::new(), &mut report)?
         .ok_or(Error::Interrupted)?;
     eprintln!();
-    image.layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     let what = format!(
         "32x32x16 perceptual-taa, seed {}, {} iterations made on the device in {:.1} s",
         args.seed,
@@ -276,7 +276,7 @@ fn run(args: &Args) -> Result<()> {
     let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     for (set, (bound, out)) in [(&fsot, &raw[0]), (&white, &raw[1]), (&fsot, &raw[2])].into_iter().enumerate()
     {
-        scene.bind_image(set, 1, bound.image.view, sampler.raw, layout)?;
+        scene.bind_image(set, 1, bound.image.view(), sampler.raw(), layout)?;
         scene.bind(set, &[(0, out), (2, &bound.block)])?;
     }
     let resolve_spirv = compile("taa_resolve.comp")?;

@@ -369,8 +369,7 @@ fn a_host_records_the_sort_into_its_own_command_buffer() {
     let vals: Vec<u32> = (0..n).collect();
     let mut sort = fsot::vk::RadixSort::new(&ctx, n, fsot::vk::SortCount::Host).unwrap();
     sort.set_count(n).unwrap();
-    sort.keys[0].upload(&keys).unwrap();
-    sort.vals[0].upload(&vals).unwrap();
+    sort.upload_pairs(&keys, &vals).unwrap();
     host.run(|cmd| {
         // SAFETY: `cmd` is the host's, begun on the device `ctx` wraps and its
         // compute queue, recorded only here; `run` waits for the device before
@@ -378,11 +377,12 @@ fn a_host_records_the_sort_into_its_own_command_buffer() {
         let recording = unsafe { fsot::vk::Recording::new(&ctx, cmd) };
         sort.record(recording, 32, Some(n));
     });
-    let got: Vec<(u32, u32)> = sort.keys[0]
+    let got: Vec<(u32, u32)> = sort
+        .keys()
         .download::<u32>(n as usize)
         .unwrap()
         .into_iter()
-        .zip(sort.vals[0].download::<u32>(n as usize).unwrap())
+        .zip(sort.vals().download::<u32>(n as usize).unwrap())
         .collect();
     let mut expected: Vec<(u32, u32)> = keys.into_iter().zip(vals).collect();
     expected.sort_by_key(|&(k, _)| k);

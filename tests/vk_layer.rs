@@ -78,7 +78,7 @@ fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_
     // Every texel distinct, so a swapped layer, row or channel would show.
     let bytes: Vec<u8> = (0..5 * 3 * 4 * 4).map(|i| (i * 7 % 251) as u8).collect();
     image.fill(&bytes, 4, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
-    assert_eq!(image.layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+    assert_eq!(image.layout(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     assert_eq!(image.read_back(4, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap(), bytes);
     let err = image.fill(&bytes[4..], 4, vk::ImageLayout::GENERAL).unwrap_err();
     assert!(err.to_string().contains("holds 240 bytes, the data is 236"), "{err}");
@@ -184,4 +184,20 @@ fn the_vulkan_layers_texel_sizes_agree_with_the_ktx2_formats_own() {
     assert_eq!(fsot::vk::texel_bytes_of(vk::Format::R64G64B64A64_SFLOAT), Some(32));
     assert_eq!(fsot::vk::texel_bytes_of(vk::Format::BC1_RGB_UNORM_BLOCK), None, "a compressed block");
     assert_eq!(fsot::vk::texel_bytes_of(vk::Format::D32_SFLOAT), None, "depth");
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_submission_from_inside_the_recording_of_another_on_its_context_is_an_error_not_a_wait_for_ever() {
+    use fsot::vk::{Buffer, Location};
+    let ctx = common::gpu_context();
+    let mut device_local = Buffer::new(&ctx, 64, Location::Device, "inner").unwrap();
+    let mut inner = None;
+    ctx.submit(|_| inner = Some(device_local.upload(&[7u32; 4]))).unwrap();
+    let err = inner.unwrap().unwrap_err();
+    assert!(err.to_string().contains("from inside the recording"), "{err}");
+    // Outside a recording the same upload goes through, and the context works on.
+    device_local.upload(&[7u32; 4]).unwrap();
+    assert_eq!(device_local.download::<u32>(4).unwrap(), [7; 4]);
+    common::assert_no_validation_messages(&ctx);
 }

@@ -26,16 +26,28 @@ pub enum Location {
 /// A buffer and its memory, freed on drop.
 pub struct Buffer {
     ctx: Context,
-    /// The Vulkan handle.
-    pub raw: vk::Buffer,
+    pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
-    /// Its size in bytes.
-    pub size: u64,
-    /// Where its memory lies.
-    pub location: Location,
+    pub(crate) size: u64,
+    pub(crate) location: Location,
 }
 
 impl Buffer {
+    /// The Vulkan handle (fsot destroys it on drop).
+    pub fn raw(&self) -> vk::Buffer {
+        self.raw
+    }
+
+    /// Its size in bytes.
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// Where its memory lies.
+    pub fn location(&self) -> Location {
+        self.location
+    }
+
     /// A storage buffer (also a uniform buffer, a uniform texel buffer through a
     /// `TexelView`, a copy source and destination, and indirect arguments) of
     /// `size` bytes. Device-local buffers larger than one binding

@@ -98,13 +98,48 @@ impl<'a> Recording<'a> {
     }
 }
 
+std::thread_local! {
+    /// The contexts (their shared state's address) this thread is recording a
+    /// submission for.
+    static RECORDING: std::cell::RefCell<Vec<usize>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Marks this thread as recording for a context until dropped.
+struct RecordingMark(usize);
+
+impl RecordingMark {
+    fn enter(key: usize) -> Result<Self> {
+        RECORDING.with(|r| {
+            let mut r = r.borrow_mut();
+            if r.contains(&key) {
+                return Err(Error::invalid(
+                    "a submission on a context from inside the recording of another on it \
+                     (an upload, download or sort inside `submit`'s closure): record into the \
+                     closure's command buffer instead",
+                ));
+            }
+            r.push(key);
+            Ok(RecordingMark(key))
+        })
+    }
+}
+
+impl Drop for RecordingMark {
+    fn drop(&mut self) {
+        RECORDING.with(|r| r.borrow_mut().retain(|k| *k != self.0));
+    }
+}
+
 impl Context {
     /// Records commands with `record` into the context's command buffer, submits
     /// them and waits until the device has run them. Holds the context's command
-    /// lock throughout and its queue lock around the submission.
+    /// lock throughout and its queue lock around the submission. A submission
+    /// on the same context from inside `record` (through an upload, a download
+    /// or a sort) is an error, where it would wait for ever on the lock.
     pub fn submit(&self, record: impl FnOnce(Recording<'_>)) -> Result<()> {
         let s = &self.shared;
         let device = &s.device;
+        let _mark = RecordingMark::enter(std::sync::Arc::as_ptr(s) as usize)?;
         let commands = s.commands.lock().map_err(|_| Error::invalid("the command lock is poisoned"))?;
         let cmd = commands.cmd;
         // SAFETY: the previous submission of this pool was waited for (below), so

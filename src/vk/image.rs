@@ -74,18 +74,41 @@ pub struct ImageDesc {
 /// `layout` tracks the layout fsot's own calls leave it in.
 pub struct Image {
     ctx: Context,
-    /// The Vulkan handle.
-    pub raw: vk::Image,
-    /// A 2-D array view of every layer.
-    pub view: vk::ImageView,
+    pub(crate) raw: vk::Image,
+    pub(crate) view: vk::ImageView,
     allocation: Option<Allocation>,
-    /// What it was made as.
-    pub desc: ImageDesc,
-    /// The layout fsot's own calls left it in.
-    pub layout: vk::ImageLayout,
+    pub(crate) desc: ImageDesc,
+    pub(crate) layout: vk::ImageLayout,
 }
 
 impl Image {
+    /// The Vulkan handle (fsot destroys it on drop).
+    pub fn raw(&self) -> vk::Image {
+        self.raw
+    }
+
+    /// A 2-D array view of every layer.
+    pub fn view(&self) -> vk::ImageView {
+        self.view
+    }
+
+    /// What it was made as.
+    pub fn desc(&self) -> ImageDesc {
+        self.desc
+    }
+
+    /// The layout fsot's own calls left it in.
+    pub fn layout(&self) -> vk::ImageLayout {
+        self.layout
+    }
+
+    /// Records the layout a write through `target(after)` left it in (the
+    /// renderer's calls take a target, not the image): the next copy's barrier
+    /// moves it from there.
+    pub fn set_layout(&mut self, layout: vk::ImageLayout) {
+        self.layout = layout;
+    }
+
     /// A device-local image as `desc` says, named `name` for debuggers.
     pub fn new(ctx: &Context, desc: ImageDesc, name: &str) -> Result<Self> {
         if desc.width == 0 || desc.height == 0 || desc.layers == 0 {
@@ -192,11 +215,15 @@ impl Drop for Image {
 /// image-sampler binding, destroyed on drop.
 pub struct Sampler {
     ctx: Context,
-    /// The Vulkan handle.
-    pub raw: vk::Sampler,
+    raw: vk::Sampler,
 }
 
 impl Sampler {
+    /// The Vulkan handle (fsot destroys it on drop).
+    pub fn raw(&self) -> vk::Sampler {
+        self.raw
+    }
+
     /// Nearest filtering, repeating addresses: a mask read as a tile.
     pub fn nearest(ctx: &Context) -> Result<Self> {
         let info = vk::SamplerCreateInfo::default()

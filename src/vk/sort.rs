@@ -255,8 +255,7 @@ struct LanePasses {
 /// the count (one workgroup, a tail scan, block passes, or a run a lane on CPU
 /// implementations); the result is the same whichever.
 pub struct RadixSort {
-    /// The most pairs one sort takes.
-    pub capacity: u32,
+    pub(crate) capacity: u32,
     /// Which passes `record` uses (forced by tests and benchmarks).
     #[cfg(feature = "internals")]
     #[doc(hidden)]
@@ -268,9 +267,9 @@ pub struct RadixSort {
     /// The host-written count (`SortCount::Host`).
     host_count: Option<Buffer>,
     /// Ping-pong key and payload buffers; input and result are in index 0.
-    pub keys: [Buffer; 2],
+    pub(crate) keys: [Buffer; 2],
     /// The payloads beside `keys`, likewise.
-    pub vals: [Buffer; 2],
+    pub(crate) vals: [Buffer; 2],
     histogram: ComputePipeline,
     scan_reduce: ComputePipeline,
     scan_apply: ComputePipeline,
@@ -296,6 +295,35 @@ pub struct RadixSort {
 }
 
 impl RadixSort {
+    /// The most pairs one sort takes.
+    pub fn capacity(&self) -> u32 {
+        self.capacity
+    }
+
+    /// The sort's own key buffer: the input of `sort_pairs` and `record`
+    /// without `bind_pairs`, and where the sorted keys land.
+    pub fn keys(&self) -> &Buffer {
+        &self.keys[0]
+    }
+
+    /// The payloads beside `keys`, likewise.
+    pub fn vals(&self) -> &Buffer {
+        &self.vals[0]
+    }
+
+    /// Uploads pairs into the sort's own buffers (`keys`, `vals`) for a
+    /// `record` without `bind_pairs`: at most `capacity` of them.
+    pub fn upload_pairs(&mut self, keys: &[u32], vals: &[u32]) -> Result<()> {
+        if keys.len() != vals.len() {
+            return Err(Error::invalid(format!("{} keys but {} payloads", keys.len(), vals.len())));
+        }
+        if keys.len() > self.capacity as usize {
+            return Err(Error::invalid(format!("{} pairs, the sort takes {}", keys.len(), self.capacity)));
+        }
+        self.keys[0].upload(keys)?;
+        self.vals[0].upload(vals)
+    }
+
     /// Largest capacity: the scan's two levels cover block x block / 256 blocks,
     /// and each key buffer must fit one binding.
     pub fn max_capacity(ctx: &Context) -> u32 {
@@ -840,8 +868,7 @@ impl RadixSort {
         if n == 0 {
             return Ok((Vec::new(), Vec::new()));
         }
-        self.keys[0].upload(keys)?;
-        self.vals[0].upload(vals)?;
+        self.upload_pairs(keys, vals)?;
         self.ctx.submit(|cmd| self.record(cmd, bits, Some(n)))?;
         Ok((self.keys[0].download(n as usize)?, self.vals[0].download(n as usize)?))
     }

@@ -78,8 +78,7 @@ pub fn sort_with_device_count(
     vals: &[u32],
 ) -> (Vec<u32>, Vec<u32>) {
     count.upload(&[keys.len() as u32]).unwrap();
-    sort.keys[0].upload(keys).unwrap();
-    sort.vals[0].upload(vals).unwrap();
+    sort.upload_pairs(keys, vals).unwrap();
     ctx.submit(|cmd| sort.record(cmd, 32, None)).unwrap();
-    (sort.keys[0].download(keys.len()).unwrap(), sort.vals[0].download(keys.len()).unwrap())
+    (sort.keys().download(keys.len()).unwrap(), sort.vals().download(keys.len()).unwrap())
 }

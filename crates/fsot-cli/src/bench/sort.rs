@@ -82,8 +82,8 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
             // The restore, timed: the copy bandwidth.
             barrier(cmd);
             timer.stamp(cmd, 4 * r);
-            copy(cmd, &pristine_k, &sort.keys[0], bytes, 0);
-            copy(cmd, &pristine_v, &sort.vals[0], bytes, 0);
+            copy(cmd, &pristine_k, sort.keys(), bytes, 0);
+            copy(cmd, &pristine_v, sort.vals(), bytes, 0);
             barrier(cmd);
             timer.stamp(cmd, 4 * r + 1);
             timer.stamp(cmd, 4 * r + 2);
@@ -99,8 +99,8 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
     let stages = Timer::new(ctx, 17)?;
     ctx.submit(|cmd| {
         stages.reset(cmd);
-        copy(cmd, &pristine_k, &sort.keys[0], bytes, 0);
-        copy(cmd, &pristine_v, &sort.vals[0], bytes, 0);
+        copy(cmd, &pristine_k, sort.keys(), bytes, 0);
+        copy(cmd, &pristine_v, sort.vals(), bytes, 0);
         barrier(cmd);
         sort.record_timed(cmd, 32, Some(n), Some(&stages));
     })?;
@@ -115,7 +115,7 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
     let (passes, dispatches) = sort.passes(Some(n));
     let (block, lanes) = (sort.shape().block, sort.lanes_path());
     // Check the last run against the CPU.
-    let gpu_vals: Vec<u32> = sort.vals[0].download(n as usize)?;
+    let gpu_vals: Vec<u32> = sort.vals().download(n as usize)?;
     let input: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
     let mut pairs = Vec::new();
     let mut cpu_times = Vec::new();
