@@ -298,6 +298,12 @@ fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
         assert!(result.is_err(), "{what}: executed");
         assert!(!out.exists(), "{what}: the folder was made");
     }
+    // More parts than a plan block holds: 700 decisions of 3 dimensions read per dimension.
+    let many: String = (0..700).map(|k| format!("[[group]]\nname = \"g{k}\"\ndims = 3\n")).collect();
+    let scene =
+        Scene::parse(&format!("[tile]\nsize = \"8x8x4\"\nreading = \"scalar\"\n{many}"), "many").unwrap();
+    let err = Plan::new(&scene, &model()).unwrap_err();
+    assert!(err.to_string().contains("2100 parts"), "{err}");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("plan");
     assert!(good().execute(&out, &options, 0, false, &CancelFlag::new(), &mut |_| {}).is_err(), "every 0");

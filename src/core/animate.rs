@@ -44,8 +44,7 @@ fn step_of(steps: &[f64], block: &[f64], x: usize, y: usize, k: usize) -> f64 {
 
 /// `v` moved by `by` (at least 0) modulo 1, in f64, and kept below 1 in f32.
 fn rotated(v: f32, by: f64) -> f32 {
-    let below_one = 1.0f32 - f32::EPSILON / 2.0;
-    ((v as f64 + by).fract() as f32).min(below_one)
+    ((v as f64 + by).fract() as f32).min(crate::core::mask::BELOW_ONE)
 }
 
 /// The mask of `frames` frames whose frame t is `spatial` (one frame) with

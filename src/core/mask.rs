@@ -4,6 +4,15 @@ use crate::core::rng::{derive, seed_key, Stream};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 
+/// The largest f32 below 1.
+pub(crate) const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
+
+/// The centre of stratum `rank` of `n` in [0, 1), as an f32 kept below 1 (for
+/// n of 2^24 and more the last centres round to 1.0 in f32).
+pub(crate) fn stratum_centre(rank: usize, n: usize) -> f32 {
+    (((rank as f64 + 0.5) / n as f64) as f32).min(BELOW_ONE)
+}
+
 /// A tile's samples: `tile.spp` samples of `tile.dims` coordinates for each
 /// pixel of each frame. Saved and opened by `save` and `open`; written into a
 /// renderer's image by the `vulkan` feature's calls.
@@ -55,7 +64,7 @@ impl Mask {
         self.tile.check()?;
         if self.samples.len() != self.tile.values() {
             return Err(Error::invalid(format!(
-                "a mask of {} holds {} values, not {}",
+                "a mask of {} needs {} values, it holds {}",
                 self.tile.describe(),
                 self.tile.values(),
                 self.samples.len()
@@ -99,5 +108,19 @@ impl Mask {
             Some(entry) => entry.1 = value,
             None => self.meta.push((key.to_string(), value)),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_strata_centre_stays_below_one_where_f32_would_round_it_up() {
+        let n = 1usize << 25;
+        assert_eq!(((n as f64 - 0.5) / n as f64) as f32, 1.0, "f32 alone rounds the last centre to 1");
+        assert!(stratum_centre(n - 1, n) < 1.0);
+        assert_eq!(stratum_centre(0, 4), 0.125);
+        assert_eq!(stratum_centre(3, 4), 0.875);
     }
 }

@@ -41,6 +41,7 @@ pub fn encode(mask: &Mask) -> Result<Vec<u8>> {
 
 /// Encodes a mask of a valid tile whatever its values: how the reader's tests
 /// make files with values outside [0, 1).
+#[doc(hidden)]
 pub fn encode_unchecked(mask: &Mask) -> Result<Vec<u8>> {
     mask.tile.check()?;
     if mask.samples.len() != mask.tile.values() {

@@ -276,7 +276,7 @@ pub fn stratified_values(tile: &Tile, seed: u64, label: u32) -> Vec<f32> {
             order.swap(i, rng.below(i as u32 + 1) as usize);
         }
         for (p, &r) in order.iter().enumerate() {
-            values[p * d + k] = ((r as f64 + 0.5) / n as f64) as f32;
+            values[p * d + k] = crate::core::mask::stratum_centre(r, n);
         }
     }
     values

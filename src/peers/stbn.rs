@@ -266,8 +266,9 @@ pub fn stbn_mask_with(
     let mut report = None;
     let (samples, how) = if tile.dims == 1 {
         let ranks = void_and_cluster(&tile, sigma_xy, sigma_t, seed)?;
-        let n = ranks.len() as f64;
-        (ranks.iter().map(|&r| ((r as f64 + 0.5) / n) as f32).collect(), "void-and-cluster".to_string())
+        let n = ranks.len();
+        let values = ranks.iter().map(|&r| crate::core::mask::stratum_centre(r as usize, n)).collect();
+        (values, "void-and-cluster".to_string())
     } else {
         let (values, r) = stbn_vector(tile, sigma_xy, sigma_t, passes, seed, device, on_pass)?;
         report = Some(r);

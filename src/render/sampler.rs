@@ -17,8 +17,9 @@ use crate::io::ktx2::Format;
 
 /// Parts the include's plan block holds by default (`FSOT_MAX_PARTS`).
 pub const MAX_PARTS: usize = 16;
-/// The most parts a plan block holds: 32 + 32 x this bytes is 64 KiB, the
-/// largest uniform block a device is likely to bind.
+/// The most parts a plan block holds: 32 + 32 x this bytes is 64 KiB. Vulkan
+/// guarantees uniform blocks of 16 KiB (511 parts); a larger block needs the
+/// device's `maxUniformBufferRange`.
 pub const MAX_BLOCK_PARTS: usize = 2047;
 
 /// Roberts' R4 sequence in 0.32 fixed point (`FSOT_R4` in the include).
@@ -326,7 +327,8 @@ impl SamplerPlan {
 
     /// The include's `fsot_get` for `part` at pixel (x, y), frame and sample,
     /// from texels as `format` stores them; past the last part, None (the
-    /// include's hash fallback).
+    /// include's hash fallback). The include reads parts below its
+    /// `FSOT_MAX_PARTS` (16 by default) and takes the fallback past them.
     pub fn value(
         &self,
         part: usize,

@@ -54,6 +54,7 @@ use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, DEFAULT_CAP, MAX_BUDGET_SECONDS};
+use crate::render::sampler::MAX_BLOCK_PARTS;
 use crate::scene::file::{Display, Reading, Scene};
 
 /// Tile width and height when the scene does not give them.
@@ -536,7 +537,7 @@ impl Plan {
                 cost.seconds_per_point
             ),
         };
-        Ok(Self {
+        let plan = Self {
             scene: scene.name.clone(),
             tile: [w, h, t],
             tile_reason,
@@ -553,7 +554,9 @@ impl Plan {
             estimated_seconds,
             cost_model,
             budget: scene.budget,
-        })
+        };
+        plan.check()?;
+        Ok(plan)
     }
 
     /// The settings of an optimized mask of the plan (under a budget its run
@@ -575,9 +578,10 @@ impl Plan {
     /// whose public fields were set by hand. At least one mask; each named
     /// `NAME.exr`, a plain file name (no folder, not hidden), once; each of a
     /// valid tile and kernel, read by some part; at least one group, each
-    /// with parts, every part reading a mask of the plan, within its
-    /// dimensions, with a finite shift each; a budget above 0 and at most a
-    /// day. `Plan::execute` and `make_plan_into_image` check their plan.
+    /// with parts, at most `MAX_BLOCK_PARTS` parts in all, every part reading
+    /// a mask of the plan, within its dimensions, with a finite shift each; a
+    /// budget above 0 and at most a day. `Plan::new` checks the plan it makes,
+    /// `Plan::execute` and `make_plan_into_image` the plan they are given.
     pub fn check(&self) -> Result<()> {
         if self.masks.is_empty() {
             return Err(Error::invalid("a plan without masks"));
@@ -601,6 +605,12 @@ impl Plan {
         }
         if self.groups.is_empty() {
             return Err(Error::invalid("a plan without groups"));
+        }
+        let parts: usize = self.groups.iter().map(|g| g.parts.len()).sum();
+        if parts > MAX_BLOCK_PARTS {
+            return Err(Error::invalid(format!(
+                "{parts} parts (a part per mask each group reads), more than a plan block holds ({MAX_BLOCK_PARTS})"
+            )));
         }
         for g in &self.groups {
             if g.parts.is_empty() {

@@ -108,8 +108,10 @@ std::thread_local! {
 struct RecordingMark(usize);
 
 impl RecordingMark {
-    fn enter(key: usize) -> Result<Self> {
-        RECORDING.with(|r| {
+    /// None where the thread's locals are already gone (a submission from a
+    /// thread-local's destructor): such a submission goes unmarked.
+    fn enter(key: usize) -> Result<Option<Self>> {
+        let entered = RECORDING.try_with(|r| {
             let mut r = r.borrow_mut();
             if r.contains(&key) {
                 return Err(Error::invalid(
@@ -120,13 +122,14 @@ impl RecordingMark {
             }
             r.push(key);
             Ok(RecordingMark(key))
-        })
+        });
+        entered.map_or(Ok(None), |e| e.map(Some))
     }
 }
 
 impl Drop for RecordingMark {
     fn drop(&mut self) {
-        RECORDING.with(|r| r.borrow_mut().retain(|k| *k != self.0));
+        let _ = RECORDING.try_with(|r| r.borrow_mut().retain(|k| *k != self.0)); // gone: nothing to unmark
     }
 }
 

@@ -89,15 +89,13 @@ pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk
 }
 
 /// The index of the device `want` names among (index, name) pairs: a number
-/// is an index alone, never part of a name; text, the first name holding it
-/// (any case).
-fn matching<'a>(want: &str, devices: impl Iterator<Item = (usize, &'a str)>) -> Option<usize> {
+/// that is a device's index names that device alone; anything else, the first
+/// name holding it (any case; "3090" names an RTX 3090).
+fn matching<'a>(want: &str, devices: impl Iterator<Item = (usize, &'a str)> + Clone) -> Option<usize> {
+    let want = want.trim();
+    let by_index = want.parse::<usize>().ok().and_then(|i| devices.clone().find(|d| d.0 == i));
     let mut devices = devices;
-    match want.trim().parse::<usize>() {
-        Ok(i) => devices.find(|d| d.0 == i),
-        Err(_) => devices.find(|d| d.1.to_lowercase().contains(&want.to_lowercase())),
-    }
-    .map(|d| d.0)
+    by_index.or_else(|| devices.find(|d| d.1.to_lowercase().contains(&want.to_lowercase()))).map(|d| d.0)
 }
 
 /// What the device offers.
@@ -155,14 +153,16 @@ mod tests {
     use super::matching;
 
     #[test]
-    fn a_device_is_named_by_its_index_alone_or_by_part_of_its_name() {
+    fn a_device_is_named_by_its_index_first_else_by_part_of_its_name() {
         let devices = [(0, "llvmpipe (LLVM 17.0.6, 256 bits)"), (1, "NVIDIA H100 80GB HBM3")];
         let pick = |want| matching(want, devices.iter().copied());
         assert_eq!(pick("1"), Some(1), "index 1, not the first name holding a 1");
         assert_eq!(pick(" 0 "), Some(0));
-        assert_eq!(pick("7"), None, "a number names no device past the list");
+        assert_eq!(pick("80"), Some(1), "a number that is no index: part of a name");
+        assert_eq!(pick("7"), Some(0), "likewise, the first name holding it");
+        assert_eq!(pick("9"), None, "a number neither index nor in a name");
         assert_eq!(pick("nvidia"), Some(1));
-        assert_eq!(pick("LLVMpipe"), Some(0));
+        assert_eq!(pick(" LLVMpipe "), Some(0));
         assert_eq!(pick("radeon"), None);
     }
 }
