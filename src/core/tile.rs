@@ -31,13 +31,14 @@ pub struct Tile {
 }
 
 impl Tile {
-    /// Checks every parameter; the error says which one is wrong and why.
     /// An error unless `Tile::new` would make this tile: for one whose public
     /// fields were set by hand.
     pub fn check(&self) -> Result<()> {
         Tile::new(self.width, self.height, self.frames, self.spp, self.dims).map(|_| ())
     }
 
+    /// A tile of W x H pixels x T frames, `spp` samples of `dims` coordinates
+    /// each. Checks every parameter; the error says which one is wrong and why.
     pub fn new(width: usize, height: usize, frames: usize, spp: usize, dims: usize) -> Result<Self> {
         for (name, v) in [("width", width), ("height", height), ("frames", frames)] {
             if v == 0 {
