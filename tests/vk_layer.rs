@@ -90,6 +90,21 @@ fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_
     assert!(err.to_string().contains("4-byte texels, the copy was given 16"), "{err}");
     let err = image.fill(&bytes, 4, vk::ImageLayout::UNDEFINED).unwrap_err();
     assert!(err.to_string().contains("cannot be left in UNDEFINED"), "{err}");
+    // Images the device cannot make, refused before vkCreateImage: no usage a
+    // view allows, more layers than the device holds, a format it cannot store to.
+    let copy_only = fsot::vk::ImageDesc { usage: vk::ImageUsageFlags::TRANSFER_DST, ..desc };
+    let err = fsot::vk::Image::new(&ctx, copy_only, "copy-only").err().expect("a view of a copy-only image");
+    assert!(err.to_string().contains("allows no view"), "{err}");
+    let deep = fsot::vk::ImageDesc { layers: 1 << 24, ..desc };
+    let err = fsot::vk::Image::new(&ctx, deep, "deep").err().expect("2^24 layers");
+    assert!(err.to_string().contains("the device supports"), "{err}");
+    let block_storage = fsot::vk::ImageDesc {
+        format: vk::Format::BC1_RGB_UNORM_BLOCK,
+        usage: vk::ImageUsageFlags::STORAGE,
+        ..desc
+    };
+    let err = fsot::vk::Image::new(&ctx, block_storage, "bc1").err().expect("a compressed storage image");
+    assert!(err.to_string().contains("the device supports"), "{err}");
     let _sampler = fsot::vk::Sampler::nearest(&ctx).unwrap();
     drop(image);
     common::assert_no_validation_messages(&ctx);

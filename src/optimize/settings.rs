@@ -261,6 +261,11 @@ impl RunState {
         if self.plateau.is_some() != settings.until.plateau().is_some() {
             return Err(Error::invalid("the saved state does not match this run's stopping rule"));
         }
+        if let (Some(state), Some(rule)) = (self.plateau, settings.until.plateau()) {
+            if state.count >= rule.window.max(1) || !state.scale.is_finite() || state.scale <= 0.0 {
+                return Err(Error::invalid("the saved state's plateau window does not fit this run's rule"));
+            }
+        }
         if self.iteration > settings.iterations {
             return Err(Error::invalid(format!(
                 "the saved state is at iteration {} of a run of {}",
@@ -377,5 +382,23 @@ mod tests {
         let small = Tile::new(1, 1, 1, 1, 1).unwrap();
         let (slices, _) = slices_and_hits(&small, &Kernel::new(spec, &small), &settings).unwrap();
         assert_eq!(slices, 16, "at least 16");
+    }
+
+    #[test]
+    fn a_saved_plateau_window_past_the_rules_is_refused() {
+        use crate::core::step_rule::{Plateau, PlateauState};
+        let tile = Tile::new(2, 2, 1, 1, 1).unwrap();
+        let mut settings = Settings::new(KernelSpec::named("taa").unwrap(), 0);
+        settings.until = Until::Plateau(Plateau::DEFAULT);
+        let saved = |count, scale| RunState {
+            iteration: 0,
+            samples: vec![0.5; 4],
+            first: vec![0.0; 4],
+            second: vec![],
+            plateau: Some(PlateauState { count, scale, ..PlateauState::default() }),
+        };
+        assert!(saved(Plateau::DEFAULT.window - 1, 0.5).check(&tile, &settings).is_ok());
+        assert!(saved(Plateau::DEFAULT.window, 0.5).check(&tile, &settings).is_err(), "a full window");
+        assert!(saved(0, f32::NAN).check(&tile, &settings).is_err(), "a NaN step scale");
     }
 }

@@ -109,12 +109,55 @@ impl Image {
         self.layout = layout;
     }
 
-    /// A device-local image as `desc` says, named `name` for debuggers.
+    /// A device-local image as `desc` says, named `name` for debuggers. An
+    /// error, before the image is made, for a usage its view cannot have (none
+    /// of sampled, storage or an attachment) and for a format, usage, extent or
+    /// layer count the device does not support.
     pub fn new(ctx: &Context, desc: ImageDesc, name: &str) -> Result<Self> {
         if desc.width == 0 || desc.height == 0 || desc.layers == 0 {
             return Err(Error::invalid(format!(
                 "image {name}: {}x{} with {} layers",
                 desc.width, desc.height, desc.layers
+            )));
+        }
+        let viewable = vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::INPUT_ATTACHMENT;
+        if !desc.usage.intersects(viewable) {
+            return Err(Error::invalid(format!(
+                "image {name}: usage {:?} allows no view (give SAMPLED or STORAGE)",
+                desc.usage
+            )));
+        }
+        let s = &ctx.shared;
+        // SAFETY: a plain query on a live instance.
+        let supported = unsafe {
+            s.instance.get_physical_device_image_format_properties(
+                s.physical_device,
+                desc.format,
+                vk::ImageType::TYPE_2D,
+                vk::ImageTiling::OPTIMAL,
+                desc.usage,
+                vk::ImageCreateFlags::empty(),
+            )
+        };
+        let fits = supported.as_ref().is_ok_and(|p| {
+            desc.width <= p.max_extent.width
+                && desc.height <= p.max_extent.height
+                && desc.layers <= p.max_array_layers
+        });
+        if !fits {
+            let limit = match supported {
+                Ok(p) => format!(
+                    "at most {}x{} with {} layers",
+                    p.max_extent.width, p.max_extent.height, p.max_array_layers
+                ),
+                Err(e) => format!("{e:?}"),
+            };
+            return Err(Error::invalid(format!(
+                "image {name}: {:?} {}x{} with {} layers for {:?}: the device supports {limit}",
+                desc.format, desc.width, desc.height, desc.layers, desc.usage
             )));
         }
         let device = ctx.device();
