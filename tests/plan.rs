@@ -50,7 +50,7 @@ fn the_taa_history_that_matters_sets_the_frames() {
     assert_eq!(t("taa_alpha = 0.2"), (128, 128, 32));
     assert_eq!(t("taa_alpha = 1.0"), (128, 128, 2));
     assert_eq!(t("taa_alpha = 0.001"), (128, 128, 256), "2995 frames: the most planned, 256");
-    assert_eq!(t("taa_alpha = 1e-17"), (128, 128, 256), "1 - alpha rounds to 1: still the longest history");
+    assert_eq!(t("taa_alpha = 0.0001"), (128, 128, 256), "the smallest alpha: the most planned");
     assert_eq!(t("fps = 60"), (128, 128, 16), "no TAA: a quarter second of the eye's filter");
     assert_eq!(t("fps = 120"), (128, 128, 32));
     assert_eq!(t("animated = false"), (128, 128, 16));

@@ -20,6 +20,9 @@ use crate::error::{Error, Result};
 /// weight but the centre's is far below the tolerance (the kernel is a point
 /// already at 0.3), and the square of a far smaller width underflows.
 pub(crate) const SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=64.0;
+/// TAA's blend weights: below 1e-4 the history is longer than any tile (and at
+/// a subnormal alpha every temporal weight rounds to 0).
+pub(crate) const ALPHA_RANGE: std::ops::RangeInclusive<f64> = 1e-4..=1.0;
 /// The frame rates the eye's temporal response is defined for.
 pub(crate) const FPS_RANGE: std::ops::RangeInclusive<f64> = 8.0..=1000.0;
 
@@ -35,7 +38,7 @@ pub enum Temporal {
     },
     /// TAA: exponential moving average, weight alpha (1 - alpha)^k at lag k.
     Taa {
-        /// Blend weight of the current frame, in (0, 1].
+        /// Blend weight of the current frame, in [0.0001, 1].
         alpha: f64,
     },
     /// FovVideoVDP sustained + transient temporal response at `fps`.
@@ -47,7 +50,7 @@ pub enum Temporal {
     PerceptualTaa {
         /// Frame rate in frames per second, in [8, 1000].
         fps: f64,
-        /// TAA's blend weight of the current frame, in (0, 1].
+        /// TAA's blend weight of the current frame, in [0.0001, 1].
         alpha: f64,
     },
 }
@@ -160,9 +163,9 @@ impl KernelSpec {
             return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma}")));
         }
         let check_alpha = || -> Result<()> {
-            if !(alpha.is_finite() && alpha > 0.0 && alpha <= 1.0) {
+            if !ALPHA_RANGE.contains(&alpha) {
                 return Err(Error::invalid(format!(
-                    "alpha (TAA blend weight) must be in (0, 1], got {alpha}"
+                    "alpha (TAA blend weight) must be in [0.0001, 1], got {alpha}"
                 )));
             }
             Ok(())
@@ -215,7 +218,7 @@ impl KernelSpec {
                 crate::core::display::check_ppd(ppd)?;
             }
         }
-        let alpha_ok = |a: f64| a > 0.0 && a <= 1.0;
+        let alpha_ok = |a: f64| ALPHA_RANGE.contains(&a);
         let fps_ok = |f: f64| FPS_RANGE.contains(&f);
         let ok = match self.temporal {
             Temporal::Spatial => true,
@@ -226,7 +229,7 @@ impl KernelSpec {
         };
         if !ok {
             return Err(Error::invalid(format!(
-                "temporal filter {:?} out of range (sigma_t in [0.01, 64], alpha in (0, 1], fps in [8, 1000])",
+                "temporal filter {:?} out of range (sigma_t in [0.01, 64], alpha in [0.0001, 1], fps in [8, 1000])",
                 self.temporal
             )));
         }
@@ -724,6 +727,11 @@ mod tests {
         assert!(KernelSpec::from_name("box", 2.1, None, 0.1, 60.0).is_err());
         assert!(KernelSpec::from_name("taa", 2.1, None, 1.5, 60.0).is_err());
         assert!(KernelSpec::from_name("taa", 2.1, None, 0.0, 60.0).is_err());
+        assert!(KernelSpec::from_name("perceptual-taa", 2.1, None, 5e-324, 60.0).is_err(), "a subnormal alpha");
+        // The smallest alpha makes a kernel of weights summing to 1.
+        let smallest = KernelSpec::from_name("taa", 2.1, None, 1e-4, 60.0).unwrap();
+        let sum: f64 = Kernel::new(smallest, &tile(8, 8, 64)).taps.iter().map(|t| t.weight).sum();
+        assert!((sum - 1.0).abs() < 1e-12, "{sum}");
         assert!(KernelSpec::from_name("spatial", -1.0, None, 0.1, 60.0).is_err());
         assert!(KernelSpec::from_name("spatial", f64::NAN, None, 0.1, 60.0).is_err());
         assert!(KernelSpec::from_name("perceptual", 2.1, None, 0.1, 0.0).is_err());

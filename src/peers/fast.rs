@@ -99,13 +99,15 @@ impl Filter {
             Filter::Gaussian { sigma } => crate::core::kernel::SIGMA_RANGE.contains(&sigma),
             Filter::Box { n } => (1..=64).contains(&n),
             Filter::Binomial { n } => n <= 64,
-            Filter::Ema { alpha, beta } => alpha > 0.0 && alpha <= 1.0 && (0.0..1.0).contains(&beta),
+            Filter::Ema { alpha, beta } => {
+                crate::core::kernel::ALPHA_RANGE.contains(&alpha) && (0.0..1.0).contains(&beta)
+            }
         };
         if ok {
             Ok(())
         } else {
             Err(Error::invalid(format!(
-                "filter {self:?} out of range (sigma in [0.01, 64], box 1..64, binomial 0..64, alpha in (0, 1], beta in [0, 1))"
+                "filter {self:?} out of range (sigma in [0.01, 64], box 1..64, binomial 0..64, alpha in [0.0001, 1], beta in [0, 1))"
             )))
         }
     }

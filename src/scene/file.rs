@@ -3,7 +3,7 @@
 //! ```toml
 //! [display]
 //! fps = 60            # frame rate, 8 to 1000, for the perceptual filter
-//! taa_alpha = 0.1     # TAA blend weight of the current frame; absent: no TAA
+//! taa_alpha = 0.1     # TAA blend weight of the current frame, 0.0001 to 1; absent: no TAA
 //! name = "standard_fhd"  # the display the frames are seen on (default), or:
 //! # ppd = 60          #   its pixels per degree, or:
 //! # resolution = [2560, 1440]
@@ -36,7 +36,7 @@ use std::path::Path;
 use serde::Deserialize;
 use toml::Spanned;
 
-use crate::core::kernel::{Spatial, FPS_RANGE};
+use crate::core::kernel::{Spatial, ALPHA_RANGE, FPS_RANGE};
 use crate::core::tile::{Tile, MAX_DIMS, MAX_SPP};
 use crate::error::{Error, Result};
 
@@ -217,8 +217,8 @@ impl Scene {
         if !FPS_RANGE.contains(&d.fps) {
             return Err(Error::invalid(format!("fps must be in [8, 1000], got {}", d.fps)));
         }
-        if let Some(a) = d.taa_alpha.filter(|a| !(*a > 0.0 && *a <= 1.0)) {
-            return Err(Error::invalid(format!("taa_alpha must be in (0, 1], got {a}")));
+        if let Some(a) = d.taa_alpha.filter(|a| !ALPHA_RANGE.contains(a)) {
+            return Err(Error::invalid(format!("taa_alpha must be in [0.0001, 1], got {a}")));
         }
         match d.spatial {
             Spatial::Gaussian { sigma } if !SCENE_SIGMA_RANGE.contains(&sigma) => {
@@ -285,8 +285,8 @@ fn check_display(
         None => 60.0,
     };
     let taa_alpha = match &d.taa_alpha {
-        Some(a) if !(a.get_ref().is_finite() && *a.get_ref() > 0.0 && *a.get_ref() <= 1.0) => {
-            return Err(at(a.span(), format!("taa_alpha must be in (0, 1], got {}", a.get_ref())))
+        Some(a) if !ALPHA_RANGE.contains(a.get_ref()) => {
+            return Err(at(a.span(), format!("taa_alpha must be in [0.0001, 1], got {}", a.get_ref())))
         }
         Some(a) => Some(*a.get_ref()),
         None => None,

@@ -73,7 +73,7 @@ pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk
     if candidates.is_empty() {
         return Err(Error::VulkanUnavailable("no Vulkan device with a compute queue".into()));
     }
-    if let Some(want) = wanted.filter(|w| !w.is_empty()) {
+    if let Some(want) = wanted.filter(|w| !w.trim().is_empty()) {
         let hit = matching(want, candidates.iter().map(|c| (c.1, c.2.as_str())))
             .and_then(|i| candidates.iter().find(|c| c.1 == i));
         return match hit {
@@ -89,13 +89,17 @@ pub(crate) fn pick(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk
 }
 
 /// The index of the device `want` names among (index, name) pairs: a number
-/// that is a device's index names that device alone; anything else, the first
-/// name holding it (any case; "3090" names an RTX 3090).
-fn matching<'a>(want: &str, devices: impl Iterator<Item = (usize, &'a str)> + Clone) -> Option<usize> {
+/// is an index alone (a number past the list names no device, never a name
+/// holding its digits: "RTX 3090" names that card); other text, the first name
+/// holding it (any case).
+fn matching<'a>(want: &str, devices: impl Iterator<Item = (usize, &'a str)>) -> Option<usize> {
     let want = want.trim();
-    let by_index = want.parse::<usize>().ok().and_then(|i| devices.clone().find(|d| d.0 == i));
     let mut devices = devices;
-    by_index.or_else(|| devices.find(|d| d.1.to_lowercase().contains(&want.to_lowercase()))).map(|d| d.0)
+    match want.parse::<usize>() {
+        Ok(i) => devices.find(|d| d.0 == i),
+        Err(_) => devices.find(|d| d.1.to_lowercase().contains(&want.to_lowercase())),
+    }
+    .map(|d| d.0)
 }
 
 /// What the device offers.
@@ -153,14 +157,13 @@ mod tests {
     use super::matching;
 
     #[test]
-    fn a_device_is_named_by_its_index_first_else_by_part_of_its_name() {
+    fn a_device_is_named_by_its_index_alone_or_by_part_of_its_name() {
         let devices = [(0, "llvmpipe (LLVM 17.0.6, 256 bits)"), (1, "NVIDIA H100 80GB HBM3")];
         let pick = |want| matching(want, devices.iter().copied());
         assert_eq!(pick("1"), Some(1), "index 1, not the first name holding a 1");
         assert_eq!(pick(" 0 "), Some(0));
-        assert_eq!(pick("80"), Some(1), "a number that is no index: part of a name");
-        assert_eq!(pick("7"), Some(0), "likewise, the first name holding it");
-        assert_eq!(pick("9"), None, "a number neither index nor in a name");
+        assert_eq!(pick("7"), None, "a number past the list, though a name holds a 7");
+        assert_eq!(pick("H100"), Some(1), "a model number with its letters: a name");
         assert_eq!(pick("nvidia"), Some(1));
         assert_eq!(pick(" LLVMpipe "), Some(0));
         assert_eq!(pick("radeon"), None);

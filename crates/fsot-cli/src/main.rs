@@ -166,7 +166,7 @@ struct KernelBench {
     /// Input size, at most 2^28.
     #[arg(long, default_value_t = 1 << 20, allow_negative_numbers = true)]
     n: u32,
-    /// Timed runs (median reported), after two warm-up runs.
+    /// Timed runs (median reported), after two warm-up runs; at most 10000.
     #[arg(long, default_value_t = 10, allow_negative_numbers = true)]
     repeats: u32,
     /// Vulkan device: index or part of its name [default: FSOT_DEVICE, else
@@ -305,7 +305,7 @@ struct KernelArgs {
     /// Temporal sigma of the gaussian kernel, in frames [default: --sigma, else 2.1].
     #[arg(long, allow_negative_numbers = true)]
     sigma_t: Option<f64>,
-    /// TAA blend weight of the current frame, in (0, 1] [default: 0.1].
+    /// TAA blend weight of the current frame, in [0.0001, 1] [default: 0.1].
     #[arg(long, allow_negative_numbers = true)]
     alpha: Option<f64>,
     /// Frame rate for the perceptual filter [default: 60].
@@ -406,9 +406,9 @@ struct OptimizeArgs {
     #[arg(long, allow_negative_numbers = true)]
     axis_share: Option<f64>,
     /// Random seed: the same seed gives a bit-identical mask (on Vulkan with
-    /// --deterministic).
-    #[arg(long, default_value_t = 0, allow_negative_numbers = true)]
-    seed: u64,
+    /// --deterministic) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    seed: Option<u64>,
     /// Where to run.
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,

@@ -122,6 +122,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--kernel", "box"], "invalid value 'box'"),
         (&["--kernel", "taa", "--alpha", "1.5"], "alpha"),
         (&["--kernel", "taa", "--alpha", "NaN"], "alpha"),
+        (&["--alpha", "5e-324"], "alpha (TAA blend weight) must be in [0.0001, 1]"),
         (&["--sigma", "-2"], "sigma"),
         (&["--sigma", "1e-200"], "sigma must be in [0.01, 64]"),
         (&["--kernel", "gaussian", "--sigma-t", "1e-200"], "temporal sigma must be in [0.01, 64]"),
@@ -335,9 +336,33 @@ fn kernel_benchmarks_refuse_sizes_no_machine_holds_before_they_allocate() {
         let cases: &[(&[&str], &str)] = &[
             (&["--n", "0"], "--n must be 1 to 268435456"),
             (&["--n", "4294967295"], "--n must be 1 to 268435456"),
-            (&["--repeats", "0"], "--repeats at least 1"),
+            (&["--repeats", "0"], "--repeats 1 to 10000"),
+            (&["--repeats", "4294967295"], "--repeats 1 to 10000"),
         ];
         refused(dir.path(), &["bench", suite], cases);
+    }
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_made_or_a_checkpoint_named_as_an_output_leaves_the_existing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.exr"), b"what the user had").unwrap();
+    std::fs::write(dir.path().join("file"), b"a file, not a folder").unwrap();
+    let run = ["optimize", "--size", "8x8x2", "--iterations", "5", "--backend", "cpu", "--out", "m.exr"];
+    let cases: &[(&[&str], &str)] = &[
+        (&["--png", "file/slices"], "is not a folder to make it in"),
+        (&["--checkpoint", "m.exr"], "is also an output"),
+        (&["--checkpoint", "./m.exr"], "is also an output"),
+        (&["--also", "m.ktx2", "--checkpoint", "m.ktx2"], "is also an output"),
+    ];
+    for (extra, expect) in cases {
+        let mut args = run.to_vec();
+        args.extend_from_slice(extra);
+        let o = fsot(&args, dir.path());
+        let err = stderr(&o);
+        assert!(!o.status.success() && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(err.contains(expect), "{extra:?}: expected {expect:?} in {err:?}");
+        assert_eq!(std::fs::read(dir.path().join("m.exr")).unwrap(), b"what the user had", "{extra:?}");
     }
 }
 
@@ -544,6 +569,11 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
             "--scene does not take --kernel",
         ),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--png", "p"], "--scene does not take --png"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad", "--seed", "3"], "--scene does not take --seed"),
+        (
+            &["optimize", "--scene", "s.toml", "--out", "bad", "--slices", "9"],
+            "--scene does not take --slices",
+        ),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--ktx2-format", "r8_unorm"], "d = 2"),
         (&["plan", "bad.toml"], "line 4"),
     ];

@@ -11,6 +11,9 @@ use fsot_cli::bench::convergence::Point;
 /// pairs of 32-bit keys and payloads, eight times the most the benchmarks measure
 /// (2^25).
 const MAX_BENCH_N: u32 = 1 << 28;
+/// The most timed runs of a kernel benchmark (their timestamps fill one query
+/// pool).
+const MAX_REPEATS: u32 = 10_000;
 
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
     match args.suite {
@@ -25,9 +28,9 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
         Some(
             BenchSuite::Sort(KernelBench { n, repeats, .. })
             | BenchSuite::Scatter(KernelBench { n, repeats, .. }),
-        ) if !(1..=MAX_BENCH_N).contains(&n) || repeats == 0 => Err(Error::invalid(format!(
-            "--n must be 1 to {MAX_BENCH_N} and --repeats at least 1, got {n} and {repeats}"
-        ))),
+        ) if !(1..=MAX_BENCH_N).contains(&n) || !(1..=MAX_REPEATS).contains(&repeats) => Err(Error::invalid(
+            format!("--n must be 1 to {MAX_BENCH_N} and --repeats 1 to {MAX_REPEATS}, got {n} and {repeats}"),
+        )),
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
             let b = fsot_cli::bench::bench_sort(&ctx, n, repeats, SortPath::Auto)?;

@@ -51,6 +51,14 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         if dir.exists() && !dir.is_dir() {
             return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
         }
+        let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !dir.exists() && !parent.is_dir() {
+            return Err(Error::invalid(format!(
+                "--png {}: {} is not a folder to make it in",
+                dir.display(),
+                parent.display()
+            )));
+        }
     }
     if args.method != Method::Fsot {
         if args.checkpoint.is_some() || args.resume || args.axis_share.is_some() {
@@ -58,7 +66,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         }
         return make_baseline(&args, tile, spec, init.as_ref(), file_kind, out, also);
     }
-    let mut settings = Settings::new(spec, args.seed);
+    let mut settings = Settings::new(spec, args.seed.unwrap_or(0));
     settings.iterations = iterations;
     settings.until = until;
     settings.slices = args.slices;
@@ -149,13 +157,11 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     // Scored after the run, so that a time budget is the run's alone.
     let scored = scores(&tile, &[&start_samples, &mask.samples], spec, SCORE_SLICES);
     let (before, after) = (scored[0], scored[1]);
+    // The PNG slices first: a folder that cannot be made leaves --out as it was.
+    write_png(&args, &mask)?;
     file_kind.write(&mask, out)?;
     for (kind, file) in also {
         kind.write(&mask, file)?;
-    }
-    if let Some(dir) = &args.png {
-        let files = fsot::io::png::write(&mask, dir, args.png_bits)?;
-        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
     println!(
         "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
@@ -208,6 +214,12 @@ fn run_options(args: &OptimizeArgs) -> Result<RunOptions> {
         (None, false) => None,
         (Some(_), _) if args.checkpoint_every == 0 => {
             return Err(Error::invalid("--checkpoint-every must be at least 1"))
+        }
+        (Some(path), _) if std::iter::once(&args.out).chain(&args.also).any(|o| same_file(o, path)) => {
+            return Err(Error::invalid(format!(
+                "--checkpoint {} is also an output: give the run's state a file of its own",
+                path.display()
+            )))
         }
         (Some(path), resume) => {
             Some(Checkpointing { path: path.clone(), every: args.checkpoint_every, resume })
@@ -348,10 +360,11 @@ pub(crate) fn make_baseline(
     };
     let start = Instant::now();
     let bar = swap_bar(args.passes, method.swaps(&tile));
-    let made = fsot::peers::method::make(&method, tile, args.seed, init, &device, &mut |_, e| {
-        bar.inc(1);
-        bar.set_message(format!("{e:.6e}"));
-    })?;
+    let made =
+        fsot::peers::method::make(&method, tile, args.seed.unwrap_or(0), init, &device, &mut |_, e| {
+            bar.inc(1);
+            bar.set_message(format!("{e:.6e}"));
+        })?;
     bar.finish_and_clear();
     if let Some(note) = &made.note {
         eprintln!("{note}");
@@ -362,13 +375,10 @@ pub(crate) fn make_baseline(
     let mask = made.mask;
     let seconds = start.elapsed().as_secs_f64();
     let s = score(&mask, spec, SCORE_SLICES);
+    write_png(args, &mask)?;
     kind.write(&mask, out)?;
     for (kind, file) in also {
         kind.write(&mask, file)?;
-    }
-    if let Some(dir) = &args.png {
-        let files = fsot::io::png::write(&mask, dir, args.png_bits)?;
-        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
     }
     println!(
         "wrote {}: {}, method {:?}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
@@ -380,4 +390,23 @@ pub(crate) fn make_baseline(
         s.ratio()
     );
     Ok(())
+}
+
+/// The mask's PNG slices into `--png`, if given.
+fn write_png(args: &OptimizeArgs, mask: &fsot::Mask) -> Result<()> {
+    if let Some(dir) = &args.png {
+        let files = fsot::io::png::write(mask, dir, args.png_bits)?;
+        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+    }
+    Ok(())
+}
+
+/// Whether two paths name one file: the same text, or the same file name in
+/// one folder (links to folders resolved).
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    let resolved = |p: &std::path::Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        Some(std::fs::canonicalize(dir).ok()?.join(p.file_name()?))
+    };
+    a == b || resolved(a).is_some_and(|r| Some(r) == resolved(b))
 }

@@ -104,6 +104,8 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
             "--kernel, --display, --sigma, --sigma-t, --alpha or --fps (the scene's [display] sets the eye and the kernel)",
         ),
         (args.png.is_some(), "--png (a plan writes EXR, and KTX2 with --ktx2-format)"),
+        (args.seed.is_some(), "--seed (each mask's seed comes from the scene's and the file's names)"),
+        (args.slices.is_some(), "--slices (each mask draws the default slices for its tile)"),
     ];
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));
