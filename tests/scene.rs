@@ -67,6 +67,12 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("{group}[[group]]\nname = \"a\"\ndims = 1\n"), "line 5", "a second group named \"a\""),
         ("[[group]]\nname = \"Lens\"\ndims = 2\n".to_string(), "line 2", "[a-z0-9_]"),
         ("[[group]]\nname = \"\"\ndims = 2\n".to_string(), "line 2", "[a-z0-9_]"),
+        (format!("[[group]]\nname = \"{}\"\ndims = 2\n", "a".repeat(65)), "line 2", "1 to 64 of [a-z0-9_]"),
+        (
+            format!("[display]\nresolution = [2560, 1440, 3]\ndiagonal = 27.0\ndistance = 0.7\n{group}"),
+            "line 2",
+            "resolution is [width, height]",
+        ),
         (format!("[display]\ntaa_alpha = 1.5\n{group}"), "line 2", "taa_alpha must be in [0.0001, 1]"),
         (format!("[display]\ntaa_alpha = 0\n{group}"), "line 2", "taa_alpha must be in [0.0001, 1]"),
         (format!("[display]\ntaa_alpha = 5e-324\n{group}"), "line 2", "taa_alpha must be in [0.0001, 1]"),
@@ -76,6 +82,7 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("[display]\nsigma = 1e-200\n{group}"), "line 2", "sigma must be in [0.01, 8]"),
         (format!("[tile]\nsize = \"64xx\"\n{group}"), "line 2", "size must look like"),
         (format!("[tile]\nsize = \"0x0\"\n{group}"), "line 2", "tile width must be at least 1"),
+        (format!("[plan]\nbudget = \"1e-300s\"\n{group}"), "line 2", "must be at least 0.001 s"),
         (format!("[tile]\nsize = \"65536x65536x65536\"\n{group}"), "line 2", "holds more than"),
         (
             (0..2048).map(|k| format!("[[group]]\nname = \"g{k}\"\ndims = 1\n")).collect(),

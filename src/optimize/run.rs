@@ -827,6 +827,12 @@ fn saved_state(c: Option<&Checkpointing>, fingerprint: &str, tile: &Tile) -> Res
     if c.every == 0 {
         return Err(Error::invalid("checkpoints must be at least 1 iteration apart"));
     }
+    if c.path.exists() && !c.path.is_file() {
+        return Err(Error::invalid(format!(
+            "checkpoint {} is not a regular file (a folder, a device or a pipe)",
+            c.path.display()
+        )));
+    }
     let saved = match c.resume {
         true => Some(checkpoint::read(&c.path, fingerprint, tile)?),
         false if c.path.exists() => return Err(Error::CheckpointExists(c.path.clone())),

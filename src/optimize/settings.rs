@@ -133,6 +133,7 @@ pub enum Until {
 /// assert!(parse_budget("-1s").is_err());
 /// assert_eq!(parse_budget("86400"), Ok(86400.0));
 /// assert!(parse_budget("86401").is_err() && parse_budget("1441m").is_err()); // past a day
+/// assert!(parse_budget("1e-300s").is_err()); // less than a millisecond
 /// ```
 pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
     let t = text.trim();
@@ -143,9 +144,12 @@ pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
         _ => (t, 1.0),
     };
     match number.trim().parse::<f64>() {
-        Ok(x) if x.is_finite() && x > 0.0 && x * unit <= MAX_BUDGET_SECONDS => Ok(x * unit),
-        Ok(x) if x.is_finite() && x > 0.0 => {
+        Ok(x) if x.is_finite() && BUDGET_SECONDS.contains(&(x * unit)) => Ok(x * unit),
+        Ok(x) if x.is_finite() && x * unit > MAX_BUDGET_SECONDS => {
             Err(format!("must be at most {MAX_BUDGET_SECONDS} seconds (a day), got {text:?}"))
+        }
+        Ok(x) if x.is_finite() && x > 0.0 => {
+            Err(format!("must be at least {MIN_BUDGET_SECONDS} s (a millisecond), got {text:?}"))
         }
         _ => Err(format!("must be a time above zero such as 1s, 500ms or 2m, got {text:?}")),
     }
@@ -153,6 +157,10 @@ pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
 
 /// The longest time budget a run takes: a day.
 pub const MAX_BUDGET_SECONDS: f64 = 86_400.0;
+/// The shortest: a millisecond (less makes no iteration).
+pub const MIN_BUDGET_SECONDS: f64 = 1e-3;
+/// The time budgets a run takes, in seconds.
+pub const BUDGET_SECONDS: std::ops::RangeInclusive<f64> = MIN_BUDGET_SECONDS..=MAX_BUDGET_SECONDS;
 
 impl Until {
     /// The end-agnostic schedule the rule runs, if any.

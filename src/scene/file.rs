@@ -21,7 +21,7 @@
 //!                     # instead of until iterations no longer pay
 //!
 //! [[group]]           # one per sampling decision, in the order the renderer consumes them
-//! name = "pick"       # unique, [a-z0-9_]
+//! name = "pick"       # unique, 1 to 64 of [a-z0-9_]
 //! dims = 1            # 1 to 8
 //! spp = 1             # optional, default 1
 //! visible = true      # optional; false: its error is not seen directly
@@ -59,7 +59,7 @@ pub struct Display {
 /// One sampling decision of the renderer.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Group {
-    /// Unique in the scene, [a-z0-9_].
+    /// Unique in the scene, 1 to 64 of [a-z0-9_].
     pub name: String,
     /// Dimensions of the decision, 1 to `MAX_DIMS`.
     pub dims: usize,
@@ -114,7 +114,7 @@ struct FileDisplay {
     taa_alpha: Option<Spanned<f64>>,
     name: Option<Spanned<String>>,
     ppd: Option<Spanned<f64>>,
-    resolution: Option<Spanned<[u32; 2]>>,
+    resolution: Option<Spanned<Vec<u32>>>,
     diagonal: Option<Spanned<f64>>,
     distance: Option<Spanned<f64>>,
     sigma: Option<Spanned<f64>>,
@@ -232,11 +232,8 @@ impl Scene {
         if let Some((w, h, t)) = self.size {
             Tile::new(w, h, t, 1, 1)?;
         }
-        if let Some(b) = self.budget {
-            let most = crate::optimize::settings::MAX_BUDGET_SECONDS;
-            if !(b.is_finite() && b > 0.0 && b <= most) {
-                return Err(Error::invalid(format!("budget must be above 0 and at most {most} seconds, got {b}")));
-            }
+        if let Some(b) = self.budget.filter(|b| !crate::optimize::settings::BUDGET_SECONDS.contains(b)) {
+            return Err(Error::invalid(format!("budget must be a millisecond to a day, got {b} s")));
         }
         if self.groups.is_empty() {
             return Err(Error::invalid("no group: a scene needs at least one sampling decision"));
@@ -246,7 +243,7 @@ impl Scene {
         }
         for (k, g) in self.groups.iter().enumerate() {
             if !valid_group_name(&g.name) {
-                return Err(Error::invalid(format!("group name {:?} must be non-empty [a-z0-9_]", g.name)));
+                return Err(Error::invalid(format!("group name {:?} must be 1 to 64 of [a-z0-9_]", g.name)));
             }
             if self.groups[..k].iter().any(|o| o.name == g.name) {
                 return Err(Error::invalid(format!("a second group named {:?}", g.name)));
@@ -345,9 +342,11 @@ fn viewing(
     match (&d.resolution, &d.diagonal, &d.distance) {
         (None, None, None) => Ok(Display::default_viewing()),
         (Some(r), Some(g), Some(s)) => {
-            let ppd = crate::core::display::pixels_per_degree(*r.get_ref(), *g.get_ref(), *s.get_ref())
+            let &[w, h] = r.get_ref().as_slice() else {
+                return Err(at(r.span(), format!("resolution is [width, height], got {:?}", r.get_ref())));
+            };
+            let ppd = crate::core::display::pixels_per_degree([w, h], *g.get_ref(), *s.get_ref())
                 .map_err(|e| at(r.span(), e.to_string()))?;
-            let [w, h] = *r.get_ref();
             on(ppd, r.span(), format!("a {w} x {h} display of {} in at {} m", g.get_ref(), s.get_ref()))
         }
         _ => {
@@ -383,7 +382,7 @@ fn check_group(
 ) -> std::result::Result<Group, String> {
     let name = g.name.get_ref();
     if !valid_group_name(name) {
-        return Err(at(g.name.span(), format!("group name {name:?} must be non-empty [a-z0-9_]")));
+        return Err(at(g.name.span(), format!("group name {name:?} must be 1 to 64 of [a-z0-9_]")));
     }
     let dims = *g.dims.get_ref();
     if !(1..=MAX_DIMS as i64).contains(&dims) {
@@ -405,9 +404,10 @@ fn check_group(
     })
 }
 
-/// A group's name: non-empty [a-z0-9_] (it names the group's mask files).
+/// A group's name: 1 to 64 of [a-z0-9_] (it names the group's mask files).
 fn valid_group_name(name: &str) -> bool {
-    !name.is_empty() && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+    (1..=64).contains(&name.len())
+        && name.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
 }
 
 /// The most groups a scene holds: each reads at least one part of the plan

@@ -53,7 +53,7 @@ use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
-use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, DEFAULT_CAP, MAX_BUDGET_SECONDS};
+use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, BUDGET_SECONDS, DEFAULT_CAP};
 use crate::render::sampler::MAX_BLOCK_PARTS;
 use crate::scene::file::{Display, Reading, Scene};
 
@@ -580,7 +580,7 @@ impl Plan {
     /// valid tile and kernel, read by some part; at least one group, each
     /// with parts, at most `MAX_BLOCK_PARTS` parts in all, every part reading
     /// a mask of the plan, within its dimensions, with a finite shift each; a
-    /// budget above 0 and at most a day. `Plan::new` checks the plan it makes,
+    /// budget of a millisecond to a day. `Plan::new` checks the plan it makes,
     /// `Plan::execute` and `make_plan_into_image` the plan they are given.
     pub fn check(&self) -> Result<()> {
         if self.masks.is_empty() {
@@ -639,12 +639,8 @@ impl Plan {
         if let Some(m) = self.masks.iter().find(|m| !read(m)) {
             return Err(Error::invalid(format!("the plan makes {}, which no group reads", m.file)));
         }
-        if let Some(b) = self.budget {
-            if !(b.is_finite() && b > 0.0 && b <= MAX_BUDGET_SECONDS) {
-                return Err(Error::invalid(format!(
-                    "a plan's budget must be above 0 and at most {MAX_BUDGET_SECONDS} seconds, got {b}"
-                )));
-            }
+        if let Some(b) = self.budget.filter(|b| !BUDGET_SECONDS.contains(b)) {
+            return Err(Error::invalid(format!("a plan's budget must be a millisecond to a day, got {b} s")));
         }
         Ok(())
     }

@@ -148,6 +148,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--until", "objective:-1"], "--until must be"),
         (&["--budget", "soon"], "--budget must be a time"),
         (&["--budget", "0s"], "--budget must be a time"),
+        (&["--budget", "1e-300s"], "--budget must be at least 0.001 s"),
         (&["--budget", "-1"], "--budget must be a time"),
         (&["--budget", "1e9"], "at most 86400 seconds"),
         (&["--budget", "1s", "--until", "plateau"], "cannot be used with"),
@@ -354,6 +355,7 @@ fn an_output_folder_that_cannot_be_made_or_a_checkpoint_named_as_an_output_leave
         (&["--checkpoint", "m.exr"], "is also an output"),
         (&["--checkpoint", "./m.exr"], "is also an output"),
         (&["--also", "m.ktx2", "--checkpoint", "m.ktx2"], "is also an output"),
+        (&["--checkpoint", "/dev/null"], "is not a regular file"),
     ];
     for (extra, expect) in cases {
         let mut args = run.to_vec();
