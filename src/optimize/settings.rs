@@ -151,7 +151,7 @@ pub fn parse_budget(text: &str) -> std::result::Result<f64, String> {
         Ok(x) if x.is_finite() && x > 0.0 => {
             Err(format!("must be at least {MIN_BUDGET_SECONDS} s (a millisecond), got {text:?}"))
         }
-        _ => Err(format!("must be a time above zero such as 1s, 500ms or 2m, got {text:?}")),
+        _ => Err(format!("must be a time above zero in ms, s or m, such as 1s, 500ms or 2m, got {text:?}")),
     }
 }
 

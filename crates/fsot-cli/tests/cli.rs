@@ -555,6 +555,8 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         (&["optimize", "--scene", "bad.toml", "--out", "bad"], "line 4"),
         (&["optimize", "--scene", "missing.toml", "--out", "bad"], "cannot read the scene"),
         (&["optimize", "--scene", "s.toml", "--out", "bad.exr"], "names a folder"),
+        (&["optimize", "--scene", "s.toml", "--out", "bad.ktx2"], "names a folder"),
+        (&["optimize", "--scene", "s.toml", "--out", "/dev/null"], "names a folder"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--dims", "3"], "--scene does not take"),
         (&["optimize", "--scene", "s.toml", "--out", "bad", "--until", "plateau"], "--scene does not take"),
         (

@@ -110,7 +110,9 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     if let Some((_, flag)) = refused.iter().find(|(bad, _)| *bad) {
         return Err(Error::invalid(format!("--scene does not take {flag}")));
     }
-    if args.out.extension().is_some_and(|e| e == "exr") {
+    let mask_file =
+        args.out.extension().is_some_and(|e| ["exr", "ktx2", "h"].contains(&&*e.to_string_lossy()));
+    if mask_file || (args.out.exists() && !args.out.is_dir()) {
         return Err(Error::invalid(format!(
             "with --scene, --out names a folder, not {}",
             args.out.display()
