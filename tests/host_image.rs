@@ -349,7 +349,9 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     drop(ctx);
     for k in 0..2 {
         let budget = sampler.masks()[k].meta("budget_seconds");
-        assert!(budget.is_some_and(|b| b.parse::<f64>().unwrap() <= 0.6), "mask {k}: {budget:?}");
+        // Each run ends at the end of its share: the last at the budget's end (a
+        // sum of shares, so within rounding).
+        assert!(budget.is_some_and(|b| b.parse::<f64>().unwrap() <= 0.6 + 1e-9), "mask {k}: {budget:?}");
     }
     assert!(seconds <= 0.6 + slowest + 1.0, "{seconds} s for a budget of 0.6 s ({slowest} s a step)");
     host.free_image(image);
