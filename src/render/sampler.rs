@@ -100,9 +100,6 @@ impl SamplerPlan {
     /// One mask read as one part: offset 0, no shift.
     pub fn single(mask: Mask) -> Result<Self> {
         let dims = mask.tile.dims;
-        if dims > 4 {
-            return Err(Error::invalid(format!("a part reads at most 4 dimensions, the mask has {dims}")));
-        }
         Self::new(vec![mask], vec![SamplerPart { mask: 0, dims, offset: [0; 3], shift: vec![0.0; dims] }])
     }
 
