@@ -31,12 +31,12 @@ pub struct Shader {
     pub spirv: Vec<u8>,
 }
 
-/// Compiles every shader and variant of `glsl_root/family`, in file-name order.
+/// Compiles every shader and variant of `glsl_root/family`, in file-name order,
+/// on as many threads as the machine has (the bytes do not depend on it).
 /// With `debug_names`, the SPIR-V keeps OpName/OpMemberName (for reflection);
 /// fsot embeds it without. Source names are relative (`glsl/FAMILY/NAME.comp`)
 /// so the bytes do not depend on where the checkout lies.
 pub fn compile_family(glsl_root: &Path, family: &str, debug_names: bool) -> Result<Vec<Shader>, String> {
-    let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
     let dir = glsl_root.join(family);
     let mut entries: Vec<_> = fs::read_dir(&dir)
         .map_err(|e| format!("{}: {e}", dir.display()))?
@@ -44,7 +44,7 @@ pub fn compile_family(glsl_root: &Path, family: &str, debug_names: bool) -> Resu
         .collect::<Result<_, _>>()
         .map_err(|e| format!("{}: {e}", dir.display()))?;
     entries.sort();
-    let mut shaders = Vec::new();
+    let mut jobs = Vec::new();
     for path in entries {
         if path.extension().and_then(|e| e.to_str()) != Some("comp") {
             continue;
@@ -64,50 +64,91 @@ pub fn compile_family(glsl_root: &Path, family: &str, debug_names: bool) -> Resu
         }
         let source_name = format!("glsl/{family}/{stem}.comp");
         for (name, define) in variants {
-            let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
-            options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
-            options.set_target_spirv(shaderc::SpirvVersion::V1_3);
-            options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-            options.set_warnings_as_errors();
-            if debug_names {
-                options.set_generate_debug_info();
-            }
-            for m in define.iter().flat_map(|m| m.split_whitespace()) {
-                options.add_macro_definition(m, None);
-            }
-            let include_dir = dir.clone();
-            let family_name = family.to_string();
-            options.set_include_callback(move |included, _kind, _from, _depth| {
-                let path = include_dir.join(included);
-                fs::read_to_string(&path)
-                    .map(|content| shaderc::ResolvedInclude {
-                        resolved_name: format!("glsl/{family_name}/{included}"),
-                        content,
-                    })
-                    .map_err(|e| format!("cannot include {}: {e}", path.display()))
-            });
-            let artifact = compiler
-                .compile_into_spirv(
-                    &source,
-                    shaderc::ShaderKind::Compute,
-                    &source_name,
-                    "main",
-                    Some(&options),
-                )
-                .map_err(|e| format!("{source_name} ({name}) failed to compile:\n{e}"))?;
-            let what = match &define {
-                Some(m) => format!("`{source_name}` with `{m}`"),
-                None => format!("`{source_name}`"),
-            };
-            shaders.push(Shader {
-                file: format!("{}.spv", name.to_lowercase()),
-                name,
-                what,
-                spirv: artifact.as_binary_u8().to_vec(),
-            });
+            jobs.push(Job { source: source.clone(), source_name: source_name.clone(), name, define });
         }
     }
-    Ok(shaders)
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(jobs.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<Option<Result<Shader, String>>> = (0..jobs.len()).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut out = Vec::new();
+                    let compiler = match shaderc::Compiler::new() {
+                        Ok(c) => c,
+                        Err(e) => return Err(format!("shaderc: {e}")),
+                    };
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(job) = jobs.get(i) else { return Ok(out) };
+                        out.push((i, compile(&compiler, &dir, family, job, debug_names)));
+                    }
+                })
+            })
+            .collect();
+        for worker in workers {
+            for (i, shader) in worker.join().expect("a shader compiler thread panicked")? {
+                done[i] = Some(shader);
+            }
+        }
+        Ok::<(), String>(())
+    })?;
+    done.into_iter().map(|s| s.expect("every shader was compiled")).collect()
+}
+
+/// One shader or variant to compile.
+struct Job {
+    source: String,
+    source_name: String,
+    name: String,
+    define: Option<String>,
+}
+
+/// One shader or variant, by the recipe.
+fn compile(
+    compiler: &shaderc::Compiler,
+    dir: &Path,
+    family: &str,
+    job: &Job,
+    debug_names: bool,
+) -> Result<Shader, String> {
+    let Job { source, source_name, name, define } = job;
+    let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
+    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+    options.set_target_spirv(shaderc::SpirvVersion::V1_3);
+    options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    options.set_warnings_as_errors();
+    if debug_names {
+        options.set_generate_debug_info();
+    }
+    for m in define.iter().flat_map(|m| m.split_whitespace()) {
+        options.add_macro_definition(m, None);
+    }
+    let include_dir = dir.to_path_buf();
+    let family_name = family.to_string();
+    options.set_include_callback(move |included, _kind, _from, _depth| {
+        let path = include_dir.join(included);
+        fs::read_to_string(&path)
+            .map(|content| shaderc::ResolvedInclude {
+                resolved_name: format!("glsl/{family_name}/{included}"),
+                content,
+            })
+            .map_err(|e| format!("cannot include {}: {e}", path.display()))
+    });
+    let artifact = compiler
+        .compile_into_spirv(source, shaderc::ShaderKind::Compute, source_name, "main", Some(&options))
+        .map_err(|e| format!("{source_name} ({name}) failed to compile:\n{e}"))?;
+    let what = match define {
+        Some(m) => format!("`{source_name}` with `{m}`"),
+        None => format!("`{source_name}`"),
+    };
+    Ok(Shader {
+        file: format!("{}.spv", name.to_lowercase()),
+        name: name.clone(),
+        what,
+        spirv: artifact.as_binary_u8().to_vec(),
+    })
 }
 
 /// The Rust module that embeds a family: one constant per shader, read with
