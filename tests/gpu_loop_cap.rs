@@ -49,7 +49,7 @@ fn a_class_cut_short_by_the_loop_cap_fails_the_run_clearly() {
     assert!(err.is_device_failure(), "auto must be able to go on with the CPU path: {err:?}");
     // The budgeted limit (7 samples per lane at d = 8, the rest in the large-class
     // stage) never trips it, over more iterations than the failing run took.
-    run_with(&ctx, None, 40).expect("the budgeted transport stays under the cap");
+    run_with(&ctx, None, 10).expect("the budgeted transport stays under the cap");
     common::assert_no_validation_messages(&ctx);
 }
 

@@ -666,8 +666,9 @@ fn one_iteration_gives_the_cpu_displacements_in_three_four_and_eight_dimensions(
 #[test]
 fn full_runs_in_three_four_and_eight_dimensions_reach_the_cpu_objective_within_five_percent() {
     let ctx = common::gpu_context();
-    for dims in [3, 4, 8] {
-        let tile = Tile::new(16, 16, 8, 1, dims).unwrap();
+    // d = 8 on a smaller tile: lavapipe's cost per iteration grows with d.
+    for (dims, side) in [(3, 16), (4, 16), (8, 8)] {
+        let tile = Tile::new(side, side, 8, 1, dims).unwrap();
         let s = settings("perceptual-taa", 100, 7);
         let cpu = optimize(tile, s, None).unwrap();
         let mut gpu = VulkanRun::new(&ctx, tile, s, None, VulkanOptions::default()).unwrap();
@@ -675,8 +676,8 @@ fn full_runs_in_three_four_and_eight_dimensions_reach_the_cpu_objective_within_f
             gpu.step_batch(u32::MAX).unwrap();
         }
         let g = gpu.mask().unwrap();
-        let (sc, sg) = (score(&cpu, s.kernel, 8192).objective, score(&g, s.kernel, 8192).objective);
-        let white = score(&Mask::white(tile, 7), s.kernel, 8192).objective;
+        let (sc, sg) = (score(&cpu, s.kernel, 2048).objective, score(&g, s.kernel, 2048).objective);
+        let white = score(&Mask::white(tile, 7), s.kernel, 2048).objective;
         eprintln!("d = {dims}: objective cpu {sc:.4e}, vulkan {sg:.4e}, white {white:.4e}");
         assert!(sg < 0.8 * white, "d = {dims}: the run did not optimise ({sg} against white {white})");
         assert!((sg - sc).abs() / sc < 0.05, "d = {dims}: cpu {sc} vulkan {sg}");

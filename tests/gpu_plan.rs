@@ -13,7 +13,7 @@ use fsot::optimize::vulkan::{VulkanOptions, VulkanRun};
 
 fn run(ctx: &fsot::vk::Context, tile: Tile, kernel: &str, seed: u64) -> VulkanRun {
     let mut s = Settings::new(KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap(), seed);
-    s.iterations = 60;
+    s.iterations = 30;
     let options = VulkanOptions::default().deterministic(true);
     VulkanRun::new(ctx, tile, s, None, options).unwrap()
 }
@@ -34,7 +34,7 @@ fn runs_stepped_together_make_bit_for_bit_the_masks_they_make_alone() {
     let mut alone = make();
     assert!(together[2].large_capacity() > 0, "the 64 spp case must reach the large-class stage");
     // Unequal steps, as a plan's stopping rules give: runs end at different times.
-    let steps: [[u32; 3]; 3] = [[32, 20, 7], [28, 32, 32], [0, 8, 21]];
+    let steps: [[u32; 3]; 3] = [[16, 10, 4], [14, 16, 16], [0, 4, 10]];
     for counts in steps {
         let mut members: Vec<&mut VulkanRun> = together.iter_mut().collect();
         let costs_together = VulkanRun::step_together(&mut members, &counts).unwrap();

@@ -39,7 +39,7 @@ fn builds_and_runs(features: &[&str], absent: &[&str]) {
             "{name} is in the host's dependencies ({features:?}):\n{deps}"
         );
     }
-    let mut run = vec!["run", "--release", "--offline", "--quiet"];
+    let mut run = vec!["run", "--offline", "--quiet"];
     run.extend_from_slice(features);
     let said = cargo(&run, empty.path());
     assert!(said.contains("made a 16x16x4 mask, 2048 samples"), "{said}");
