@@ -20,6 +20,7 @@ use fsot::optimize::run::{optimize, CancelFlag};
 use fsot::optimize::settings::Settings;
 use fsot::render::device::{
     layers_for, make_into_image, vk_format, write_mask, write_mask_to_buffer, write_plan, write_plan_block,
+    write_plan_block_for,
 };
 use fsot::render::sampler::{SamplerPart, SamplerPlan};
 use fsot::vk::{BufferTarget, ComputeDesc, ComputePipeline};
@@ -118,6 +119,21 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     };
     write_plan_block(&ctx, &plan, &block_target).unwrap();
     assert_eq!(host.read_memory(block_memory, block_bytes as usize), plan.plan_block().unwrap());
+    // A shader that defines FSOT_MAX_PARTS 32 takes a plan of 20 parts.
+    let wide = SamplerPlan::new(
+        plan.masks().to_vec(),
+        (0..20).map(|k| SamplerPart { mask: 1, dims: 1, offset: [k, 0, 0], shift: vec![0.5] }).collect(),
+    )
+    .unwrap();
+    let err = write_plan_block(&ctx, &wide, &block_target).unwrap_err().to_string();
+    assert!(err.contains("FSOT_MAX_PARTS") && err.contains("plan_block_for"), "{err}");
+    let wide_bytes = wide.plan_block_for(32).unwrap();
+    let usage = vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+    let (wide_block, wide_memory) = host.buffer(wide_bytes.len() as u64, usage);
+    let wide_target = BufferTarget { buffer: wide_block, size: wide_bytes.len() as u64, usage, offset: 0 };
+    write_plan_block_for(&ctx, &wide, 32, &wide_target).unwrap();
+    assert_eq!(host.read_memory(wide_memory, wide_bytes.len()), wide_bytes);
+    assert_eq!(wide_bytes.len(), 32 + 32 * 32, "a head and 32 parts, each two 16-byte vectors");
 
     // Run the probe through fsot's pipeline helper on the renderer's device, with
     // the renderer's own view and sampler.

@@ -122,6 +122,18 @@ pub fn write_plan_block(ctx: &Context, plan: &SamplerPlan, target: &BufferTarget
     Ok(fill_buffer(ctx, target, &plan.plan_block()?)?)
 }
 
+/// Writes the plan block for a shader that defines `FSOT_MAX_PARTS` as
+/// `capacity` (at most `MAX_BLOCK_PARTS`; `SamplerPlan::plan_block_for`'s bytes)
+/// into the renderer's buffer at `target.offset`.
+pub fn write_plan_block_for(
+    ctx: &Context,
+    plan: &SamplerPlan,
+    capacity: usize,
+    target: &BufferTarget,
+) -> Result<()> {
+    Ok(fill_buffer(ctx, target, &plan.plan_block_for(capacity)?)?)
+}
+
 /// Writes a mask's texels in `format` (laid out as in the image: layer by
 /// layer, row by row) into the renderer's buffer at `target.offset`.
 pub fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: &BufferTarget) -> Result<()> {
