@@ -65,7 +65,9 @@
 //! use fsot::vk::{Context, ImageTarget};
 //! use fsot::{CancelFlag, KernelSpec, Settings, Tile};
 //!
-//! let ctx = Context::wrap(external)?; // the renderer's instance, device and queue
+//! // SAFETY: `external` is the renderer's live instance, device and queue, made
+//! // with the features it claims, alive until `ctx` is dropped.
+//! let ctx = unsafe { Context::wrap(external) }?;
 //! let tile = Tile::new(64, 64, 32, 1, 2)?;
 //! let target = ImageTarget {
 //!     image,

@@ -692,8 +692,10 @@ fn a_device_without_f64_takes_float_pairs_and_classes_past_the_loop_budget_get_a
     // A device without shaderFloat64 (here: the same device, wrapped as a host
     // that did not enable it) takes d >= 3 with the float32-pair targets, whose
     // one iteration agrees with the CPU path's f64 within 1e-5.
+    // SAFETY: ctx's live device, with fewer features claimed than it has; guest is dropped first.
     let guest =
-        fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
+        unsafe { fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }) }
+            .unwrap();
     let mask = Mask::white(Tile::new(8, 8, 4, 1, 3).unwrap(), 4);
     let s = settings("taa", 5, 1);
     let mut run = VulkanRun::new(&guest, mask.tile, s, Some(&mask), VulkanOptions::default()).unwrap();
@@ -723,7 +725,8 @@ fn runs_on_a_device_that_a_host_renderer_made_and_leaves_it_alive() {
     let host = common::gpu_context();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     {
-        let guest = fsot::vk::Context::wrap(host.external()).unwrap();
+        // SAFETY: the host context's live device, which outlives this block.
+        let guest = unsafe { fsot::vk::Context::wrap(host.external()) }.unwrap();
         let mut run =
             VulkanRun::new(&guest, tile, settings("taa", 20, 2), None, VulkanOptions::default()).unwrap();
         while !run.finished() {

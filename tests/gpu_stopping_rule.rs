@@ -231,7 +231,9 @@ fn the_device_pass_takes_the_host_rules_decisions_slot_by_slot() {
 fn a_device_without_f64_leaves_the_rule_to_the_host_and_ends_at_the_same_iteration() {
     let ctx = common::gpu_context();
     // The same device wrapped as a host that did not enable shaderFloat64.
-    let guest = Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
+    // SAFETY: ctx's live device, with fewer features claimed than it has; guest is dropped first.
+    let guest =
+        unsafe { Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }) }.unwrap();
     let mut run = Run::start(tile(), settings(Until::Plateau(QUICK)), None, options(&guest, false)).unwrap();
     assert!(!run.rule_on_device(), "without shaderFloat64 the host evaluates the rule");
     run.run(&CancelFlag::new(), &mut |_| {}).unwrap();

@@ -220,8 +220,10 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
         assert_eq!(on_gpu.backend().kind(), BackendKind::Vulkan, "d = {dims}: a handed context is taken");
     }
     // A device without shaderFloat64 takes d >= 3 too (the float32-pair targets).
+    // SAFETY: ctx's live device, with fewer features claimed than it has; guest is dropped first.
     let guest =
-        fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }).unwrap();
+        unsafe { fsot::vk::Context::wrap(fsot::vk::ExternalDevice { float64: false, ..ctx.external() }) }
+            .unwrap();
     let handed = RunOptions::default().context(Some(guest.clone()));
     let taken = Run::start(tile, settings(5), None, handed).unwrap();
     assert_eq!(taken.backend().kind(), BackendKind::Vulkan, "{}", taken.note());

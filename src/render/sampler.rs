@@ -17,10 +17,7 @@ use crate::io::ktx2::Format;
 
 /// Parts the include's plan block holds by default (`FSOT_MAX_PARTS`).
 pub const MAX_PARTS: usize = 16;
-/// The most parts a plan block holds: 32 + 32 x this bytes is 64 KiB. Vulkan
-/// guarantees uniform blocks of 16 KiB (511 parts); a larger block needs the
-/// device's `maxUniformBufferRange`.
-pub const MAX_BLOCK_PARTS: usize = 2047;
+pub use crate::scene::plan::MAX_BLOCK_PARTS;
 
 /// Roberts' R4 sequence in 0.32 fixed point (`FSOT_R4` in the include).
 pub const R4: [u32; 4] = [3_679_390_609, 3_152_041_523, 2_700_274_806, 2_313_257_605];

@@ -412,7 +412,7 @@ fn valid_group_name(name: &str) -> bool {
 
 /// The most groups a scene holds: each reads at least one part of the plan
 /// block, which holds at most this many.
-pub const MAX_GROUPS: usize = crate::render::sampler::MAX_BLOCK_PARTS;
+pub const MAX_GROUPS: usize = crate::scene::plan::MAX_BLOCK_PARTS;
 
 /// A scene's eye as a Gaussian: sigma in pixels.
 const SCENE_SIGMA_RANGE: std::ops::RangeInclusive<f64> = 0.01..=8.0;

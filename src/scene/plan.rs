@@ -54,8 +54,13 @@ use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::run::{CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions};
 use crate::optimize::settings::{recorded_axis_share, Settings, Start, Until, BUDGET_SECONDS, DEFAULT_CAP};
-use crate::render::sampler::MAX_BLOCK_PARTS;
 use crate::scene::file::{Display, Reading, Scene};
+
+/// The most parts a plan holds: the include's plan block (`FSOT_MAX_PARTS`) of
+/// this many parts, 32 + 32 x this bytes, is 64 KiB. Vulkan guarantees uniform
+/// blocks of 16 KiB (511 parts); a larger block needs the device's
+/// `maxUniformBufferRange`.
+pub const MAX_BLOCK_PARTS: usize = 2047;
 
 /// Tile width and height when the scene does not give them.
 pub const DEFAULT_SIZE: usize = 128;

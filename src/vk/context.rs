@@ -139,7 +139,17 @@ impl Context {
     /// The queue family must be one of the physical device's, with compute, and
     /// the queue's index within its queue count: an error otherwise, before the
     /// queue is asked for.
-    pub fn wrap(external: ExternalDevice) -> Result<Self> {
+    ///
+    /// # Safety
+    /// fsot cannot check these of a device it did not make:
+    /// - `device` was made from `physical_device` of `instance`, with each
+    ///   feature whose flag is set, and with the queue `queue_index` of
+    ///   `queue_family` where the physical device has that queue (checked above);
+    /// - the instance and the device stay alive until this context and
+    ///   everything made with it (buffers, images, runs, clones) are dropped;
+    /// - every other submission to the queue takes `queue_lock` (with None, no
+    ///   other submits to it while the context lives).
+    pub unsafe fn wrap(external: ExternalDevice) -> Result<Self> {
         // SAFETY: a plain query on the host's live instance.
         let families = unsafe {
             external.instance.get_physical_device_queue_family_properties(external.physical_device)

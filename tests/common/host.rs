@@ -117,7 +117,9 @@ impl Host {
 
     /// fsot's context on the host's device, sharing its queue lock.
     pub fn fsot(&self) -> Context {
-        Context::wrap(self.external()).unwrap()
+        // SAFETY: the host's live device, made with the features it claims; each
+        // test drops its fsot contexts before the host.
+        unsafe { Context::wrap(self.external()) }.unwrap()
     }
 
     /// What the host hands fsot: its device, queue and queue lock.
