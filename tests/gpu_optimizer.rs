@@ -18,7 +18,8 @@ use fsot::optimize::vulkan::shape::{TransportShape, LANE_BUDGET, LANE_MAX};
 use fsot::optimize::vulkan::{TransportKind, VulkanHooks, VulkanOptions, VulkanRun};
 
 /// The per-lane transport is for CPU implementations (lavapipe); a GPU must refuse
-/// it with a clear error. True when `transport` is refused here (checked).
+/// it with a clear error. True when `transport` is refused here (checked; the
+/// rest of the check is then a skip, `common::skip`).
 fn refused_here(ctx: &fsot::vk::Context, transport: TransportKind) -> bool {
     if transport != TransportKind::PerLane || ctx.info().device_type == ash::vk::PhysicalDeviceType::CPU {
         return false;
@@ -30,7 +31,20 @@ fn refused_here(ctx: &fsot::vk::Context, transport: TransportKind) -> bool {
     let err =
         VulkanRun::new(ctx, tile, settings("taa", 5, 1), None, options).err().expect("per-lane on a GPU");
     assert!(err.to_string().contains("CPU implementations"), "{err}");
-    true
+    common::skip(
+        "the per-lane transport is for CPU implementations: on this GPU only its refusal was checked",
+    )
+}
+
+/// The largest difference between two vectors of one length (checked).
+fn largest_difference(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len(), "vectors of different lengths");
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+}
+
+/// The bits of each value, to compare runs bit for bit.
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
 }
 
 /// Settings that start from white noise: these tests give both backends the
@@ -82,7 +96,8 @@ fn compare_with_share(mask: &Mask, kernel: &str, options: VulkanOptions, axis_sh
     for iteration in [0u32, 5] {
         let g = gpu.displacements(iteration).unwrap();
         let c = cpu_displacements(mask, &s, 300, iteration);
-        let worst = g.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let worst = largest_difference(&g, &c);
+        assert_eq!(c.len(), tile.values(), "a displacement per coordinate");
         let moved = c.iter().filter(|v| **v != 0.0).count();
         assert!(moved > tile.values() / 4, "too few coordinates moved: {moved}");
         eprintln!(
@@ -511,7 +526,7 @@ fn deterministic_mode_is_bit_identical_run_to_run() {
         }
         let a = run(transport);
         let b = run(transport);
-        assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "{transport:?}");
+        assert_eq!(bits(&a), bits(&b), "{transport:?}");
         assert!(a.iter().all(|v| (0.0..1.0).contains(v)));
     }
     common::assert_no_validation_messages(&ctx);
@@ -548,7 +563,7 @@ fn a_resumed_deterministic_run_equals_an_uninterrupted_one_bit_for_bit() {
     }
     let a = straight.samples().unwrap();
     let b = resumed.samples().unwrap();
-    assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()), "resumed run differs");
+    assert_eq!(bits(&a), bits(&b), "resumed run differs");
     common::assert_no_validation_messages(&ctx);
 }
 
@@ -604,6 +619,7 @@ fn a_few_steps_of_momentum_and_of_adam_move_the_samples_as_the_cpu_path_does() {
                 gpu.step_batch(u32::MAX).unwrap();
             }
             let g = gpu.samples().unwrap();
+            assert_eq!(g.len(), cpu.samples.len());
             let worst = g.iter().zip(&cpu.samples).map(|(a, b)| torus(*a, *b)).fold(0.0, f32::max);
             eprintln!("{rule:?} {transport:?}: moved up to {moved:.2e}, largest difference {worst:.2e}");
             assert!(worst < 1e-5, "{rule:?} {transport:?}: largest difference {worst}");
@@ -702,7 +718,7 @@ fn a_device_without_f64_takes_float_pairs_and_classes_past_the_loop_budget_get_a
     let g = run.displacements(0).unwrap();
     let slices = run.slices_per_iteration();
     let c = cpu_displacements(&mask, &s, slices, 0);
-    let worst = g.iter().zip(&c).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let worst = largest_difference(&g, &c);
     assert!(worst < 1e-5, "float32 pairs on a device without shaderFloat64: largest difference {worst}");
     drop(run);
     drop(guest);

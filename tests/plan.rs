@@ -79,9 +79,8 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
     assert_eq!(white, ["deep.exr"]);
     assert!(plan.masks.iter().filter(|m| m.file.starts_with("vol")).all(|m| m.spp == 2));
     // Every mask its own seed; estimates from the cost model.
-    let mut seeds: Vec<u64> = plan.masks.iter().map(|m| m.seed).collect();
-    seeds.dedup();
-    assert_eq!(seeds.len(), plan.masks.len());
+    let seeds: std::collections::HashSet<u64> = plan.masks.iter().map(|m| m.seed).collect();
+    assert_eq!(seeds.len(), plan.masks.len(), "two masks share a seed");
     let lens = plan.masks.iter().find(|m| m.file == "lens.exr").unwrap();
     let per = model().seconds_per_iteration(&Tile::new(128, 128, 64, 1, 2).unwrap());
     assert!((per - 1e-6 * 128.0 * 128.0 * 64.0).abs() < 1e-12, "d = 2, spp 1 is the calibration's unit");

@@ -225,9 +225,11 @@ fn check_family(
                 let m = mirrors.iter().find(|m| m.0 == name).unwrap();
                 let want: Vec<(String, u32)> = m.2.iter().map(|(f, o)| (f.to_string(), *o as u32)).collect();
                 assert_eq!(r.layout(id), want, "{shader}: {name}");
+                seen.push(format!("struct {name}"));
             }
         }
         if let Some(meta) = r.struct_named("LargeMeta") {
+            seen.push("struct LargeMeta".to_string());
             let got = r.layout(meta);
             let head = [
                 ("large_count", std::mem::offset_of!(LargeMetaHead, large_count)),
@@ -256,6 +258,10 @@ fn every_fsot_binding_and_struct_matches_its_rust_mirror() {
     let b = &layout::binding::BLOCKS;
     let t = &layout::binding::TEXEL_VARIABLES;
     let seen = check_family("fsot", fsot_named(), b, t, layout::binding::BINDINGS);
+    // The structs inside buffers were found and checked (a rename would drop the check).
+    for name in ["LargeSegment", "RuleState", "LargeMeta"] {
+        assert!(seen.contains(&format!("struct {name}")), "no fsot pass declares {name}");
+    }
     // Every Rust binding is used by some pass (no stale entry in the mirror).
     for (name, _) in b.iter().chain(t) {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no fsot pass");
@@ -285,6 +291,9 @@ fn every_swap_binding_and_struct_matches_its_rust_mirror() {
     );
     for (name, _) in swap::binding::BLOCKS {
         assert!(seen.iter().any(|s| s == name), "binding {name} is in the Rust mirror but in no swap pass");
+    }
+    for name in ["SwapOffset", "SwapProposal", "SwapStats"] {
+        assert!(seen.contains(&format!("struct {name}")), "no swap pass declares {name}");
     }
     assert_eq!(swap::binding::BLOCKS.len() as u32, swap::binding::BINDINGS);
 }

@@ -19,12 +19,16 @@ pub fn gpu_context() -> Context {
 
 /// A test that cannot run here (a device of the other class, a missing
 /// capability or tool) fails with `reason`, unless FSOT_ALLOW_SKIPS=1 says
-/// such skips are expected on this machine: then it says SKIPPED and the
-/// caller returns. Returns whether to skip.
+/// such skips are expected on this machine: then it says SKIPPED on the
+/// process's stderr (past the harness's capture, so a skipped test that the
+/// harness reports as ok is seen to be a skip) and the caller returns.
+/// Returns whether to skip.
 #[must_use]
 pub fn skip(reason: &str) -> bool {
     if std::env::var("FSOT_ALLOW_SKIPS").map(|v| v == "1").unwrap_or(false) {
-        eprintln!("SKIPPED (FSOT_ALLOW_SKIPS=1): {reason}");
+        let test = std::thread::current().name().unwrap_or("a test").to_string();
+        let line = format!("SKIPPED (FSOT_ALLOW_SKIPS=1) {test}: {reason}\n");
+        std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes()).unwrap();
         return true;
     }
     panic!("cannot run here: {reason} (FSOT_ALLOW_SKIPS=1 allows the skip)");
@@ -42,28 +46,31 @@ pub fn assert_no_validation_messages(ctx: &Context) {
     );
 }
 
-/// Compiles a compute shader against `glsl/include` (the public include) with
-/// glslangValidator for Vulkan 1.2; None when glslangValidator is missing and
-/// the skip is allowed (`skip`).
-pub fn compile_glsl(source: &str) -> Option<Vec<u8>> {
-    let dir = tempfile::tempdir().unwrap();
-    let src = dir.path().join("shader.comp");
-    std::fs::write(&src, source).unwrap();
+/// Compiles a compute shader against `glsl/include` (the public include) for
+/// Vulkan 1.2 with shaderc, keeping its names; panics with the compiler's
+/// message when it does not compile.
+pub fn compile_glsl(source: &str) -> Vec<u8> {
+    try_compile_glsl(source).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `compile_glsl`, with the compiler's message as the error.
+pub fn try_compile_glsl(source: &str) -> Result<Vec<u8>, String> {
+    use shaderc_link::shaderc;
     let include = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include");
-    let out = dir.path().join("shader.spv");
-    let run = std::process::Command::new("glslangValidator")
-        .args(["-V", "--target-env", "vulkan1.2"])
-        .arg(format!("-I{}", include.display()))
-        .arg(&src)
-        .arg("-o")
-        .arg(&out)
-        .output();
-    let Ok(run) = run else {
-        let _ = skip("glslangValidator is not installed (scripts/install-deps.sh installs it)");
-        return None;
-    };
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stdout));
-    Some(std::fs::read(out).unwrap())
+    let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
+    let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
+    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
+    options.set_generate_debug_info();
+    options.set_include_callback(move |name, _kind, _from, _depth| {
+        let path = include.join(name);
+        std::fs::read_to_string(&path)
+            .map(|content| shaderc::ResolvedInclude { resolved_name: path.display().to_string(), content })
+            .map_err(|e| format!("cannot include {}: {e}", path.display()))
+    });
+    compiler
+        .compile_into_spirv(source, shaderc::ShaderKind::Compute, "shader.comp", "main", Some(&options))
+        .map(|a| a.as_binary_u8().to_vec())
+        .map_err(|e| format!("the shader does not compile:\n{e}"))
 }
 
 /// Sorts `keys` and `vals` by all 32 bits with a sort made with

@@ -26,11 +26,16 @@ fn the_benchmarked_scatter_sums_like_f64() {
     common::assert_no_validation_messages(&ctx);
 }
 
-#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
-fn the_reference_sums_are_the_sums() {
-    let (idx, val) = contributions(64);
-    let sums = reference_sums(&idx, &val, 64 / FAN_IN);
-    let total: f64 = val.iter().map(|&v| v as f64).sum();
-    assert!((sums.iter().sum::<f64>() - total).abs() < 1e-15);
+fn the_reference_sums_are_each_targets_contributions_summed() {
+    let n = 1 << 10;
+    let (idx, val) = contributions(n);
+    let targets = n / FAN_IN;
+    let sums = reference_sums(&idx, &val, targets);
+    assert_eq!(sums.len(), targets as usize);
+    for (t, &sum) in sums.iter().enumerate() {
+        // Brute force: the contributions whose index is this target, in f64.
+        let mine: f64 = idx.iter().zip(&val).filter(|(&i, _)| i as usize == t).map(|(_, &v)| v as f64).sum();
+        assert!((sum - mine).abs() < 1e-15, "target {t}: {sum} against {mine}");
+    }
 }

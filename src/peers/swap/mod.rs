@@ -422,6 +422,64 @@ mod tests {
     }
 
     #[test]
+    fn the_total_is_the_pairwise_sum_written_out() {
+        // Offsets past the tile (folded), a pair landing on one offset (merged)
+        // and the zero offset (dropped), against the double sum written out:
+        // every pixel, every offset as given, coordinates wrapped by hand.
+        let raw: Vec<(i64, i64, i64, f64)> = vec![
+            (1, 0, 0, 0.5),
+            (-1, 0, 0, 0.5),
+            (0, 2, 1, 0.25),
+            (0, -2, -1, 0.25),
+            (6, 0, 0, 0.125),
+            (-6, 0, 0, 0.125),
+            (0, 0, 3, 2.0),
+            (2, -1, -2, 0.75),
+            (-2, 1, 2, 0.75),
+        ];
+        for (term, dims) in [
+            (ValueTerm::Gaussian { sigma: 1.3 }, 1),
+            (ValueTerm::Gaussian { sigma: 1.0 }, 3),
+            (ValueTerm::NegDistance, 1),
+            (ValueTerm::NegDistance, 2),
+        ] {
+            let tile = Tile::new(5, 4, 3, 1, dims).unwrap();
+            let e = PairEnergy::new(tile, &raw, term).unwrap();
+            let mut rng = Stream::new(5);
+            let values: Vec<f32> = (0..tile.values()).map(|_| rng.next_f32()).collect();
+            let (w, h, t) = (5i64, 4i64, 3i64);
+            let mut want = 0.0f64;
+            for f in 0..t {
+                for y in 0..h {
+                    for x in 0..w {
+                        for &(dx, dy, dt, weight) in &raw {
+                            let (nx, ny, nf) = ((x + dx).rem_euclid(w), (y + dy).rem_euclid(h), (f + dt).rem_euclid(t));
+                            if (nx, ny, nf) == (x, y, f) {
+                                continue; // (0, 0, 3) on 3 frames: the pixel itself
+                            }
+                            let at = |x: i64, y: i64, f: i64| ((f * h + y) * w + x) as usize * dims;
+                            let (a, b) = (at(x, y, f), at(nx, ny, nf));
+                            let distance = (0..dims)
+                                .map(|k| (values[a + k] as f64 - values[b + k] as f64).powi(2))
+                                .sum::<f64>()
+                                .sqrt();
+                            want += weight
+                                * match term {
+                                    ValueTerm::Gaussian { sigma } => {
+                                        (-distance.powf(dims as f64 / 2.0) / (sigma * sigma)).exp()
+                                    }
+                                    ValueTerm::NegDistance => -distance,
+                                };
+                        }
+                    }
+                }
+            }
+            let got = e.total(&values);
+            assert!((got - want).abs() < 1e-9 * want.abs(), "{term:?} d = {dims}: {got} against {want}");
+        }
+    }
+
+    #[test]
     fn swap_delta_equals_the_change_of_the_summed_energy() {
         for (term, dims) in [(ValueTerm::Gaussian { sigma: 1.0 }, 2), (ValueTerm::NegDistance, 1)] {
             // A 5x4x3 tile is smaller than the offsets: folding and neighbour pairs.
