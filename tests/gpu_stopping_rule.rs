@@ -156,6 +156,7 @@ fn assert_device_follows_host(
 ) -> Vec<(PlateauState, Option<u32>)> {
     let device = rule::replay(ctx, RuleState::new(rule, &start, target), slots).unwrap();
     let host = host_rule(rule, start, target, slots);
+    assert_eq!((device.len(), host.len()), (slots.len(), slots.len()), "a state per slot");
     for (k, (d, (h, stopped))) in device.iter().zip(&host).enumerate() {
         let p = d.plateau_state();
         let got = (
