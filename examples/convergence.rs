@@ -13,21 +13,21 @@ use fsot::optimize::cpu::CpuRun;
 use fsot::optimize::settings::Settings;
 use fsot::quality::perceived::{ratio_to_white, TestSetup};
 
-fn main() {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let kernel = args.get(1).map(String::as_str).unwrap_or("taa");
-    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
+    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16"))?;
     let rule = match args.get(3).map(String::as_str).unwrap_or("momentum") {
         "adam" => StepRule::DEFAULT_ADAM,
         _ => StepRule::DEFAULT,
     };
     let counts: Vec<u32> = if args.len() > 4 {
-        args[4..].iter().map(|s| s.parse().unwrap()).collect()
+        args[4..].iter().map(|s| s.parse()).collect::<Result<_, _>>()?
     } else {
         vec![5, 10, 20, 50, 100, 200, 500, 1000]
     };
-    let tile = Tile::new(w, h, t, 1, 2).unwrap();
-    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
+    let tile = Tile::new(w, h, t, 1, 2)?;
+    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0)?;
     let setup = TestSetup::default();
     println!(
         "# {} kernel {} rule {:?}, {} threads",
@@ -60,15 +60,16 @@ fn main() {
                 *beta = v;
             }
         }
-        let mut run = CpuRun::new(tile, settings, None).unwrap();
+        let mut run = CpuRun::new(tile, settings, None)?;
         let start = Instant::now();
         while !run.finished() {
             run.step();
         }
         let seconds = start.elapsed().as_secs_f64();
-        let mask = fsot::optimize::backend::Backend::mask(&run).unwrap();
+        let mask = fsot::optimize::backend::Backend::mask(&run)?;
         let objective = score(&mask, spec, SCORE_SLICES).objective;
         let ratio = ratio_to_white(&mask, &setup, 4);
         println!("{n},{seconds:.3},{objective:.5e},{ratio:.4}");
     }
+    Ok(())
 }

@@ -14,19 +14,20 @@ use fsot::optimize::cpu::CpuRun;
 use fsot::optimize::settings::Settings;
 use fsot::quality::perceived::{ratio_to_white, TestSetup};
 
-fn main() {
+fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let kernel = args.get(1).map(String::as_str).unwrap_or("taa");
-    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16")).unwrap();
-    let decay_below = args.get(3).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.decay_below);
-    let stop_below = args.get(4).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.stop_below);
-    let factor = args.get(5).map(|s| s.parse().unwrap()).unwrap_or(Plateau::DEFAULT.factor);
+    let (w, h, t) = Tile::parse_size(args.get(2).map(String::as_str).unwrap_or("32x32x16"))?;
+    let decay_below = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(Plateau::DEFAULT.decay_below);
+    let stop_below = args.get(4).map(|s| s.parse()).transpose()?.unwrap_or(Plateau::DEFAULT.stop_below);
+    let factor = args.get(5).map(|s| s.parse()).transpose()?.unwrap_or(Plateau::DEFAULT.factor);
     let rule = Plateau { decay_below, stop_below, factor, ..Plateau::DEFAULT };
-    let tile = Tile::new(w, h, t, 1, 2).unwrap();
-    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0).unwrap();
+    rule.check()?;
+    let tile = Tile::new(w, h, t, 1, 2)?;
+    let spec = KernelSpec::from_name(kernel, 2.1, None, 0.1, 60.0)?;
     let mut settings = Settings::new(spec, 7);
     settings.iterations = 20_000; // a cap only
-    let mut run = CpuRun::new(tile, settings, None).unwrap();
+    let mut run = CpuRun::new(tile, settings, None)?;
     let mut state = PlateauState::default();
     let start = Instant::now();
     let mut trace = Vec::new();
@@ -41,7 +42,7 @@ fn main() {
         }
     }
     let seconds = start.elapsed().as_secs_f64();
-    let mask = run.mask().unwrap();
+    let mask = run.mask()?;
     println!(
         "{} {} {rule:?}: {} iterations, {seconds:.2} s, objective {:.5e}, perceived (TAA) {:.4}",
         tile.describe(),
@@ -51,4 +52,5 @@ fn main() {
         ratio_to_white(&mask, &TestSetup::default(), 4)
     );
     println!("windows (iteration:scale): {}", trace.join(" "));
+    Ok(())
 }
