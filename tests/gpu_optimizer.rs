@@ -369,6 +369,9 @@ fn the_workgroup_transports_second_pass_sorts_the_classes_past_its_limit() {
         let err =
             VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, too_large).err().expect("refused");
         assert!(err.to_string().contains("maxComputeSharedMemorySize"), "{err}");
+    } else {
+        // A device with that much shared memory takes the shape.
+        VulkanRun::new(&ctx, tile, settings("gaussian", 5, 1), None, too_large).expect("within the limit");
     }
     common::assert_no_validation_messages(&ctx);
 }
