@@ -147,7 +147,9 @@ fn mask_image(ctx: &Context, tile: &Tile, masks: usize, name: &str) -> Result<Im
 fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
     let tile = plan.masks()[0].tile;
     let mut image = mask_image(ctx, &tile, plan.masks().len(), name)?;
-    write_plan(ctx, &plan, &image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL))?;
+    // SAFETY: the renderer's own image on this context's device, as `target` states
+    // it, used by nothing else until the call returns.
+    unsafe { write_plan(ctx, &plan, &image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL))? };
     image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     let block = Buffer::with_data(ctx, &plan.plan_block()?, Location::Device, "plan-block")?;
     Ok(Bound { image, block, plan })
@@ -187,7 +189,9 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
             }
         }
     };
-    let mask = make_into_image(ctx, tile, settings, &target, &CancelFlag::new(), &mut report)?
+    // SAFETY: the renderer's own image on this context's device, as `target` states
+    // it, used by nothing else until the call returns.
+    let mask = unsafe { make_into_image(ctx, tile, settings, &target, &CancelFlag::new(), &mut report)? }
         .ok_or(Error::Interrupted)?;
     eprintln!();
     image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);

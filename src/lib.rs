@@ -80,7 +80,10 @@
 //!     layout_after: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
 //! };
 //! let settings = Settings::new(KernelSpec::named("perceptual-taa")?, 1);
-//! let mask = fsot::make_into_image(&ctx, tile, settings, &target, &CancelFlag::new(), &mut |_| {})?;
+//! // SAFETY: `image` is the renderer's, made as `target` states, used by nothing
+//! // else until the call returns.
+//! let mask =
+//!     unsafe { fsot::make_into_image(&ctx, tile, settings, &target, &CancelFlag::new(), &mut |_| {}) }?;
 //! # let _ = mask;
 //! # Ok(())
 //! # }

@@ -46,9 +46,11 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
     let image = host.image(vk::Format::R16G16_UNORM, 16, 16, layers_for(&tile, 1), SAMPLED);
     let made = {
         let ctx = host.fsot();
-        let mask = make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {})
-            .unwrap()
-            .expect("not cancelled");
+        // SAFETY: the host's resources, made as their targets state, used by nothing else.
+        let mask =
+            unsafe { make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {}) }
+                .unwrap()
+                .expect("not cancelled");
         assert!(ctx.validation_messages().is_empty()); // fsot's own sink is empty on a wrapped device
         mask
     }; // fsot's context is gone: the renderer's device, queue and image live on
@@ -110,14 +112,16 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     let (block, block_memory) =
         host.buffer(block_bytes, vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST);
     let ctx = host.fsot();
-    write_plan(&ctx, &plan, &image.target).unwrap();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    unsafe { write_plan(&ctx, &plan, &image.target) }.unwrap();
     let block_target = BufferTarget {
         buffer: block,
         size: block_bytes,
         usage: vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
         offset: 0,
     };
-    write_plan_block(&ctx, &plan, &block_target).unwrap();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    unsafe { write_plan_block(&ctx, &plan, &block_target) }.unwrap();
     assert_eq!(host.read_memory(block_memory, block_bytes as usize), plan.plan_block().unwrap());
     // A shader that defines FSOT_MAX_PARTS 32 takes a plan of 20 parts.
     let wide = SamplerPlan::new(
@@ -125,13 +129,15 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
         (0..20).map(|k| SamplerPart { mask: 1, dims: 1, offset: [k, 0, 0], shift: vec![0.5] }).collect(),
     )
     .unwrap();
-    let err = write_plan_block(&ctx, &wide, &block_target).unwrap_err().to_string();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe { write_plan_block(&ctx, &wide, &block_target) }.unwrap_err().to_string();
     assert!(err.contains("FSOT_MAX_PARTS") && err.contains("plan_block_for"), "{err}");
     let wide_bytes = wide.plan_block_for(32).unwrap();
     let usage = vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
     let (wide_block, wide_memory) = host.buffer(wide_bytes.len() as u64, usage);
     let wide_target = BufferTarget { buffer: wide_block, size: wide_bytes.len() as u64, usage, offset: 0 };
-    write_plan_block_for(&ctx, &wide, 32, &wide_target).unwrap();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    unsafe { write_plan_block_for(&ctx, &wide, 32, &wide_target) }.unwrap();
     assert_eq!(host.read_memory(wide_memory, wide_bytes.len()), wide_bytes);
     assert_eq!(wide_bytes.len(), 32 + 32 * 32, "a head and 32 parts, each two 16-byte vectors");
 
@@ -238,14 +244,17 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
     ];
     for (k, (format, w, h, usage, says)) in cases.into_iter().enumerate() {
         let image = host.image(format, w, h, if k == 1 { layers * 2 } else { layers }, usage);
-        let err = write_plan(&ctx, &SamplerPlan::single(mask.clone()).unwrap(), &image.target).unwrap_err();
+        // SAFETY: the host's resources, made as their targets state, used by nothing else.
+        let err = unsafe { write_plan(&ctx, &SamplerPlan::single(mask.clone()).unwrap(), &image.target) }
+            .unwrap_err();
         assert!(err.to_string().contains(says), "case {k}: {err}");
         // Refused before the optimizer starts: no iteration is run.
         let mut events = 0;
         let settings =
             Settings::new(fsot::core::kernel::KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 1);
         let err =
-            make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| events += 1)
+            // SAFETY: the host's resources, made as their targets state, used by nothing else.
+            unsafe { make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| events += 1) }
                 .unwrap_err();
         assert!(err.to_string().contains(says), "case {k}: {err}");
         assert_eq!(events, 0);
@@ -256,23 +265,28 @@ fn images_and_buffers_that_cannot_hold_the_mask_are_refused_before_any_gpu_work(
     let (buffer, memory) =
         host.buffer(bytes, vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::STORAGE_BUFFER);
     let target = BufferTarget { buffer, size: bytes, usage: vk::BufferUsageFlags::TRANSFER_DST, offset: 4 };
-    let err = write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap_err();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe { write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target) }.unwrap_err();
     assert!(err.to_string().contains("do not fit"), "{err}");
     let target = BufferTarget { offset: 0, usage: vk::BufferUsageFlags::STORAGE_BUFFER, ..target };
-    let err = write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap_err();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe { write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target) }.unwrap_err();
     assert!(err.to_string().contains("lacks TRANSFER_DST"), "{err}");
     // A mask whose values were set out of range by hand: refused, image or buffer.
     let target = BufferTarget { usage: vk::BufferUsageFlags::TRANSFER_DST, ..target };
     let mut nan = mask.clone();
     nan.samples[9] = f32::NAN;
-    let err = write_mask_to_buffer(&ctx, &nan, Format::R16G16Unorm, &target).unwrap_err();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe { write_mask_to_buffer(&ctx, &nan, Format::R16G16Unorm, &target) }.unwrap_err();
     assert!(err.to_string().contains("outside [0, 1)"), "{err}");
     let image = host.image(vk::Format::R16G16_UNORM, 8, 8, layers, SAMPLED);
-    let err = write_mask(&ctx, &nan, &image.target).unwrap_err();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe { write_mask(&ctx, &nan, &image.target) }.unwrap_err();
     assert!(err.to_string().contains("outside [0, 1)"), "{err}");
     host.free_image(image);
     // And one that fits: the texels land as the KTX2 file lays them out.
-    write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target).unwrap();
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    unsafe { write_mask_to_buffer(&ctx, &mask, Format::R16G16Unorm, &target) }.unwrap();
     assert_eq!(host.read_memory(memory, bytes as usize), texels(&mask, Format::R16G16Unorm).unwrap());
     drop(ctx);
     host.free_buffer(buffer, memory);
@@ -294,13 +308,16 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     let short = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3) - 1, SAMPLED);
     let ctx = host.fsot();
     let mut events = 0;
-    let err = fsot::render::device::make_plan_into_image(
-        &ctx,
-        &plan,
-        &short.target,
-        &CancelFlag::new(),
-        &mut |_| events += 1,
-    )
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let err = unsafe {
+        fsot::render::device::make_plan_into_image(
+            &ctx,
+            &plan,
+            &short.target,
+            &CancelFlag::new(),
+            &mut |_| events += 1,
+        )
+    }
     .unwrap_err();
     assert!(err.to_string().contains("need 12"), "{err}");
     assert_eq!(events, 0);
@@ -308,17 +325,14 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
 
     let image = host.image(vk::Format::R16G16_UNORM, 8, 8, layers_for(&tile, 3), SAMPLED);
     let mut done = Vec::new();
-    let sampler = fsot::render::device::make_plan_into_image(
-        &ctx,
-        &plan,
-        &image.target,
-        &CancelFlag::new(),
-        &mut |e| {
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let sampler = unsafe {
+        fsot::render::device::make_plan_into_image(&ctx, &plan, &image.target, &CancelFlag::new(), &mut |e| {
             if let fsot::scene::plan::PlanEvent::Done { file, iterations, .. } = e {
                 done.push((file.to_string(), iterations))
             }
-        },
-    )
+        })
+    }
     .unwrap()
     .expect("not cancelled");
     drop(ctx);
@@ -349,18 +363,21 @@ fn a_scene_plans_masks_are_made_on_the_renderers_device_and_stacked_in_its_image
     let began = std::time::Instant::now();
     let mut slowest = 0.0f64;
     let mut last = std::time::Instant::now();
-    let sampler = fsot::render::device::make_plan_into_image(
-        &ctx,
-        &budgeted,
-        &image.target,
-        &CancelFlag::new(),
-        &mut |e| {
-            if let fsot::scene::plan::PlanEvent::Run { .. } = e {
-                slowest = slowest.max(last.elapsed().as_secs_f64());
-                last = std::time::Instant::now();
-            }
-        },
-    )
+    // SAFETY: the host's resources, made as their targets state, used by nothing else.
+    let sampler = unsafe {
+        fsot::render::device::make_plan_into_image(
+            &ctx,
+            &budgeted,
+            &image.target,
+            &CancelFlag::new(),
+            &mut |e| {
+                if let fsot::scene::plan::PlanEvent::Run { .. } = e {
+                    slowest = slowest.max(last.elapsed().as_secs_f64());
+                    last = std::time::Instant::now();
+                }
+            },
+        )
+    }
     .unwrap()
     .expect("not cancelled");
     let seconds = began.elapsed().as_secs_f64();

@@ -27,6 +27,18 @@
 //! the image must be usable on the wrapped queue's family. fsot never destroys
 //! what it did not create: the image, the buffer, the device and the queue stay
 //! the renderer's.
+//!
+//! # Safety
+//!
+//! Every function here that takes an `ImageTarget` or a `BufferTarget` is
+//! `unsafe`: Vulkan cannot be asked how an image or a buffer was made, so fsot
+//! checks what the target states but cannot check the statement. The caller
+//! promises that the target's image (buffer) is alive, belongs to the context's
+//! device, was created with the format, width, height, layer count (size) and
+//! usage the target states, is in `layout_before` in every layer (an image),
+//! can be used on the context's queue family, and is used by no other work
+//! until the call returns (the host's own submissions to the queue take the
+//! queue lock).
 
 use std::path::Path;
 
@@ -104,7 +116,9 @@ fn check_image(ctx: &Context, image: &ImageTarget, tile: &Tile, masks: usize, di
 
 /// Writes a plan's masks, stacked, into the renderer's image (see the module's
 /// notes); bind the plan block (`write_plan_block`) beside it.
-pub fn write_plan(ctx: &Context, plan: &SamplerPlan, image: &ImageTarget) -> Result<()> {
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn write_plan(ctx: &Context, plan: &SamplerPlan, image: &ImageTarget) -> Result<()> {
     let tile = plan.masks()[0].tile;
     let format = check_image(ctx, image, &tile, plan.masks().len(), plan.max_dims())?;
     Ok(fill(ctx, image, &plan.texels(format)?, format.texel_bytes() as u32)?)
@@ -112,20 +126,27 @@ pub fn write_plan(ctx: &Context, plan: &SamplerPlan, image: &ImageTarget) -> Res
 
 /// Writes one mask into the renderer's image (a one-part plan: its block is
 /// `SamplerPlan::single(mask)`'s).
-pub fn write_mask(ctx: &Context, mask: &Mask, image: &ImageTarget) -> Result<()> {
-    write_plan(ctx, &SamplerPlan::single(mask.clone())?, image)
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn write_mask(ctx: &Context, mask: &Mask, image: &ImageTarget) -> Result<()> {
+    // SAFETY: the caller's promise for `image`.
+    unsafe { write_plan(ctx, &SamplerPlan::single(mask.clone())?, image) }
 }
 
 /// Writes the include's plan block (`FsotPlan`, std140, `FSOT_MAX_PARTS` = 16)
 /// into the renderer's buffer at `target.offset`.
-pub fn write_plan_block(ctx: &Context, plan: &SamplerPlan, target: &BufferTarget) -> Result<()> {
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn write_plan_block(ctx: &Context, plan: &SamplerPlan, target: &BufferTarget) -> Result<()> {
     Ok(fill_buffer(ctx, target, &plan.plan_block()?)?)
 }
 
 /// Writes the plan block for a shader that defines `FSOT_MAX_PARTS` as
 /// `capacity` (at most `MAX_BLOCK_PARTS`; `SamplerPlan::plan_block_for`'s bytes)
 /// into the renderer's buffer at `target.offset`.
-pub fn write_plan_block_for(
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn write_plan_block_for(
     ctx: &Context,
     plan: &SamplerPlan,
     capacity: usize,
@@ -136,7 +157,9 @@ pub fn write_plan_block_for(
 
 /// Writes a mask's texels in `format` (laid out as in the image: layer by
 /// layer, row by row) into the renderer's buffer at `target.offset`.
-pub fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: &BufferTarget) -> Result<()> {
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: &BufferTarget) -> Result<()> {
     Ok(fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?)?)
 }
 
@@ -145,7 +168,9 @@ pub fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: 
 /// run to run; `settings` as for `fsot optimize`) and writes it into the
 /// renderer's image. The image is checked before the optimization starts.
 /// Returns the mask (None when `cancel` stopped the run: nothing is written then).
-pub fn make_into_image(
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn make_into_image(
     ctx: &Context,
     tile: Tile,
     settings: Settings,
@@ -160,7 +185,8 @@ pub fn make_into_image(
         return Ok(None);
     }
     let mask = run.finish()?;
-    write_mask(ctx, &mask, image)?;
+    // SAFETY: the caller's promise for `image`.
+    unsafe { write_mask(ctx, &mask, image)? };
     Ok(Some(mask))
 }
 
@@ -171,7 +197,9 @@ pub fn make_into_image(
 /// into the renderer's image. The image is checked before the first run.
 /// Returns the plan as the include reads it, for its block (None when `cancel`
 /// stopped a run: nothing is written then).
-pub fn make_plan_into_image(
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn make_plan_into_image(
     ctx: &Context,
     plan: &Plan,
     image: &ImageTarget,
@@ -214,7 +242,8 @@ pub fn make_plan_into_image(
         on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
     }
     let sampler = SamplerPlan::from_plan(plan, masks)?;
-    write_plan(ctx, &sampler, image)?;
+    // SAFETY: the caller's promise for `image`.
+    unsafe { write_plan(ctx, &sampler, image)? };
     Ok(Some(sampler))
 }
 
@@ -231,8 +260,11 @@ fn device_options(ctx: &Context) -> RunOptions {
 /// Writes a mask file (`.exr`) or a plan folder (`fsot optimize --scene`'s,
 /// with `plan.json`) made earlier into the renderer's image; the plan, for its
 /// block.
-pub fn upload(ctx: &Context, path: &Path, image: &ImageTarget) -> Result<SamplerPlan> {
+/// # Safety
+/// The target is as the module's notes say (`# Safety`).
+pub unsafe fn upload(ctx: &Context, path: &Path, image: &ImageTarget) -> Result<SamplerPlan> {
     let plan = SamplerPlan::load(path)?;
-    write_plan(ctx, &plan, image)?;
+    // SAFETY: the caller's promise for `image`.
+    unsafe { write_plan(ctx, &plan, image)? };
     Ok(plan)
 }
