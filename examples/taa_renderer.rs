@@ -280,8 +280,12 @@ fn run(args: &Args) -> Result<()> {
     let layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     for (set, (bound, out)) in [(&fsot, &raw[0]), (&white, &raw[1]), (&fsot, &raw[2])].into_iter().enumerate()
     {
-        scene.bind_image(set, 1, bound.image.view(), sampler.raw(), layout)?;
-        scene.bind(set, &[(0, out), (2, &bound.block)])?;
+        // SAFETY: the images, the sampler and the buffers live until the renders
+        // below are done; the mask images are sampled in `layout`.
+        unsafe {
+            scene.bind_image(set, 1, bound.image.view(), sampler.raw(), layout)?;
+            scene.bind(set, &[(0, out), (2, &bound.block)])?;
+        }
     }
     let resolve_spirv = compile("taa_resolve.comp")?;
     let resolve = ComputePipeline::new(
@@ -298,7 +302,8 @@ fn run(args: &Args) -> Result<()> {
         },
     )?;
     for (set, (input, output)) in raw.iter().zip(&resolved).enumerate() {
-        resolve.bind(set, &[(0, input), (1, output)])?;
+        // SAFETY: the buffers live until the renders below are done.
+        unsafe { resolve.bind(set, &[(0, input), (1, output)])? };
     }
 
     let render_start = Instant::now();

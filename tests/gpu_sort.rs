@@ -234,7 +234,8 @@ fn a_count_only_on_the_device_sorts_by_every_path() {
     // device: every dispatch is sized there (indirect), for each path.
     let ctx = common::gpu_context();
     let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
-    let mut sort = RadixSort::new(&ctx, 200_000, SortCount::Device(&count)).unwrap();
+    // SAFETY: `count` outlives the sort (declared before it).
+    let mut sort = RadixSort::new(&ctx, 200_000, unsafe { SortCount::device(&count) }).unwrap();
     let block = sort.shape().block;
     let mut rng = Stream::new(derive(12, 12));
     for path in [SortPath::Auto, SortPath::Tail, SortPath::Blocks, SortPath::Lanes] {
@@ -264,7 +265,9 @@ fn the_lanes_path_reads_its_input_as_storage_where_texel_views_cannot_hold_it() 
         check(&mut sort, keys, "lanes path, storage reads");
     }
     let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
-    let mut sort = RadixSort::with_storage_reads(&ctx, 100_000, SortCount::Device(&count)).unwrap();
+    // SAFETY: `count` outlives the sort (declared before it).
+    let mut sort =
+        RadixSort::with_storage_reads(&ctx, 100_000, unsafe { SortCount::device(&count) }).unwrap();
     sort.path = SortPath::Lanes;
     let keys: Vec<u32> = (0..99_999).map(|_| rng.next_u32()).collect();
     let vals: Vec<u32> = (0..99_999).collect();

@@ -34,7 +34,8 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         texels: &binding::TEXELS,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
-    pipeline.bind(0, &[(binding::HASH_VALUES, &out)]).unwrap();
+    // SAFETY: `out` is declared before the pipeline: it outlives every dispatch.
+    unsafe { pipeline.bind(0, &[(binding::HASH_VALUES, &out)]) }.unwrap();
     let push = HashPush { key, count };
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [count.div_ceil(workgroup), 1, 1], bytemuck::bytes_of(&push));

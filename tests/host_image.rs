@@ -173,9 +173,13 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
         texels: &[],
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
-    pipeline.bind_image(0, 1, view, sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
-    pipeline.bind(0, &[(0, &out)]).unwrap();
-    pipeline.bind_raw(0, &[(2, block)]).unwrap(); // the renderer's own uniform buffer
+    // SAFETY: the view, the sampler, `out` and the renderer's own uniform buffer
+    // `block` outlive the one dispatch below; the image is sampled in its layout.
+    unsafe {
+        pipeline.bind_image(0, 1, view, sampler, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
+        pipeline.bind(0, &[(0, &out)]).unwrap();
+        pipeline.bind_raw(0, &[(2, block)]).unwrap();
+    }
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &[]);
         fsot::vk::commands::barrier(cmd);

@@ -152,11 +152,15 @@ fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_
         texels: &[0, 1],
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
-    pipeline.bind_texels(0, &[(0, &float_view), (1, &word_view)]).unwrap();
-    pipeline.bind(0, &[(2, &out)]).unwrap();
-    // A texel binding is no storage buffer, and a storage binding takes no view.
-    assert!(pipeline.bind(0, &[(0, &float_buf)]).is_err());
-    assert!(pipeline.bind_texels(0, &[(2, &float_view)]).is_err());
+    // SAFETY: the views and buffers are declared before the pipeline: they
+    // outlive every dispatch.
+    unsafe {
+        pipeline.bind_texels(0, &[(0, &float_view), (1, &word_view)]).unwrap();
+        pipeline.bind(0, &[(2, &out)]).unwrap();
+        // A texel binding is no storage buffer, and a storage binding takes no view.
+        assert!(pipeline.bind(0, &[(0, &float_buf)]).is_err());
+        assert!(pipeline.bind_texels(0, &[(2, &float_view)]).is_err());
+    }
     ctx.submit(|cmd| {
         pipeline.dispatch(cmd, 0, [(count as u32).div_ceil(64), 1, 1], &(count as u32).to_le_bytes());
         fsot::vk::commands::barrier(cmd);

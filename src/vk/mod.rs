@@ -50,7 +50,7 @@ pub use image::{texel_bytes_of, Image, ImageDesc, ImageTarget, Sampler};
 internal!(use pipeline::{ComputeDesc, ComputePipeline});
 pub use requirements::{missing, requirements, Requirement, API_VERSION};
 internal!(use sort::SortPath);
-pub use sort::{RadixSort, SortCount};
+pub use sort::{DeviceCount, RadixSort, SortCount};
 internal!(use sort_choice::{choose_sort_path, time_sort_paths, PathChoice, PathTimes});
 internal!(use texel_view::TexelView);
 internal!(use timer::Timer);

@@ -177,14 +177,23 @@ impl ComputePipeline {
 
     /// Points the given bindings of descriptor set `set` at whole buffers. A
     /// binding the pass does not use may stay unbound.
-    pub fn bind(&self, set: usize, buffers: &[(u32, &Buffer)]) -> Result<()> {
+    ///
+    /// # Safety
+    /// Each buffer outlives every dispatch that uses the set while it is bound
+    /// there (until the binding points elsewhere or the pipeline is dropped).
+    pub unsafe fn bind(&self, set: usize, buffers: &[(u32, &Buffer)]) -> Result<()> {
         let raw: Vec<(u32, vk::Buffer)> = buffers.iter().map(|(b, buffer)| (*b, buffer.raw)).collect();
-        self.bind_raw(set, &raw)
+        // SAFETY: the caller's promise, for buffers of this context's device.
+        unsafe { self.bind_raw(set, &raw) }
     }
 
-    /// As `bind`, for buffers fsot did not make (a host's): the caller keeps
-    /// them alive while the set is used.
-    pub fn bind_raw(&self, set: usize, buffers: &[(u32, vk::Buffer)]) -> Result<()> {
+    /// As `bind`, for buffers fsot did not make (a host's).
+    ///
+    /// # Safety
+    /// Each handle is a live buffer of the context's device, with the usage its
+    /// binding needs, that outlives every dispatch that uses the set while it
+    /// is bound there.
+    pub unsafe fn bind_raw(&self, set: usize, buffers: &[(u32, vk::Buffer)]) -> Result<()> {
         let bindings: Vec<u32> = buffers.iter().map(|(b, _)| *b).collect();
         let kinds = [vk::DescriptorType::STORAGE_BUFFER, vk::DescriptorType::UNIFORM_BUFFER];
         let target = self.set_for(set, &bindings, &kinds, "buffer")?;
@@ -210,8 +219,13 @@ impl ComputePipeline {
 
     /// Points a combined image-sampler binding of set `set` at an image view
     /// (in `layout` when the pass runs) and a sampler.
+    ///
+    /// # Safety
+    /// The view and the sampler are live objects of the context's device that
+    /// outlive every dispatch that uses the set while they are bound there, and
+    /// the image is in `layout` whenever such a dispatch runs.
     #[cfg_attr(not(feature = "internals"), allow(dead_code))]
-    pub fn bind_image(
+    pub unsafe fn bind_image(
         &self,
         set: usize,
         binding: u32,
@@ -234,9 +248,12 @@ impl ComputePipeline {
     }
 
     /// Points the given uniform-texel-buffer bindings of set `set` at texel
-    /// views (the caller keeps the views and their buffers alive while the set
-    /// is used).
-    pub fn bind_texels(&self, set: usize, views: &[(u32, &TexelView)]) -> Result<()> {
+    /// views.
+    ///
+    /// # Safety
+    /// The views and their buffers outlive every dispatch that uses the set
+    /// while they are bound there.
+    pub unsafe fn bind_texels(&self, set: usize, views: &[(u32, &TexelView)]) -> Result<()> {
         let bindings: Vec<u32> = views.iter().map(|(b, _)| *b).collect();
         let target =
             self.set_for(set, &bindings, &[vk::DescriptorType::UNIFORM_TEXEL_BUFFER], "texel buffer")?;

@@ -18,7 +18,7 @@
 //! keep their input order (stable), so a sort by several
 //! keys is a sequence of sorts, least significant first. The element count is
 //! set by the host (`SortCount::Host`) or read on the GPU from the first word of
-//! a buffer a producer pass writes (`SortCount::Device`): then the sort sizes its
+//! a buffer a producer pass writes (`SortCount::device`): then the sort sizes its
 //! own dispatches from it (indirect).
 
 use ash::vk;
@@ -139,8 +139,24 @@ const LOOK_BACK_HEAD: u64 = 16 + 4 * 256 * 4;
 pub enum SortCount<'a> {
     /// Set by the host (`RadixSort::set_count`).
     Host,
-    /// The first u32 of this buffer, written on the GPU before the sort runs.
-    Device(&'a Buffer),
+    /// The first u32 of a buffer, written on the GPU before the sort runs
+    /// (`SortCount::device`).
+    Device(DeviceCount<'a>),
+}
+
+/// The buffer a sort reads its count from (`SortCount::device`).
+#[derive(Clone, Copy)]
+pub struct DeviceCount<'a>(&'a Buffer);
+
+impl<'a> SortCount<'a> {
+    /// The count as the first u32 of `buffer`, written on the GPU before each
+    /// sort runs.
+    ///
+    /// # Safety
+    /// The sort made with it binds the buffer: `buffer` outlives the sort.
+    pub unsafe fn device(buffer: &'a Buffer) -> Self {
+        SortCount::Device(DeviceCount(buffer))
+    }
 }
 
 /// Launch shape chosen from the device's limits.
@@ -435,7 +451,7 @@ impl RadixSort {
         );
         let (digits, onesweep) = (pass(shaders::RADIX_DIGITS)?, pass(shaders::RADIX_ONESWEEP)?);
         let count_buffer: &Buffer = match (count, &host_count) {
-            (SortCount::Device(c), _) => c,
+            (SortCount::Device(DeviceCount(c)), _) => c,
             (SortCount::Host, Some(own)) => own,
             (SortCount::Host, None) => return Err(Error::invalid("the sort's count buffer is missing")),
         };
@@ -457,7 +473,9 @@ impl RadixSort {
                     texels: &binding::TEXELS,
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
-                pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])?;
+                // SAFETY: the sort holds the argument buffer with the pipeline and
+                // the count buffer as long as it, and dispatches only through itself.
+                unsafe { pipeline.bind(0, &[(binding::COUNT, count_buffer), (binding::ARGS, &buffer)])? };
                 Ok(Some((pipeline, buffer)))
             };
         let args = args_pass(shape.block, 1, "sort-indirect-args")?;
@@ -506,12 +524,16 @@ impl RadixSort {
                 &lanes.scan_apply,
                 &lanes.scatter,
             ] {
-                p.bind(s, &set)?;
-                if let Some(views) = &views {
-                    p.bind_texels(
-                        s,
-                        &[(binding::KEYS_TEXELS, &views[s][0]), (binding::VALS_TEXELS, &views[s][1])],
-                    )?;
+                // SAFETY: the sort holds its buffers and views as long as its
+                // pipelines, and dispatches them only through itself.
+                unsafe {
+                    p.bind(s, &set)?;
+                    if let Some(views) = &views {
+                        p.bind_texels(
+                            s,
+                            &[(binding::KEYS_TEXELS, &views[s][0]), (binding::VALS_TEXELS, &views[s][1])],
+                        )?;
+                    }
                 }
             }
         }

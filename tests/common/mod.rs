@@ -74,7 +74,7 @@ pub fn try_compile_glsl(source: &str) -> Result<Vec<u8>, String> {
 }
 
 /// Sorts `keys` and `vals` by all 32 bits with a sort made with
-/// `SortCount::Device(count)`: the count written to that buffer, the dispatches
+/// `SortCount::device(count)`: the count written to that buffer, the dispatches
 /// sized on the device (indirect); the sorted pairs read back.
 #[cfg(feature = "vulkan")]
 pub fn sort_with_device_count(

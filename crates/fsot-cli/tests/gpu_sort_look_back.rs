@@ -50,7 +50,8 @@ fn the_look_back_path_sorts_stably_by_any_number_of_low_bits_with_either_count()
     drop(sort);
     // The count only on the GPU (the first word of a buffer): indirect dispatches.
     let mut count = Buffer::new(&ctx, 16, Location::Upload, "test-count").unwrap();
-    let mut sort = RadixSort::new(&ctx, 200_000, SortCount::Device(&count)).unwrap();
+    // SAFETY: `count` outlives the sort (declared before it).
+    let mut sort = RadixSort::new(&ctx, 200_000, unsafe { SortCount::device(&count) }).unwrap();
     sort.path = SortPath::LookBack;
     for n in [1u32, block + 1, 99_999, 200_000] {
         let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();

@@ -191,10 +191,14 @@ impl RunBuffers {
     }
 
     /// The sort of the large-class stage (its count: the first word of LargeMeta).
-    pub fn large_sort(&self, ctx: &Context, large: &LargePlan) -> Result<Option<RadixSort>> {
+    ///
+    /// # Safety
+    /// The sort binds `large_meta`: these buffers outlive it.
+    pub unsafe fn large_sort(&self, ctx: &Context, large: &LargePlan) -> Result<Option<RadixSort>> {
         match large.capacity {
             0 => Ok(None),
-            c => Ok(Some(RadixSort::new(ctx, c, SortCount::Device(&self.large_meta))?)),
+            // SAFETY: the caller's promise.
+            c => Ok(Some(RadixSort::new(ctx, c, unsafe { SortCount::device(&self.large_meta) })?)),
         }
     }
 

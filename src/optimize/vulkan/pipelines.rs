@@ -104,12 +104,16 @@ impl RunPipelines {
         };
         let views: Vec<(u32, &TexelView)> = texels.iter().flatten().map(|(b, v)| (*b, v)).collect();
         let bound = |p: ComputePipeline, set: usize, table: Option<&Buffer>| -> Result<ComputePipeline> {
-            p.bind(set, &all)?;
-            if !views.is_empty() {
-                p.bind_texels(set, &views)?;
-            }
-            if let Some(t) = table {
-                p.bind(set, &[(binding::GATHER_TABLE, t)])?;
+            // SAFETY: the run holds the buffers, views and tables as long as its
+            // pipelines, and dispatches them only through itself.
+            unsafe {
+                p.bind(set, &all)?;
+                if !views.is_empty() {
+                    p.bind_texels(set, &views)?;
+                }
+                if let Some(t) = table {
+                    p.bind(set, &[(binding::GATHER_TABLE, t)])?;
+                }
             }
             Ok(p)
         };

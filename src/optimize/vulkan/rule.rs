@@ -80,7 +80,9 @@ pub fn replay(ctx: &Context, start: RuleState, slots: &[CostSlot]) -> Result<Vec
     )?;
     let schedule = Buffer::new(ctx, size, Location::Device, "replay-rule")?;
     let readback = Buffer::new(ctx, size * slots.len().max(1) as u64, Location::Readback, "replay-readback")?;
-    pass.bind(0, &[(binding::COSTS, &costs), (binding::SCHEDULE, &schedule)])?;
+    // SAFETY: the buffers live until this function returns, after its one
+    // submission is waited for: no dispatch of `pass` outlives them.
+    unsafe { pass.bind(0, &[(binding::COSTS, &costs), (binding::SCHEDULE, &schedule)])? };
     let uploads = [(&costs, bytemuck::cast_slice(slots)), (&schedule, bytemuck::bytes_of(&start))];
     upload_batch(ctx, &uploads, |_| {})?;
     ctx.submit(|cmd| {

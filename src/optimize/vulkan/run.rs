@@ -161,7 +161,8 @@ impl VulkanRun {
             &lane_table,
             shape.deferred_capacity(slices),
         )?;
-        let mut sort = buffers.large_sort(ctx, &large)?;
+        // SAFETY: the run holds the sort before its buffers (dropped first).
+        let mut sort = unsafe { buffers.large_sort(ctx, &large)? };
         let sort_choice = match sort.as_mut() {
             Some(sort) => {
                 let choice = large_sort_path(ctx, &large, options.hooks.large_sort)?;

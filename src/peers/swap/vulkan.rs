@@ -267,16 +267,20 @@ impl Passes {
                     sets: 1,
                 },
             )?;
-            p.bind(
-                0,
-                &[
-                    (binding::VALUES, &values_buf),
-                    (binding::OFFSETS, &offsets),
-                    (binding::PROPOSALS, &proposals),
-                    (binding::CLAIMS, &claims),
-                    (binding::STATS, &stats),
-                ],
-            )?;
+            // SAFETY: `Passes` holds these buffers as long as its pipelines, and
+            // dispatches them only through itself.
+            unsafe {
+                p.bind(
+                    0,
+                    &[
+                        (binding::VALUES, &values_buf),
+                        (binding::OFFSETS, &offsets),
+                        (binding::PROPOSALS, &proposals),
+                        (binding::CLAIMS, &claims),
+                        (binding::STATS, &stats),
+                    ],
+                )?
+            };
             Ok(p)
         };
         Ok(Self {

@@ -136,8 +136,14 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
         texels: &binding::TEXELS,
     };
     let pipeline = ComputePipeline::new(ctx, &desc)?;
-    pipeline
-        .bind(0, &[(binding::SCATTER_TARGETS, idx), (binding::SCATTER_VALUES, val), (binding::ACC, &acc)])?;
+    // SAFETY: the buffers outlive the pipeline, dropped at the end of this
+    // function after its one submission is waited for.
+    unsafe {
+        pipeline.bind(
+            0,
+            &[(binding::SCATTER_TARGETS, idx), (binding::SCATTER_VALUES, val), (binding::ACC, &acc)],
+        )?
+    };
     let runs = repeats + 2;
     let timer = Timer::new(ctx, 2 * runs)?;
     let groups = n.div_ceil(WORKGROUP);
