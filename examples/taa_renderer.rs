@@ -150,7 +150,8 @@ fn bind_plan(ctx: &Context, plan: SamplerPlan, name: &str) -> Result<Bound> {
     // SAFETY: the renderer's own image on this context's device, as `target` states
     // it, used by nothing else until the call returns.
     unsafe { write_plan(ctx, &plan, &image.target(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL))? };
-    image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+    // SAFETY: `write_plan` left every layer in the target's `layout_after`.
+    unsafe { image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL) };
     let block = Buffer::with_data(ctx, &plan.plan_block()?, Location::Device, "plan-block")?;
     Ok(Bound { image, block, plan })
 }
@@ -194,7 +195,8 @@ fn fsot_plan(ctx: &Context, args: &Args) -> Result<(Bound, String)> {
     let mask = unsafe { make_into_image(ctx, tile, settings, &target, &CancelFlag::new(), &mut report)? }
         .ok_or(Error::Interrupted)?;
     eprintln!();
-    image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+    // SAFETY: `make_into_image` left every layer in the target's `layout_after`.
+    unsafe { image.set_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL) };
     let what = format!(
         "32x32x16 perceptual-taa, seed {}, {} iterations made on the device in {:.1} s",
         args.seed,

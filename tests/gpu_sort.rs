@@ -275,3 +275,31 @@ fn the_lanes_path_reads_its_input_as_storage_where_texel_views_cannot_hold_it() 
     assert!((gk, gv) == cpu_sort(&keys, &vals), "lanes path, storage reads, device count");
     common::assert_no_validation_messages(&ctx);
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_known_count_past_the_capacity_sorts_the_capacity_and_a_sort_never_counted_sorts_nothing() {
+    let ctx = common::gpu_context();
+    let n = 5000u32;
+    let mut rng = Stream::new(derive(77, 1));
+    let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+    let vals: Vec<u32> = (0..n).collect();
+    for path in [SortPath::Auto, SortPath::LookBack] {
+        // Never given a count: the host's count starts at 0, so nothing moves.
+        let mut sort = RadixSort::new(&ctx, n, SortCount::Host).unwrap();
+        sort.path = path;
+        sort.upload_pairs(&keys, &vals).unwrap();
+        // SAFETY: the sort outlives this submission, which is waited for.
+        ctx.submit(|cmd| unsafe { sort.record(cmd, 32, None) }).unwrap();
+        assert_eq!(sort.keys().download::<u32>(n as usize).unwrap(), keys, "{path:?}: a sort of 0 pairs");
+        // A known count past the capacity sorts the capacity (the passes are
+        // sized by the buffers, not past them).
+        sort.set_count(n).unwrap();
+        // SAFETY: as above.
+        ctx.submit(|cmd| unsafe { sort.record(cmd, 32, Some(u32::MAX)) }).unwrap();
+        let (ck, cv) = cpu_sort(&keys, &vals);
+        assert_eq!(sort.keys().download::<u32>(n as usize).unwrap(), ck, "{path:?}");
+        assert_eq!(sort.vals().download::<u32>(n as usize).unwrap(), cv, "{path:?}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}

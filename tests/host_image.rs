@@ -416,7 +416,8 @@ fn a_host_records_the_sort_into_its_own_command_buffer() {
         // compute queue, recorded only here; `run` waits for the device before
         // `sort` can go.
         let recording = unsafe { fsot::vk::Recording::new(&ctx, cmd) };
-        sort.record(recording, 32, Some(n));
+        // SAFETY: as above: the sort outlives the commands.
+        unsafe { sort.record(recording, 32, Some(n)) };
     });
     let got: Vec<(u32, u32)> = sort
         .keys()
@@ -462,7 +463,7 @@ fn the_sort_sorts_a_hosts_own_buffers_in_place_and_refuses_ones_it_cannot_use() 
         host.run(|cmd| {
             // SAFETY: the host's command buffer, begun on the device `ctx`
             // wraps, recorded only here; `run` waits before anything goes.
-            sort.record(unsafe { fsot::vk::Recording::new(&ctx, cmd) }, bits, Some(n));
+            unsafe { sort.record(fsot::vk::Recording::new(&ctx, cmd), bits, Some(n)) };
         });
         let read =
             |memory| -> Vec<u32> { bytemuck::cast_slice(&host.read_memory(memory, 4 * n as usize)).to_vec() };

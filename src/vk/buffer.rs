@@ -263,7 +263,8 @@ pub fn download_batch(
         }
     };
     ctx.submit(|cmd| {
-        for ((buffer, bytes), &at) in sources.iter().zip(&offsets) {
+        // A copy of 0 bytes is not a valid region: nothing to copy.
+        for ((buffer, bytes), &at) in sources.iter().zip(&offsets).filter(|((_, b), _)| *b > 0) {
             copy(cmd, buffer, staging, *bytes, at);
         }
         barrier(cmd);

@@ -66,6 +66,8 @@ impl Commands {
 pub struct Recording<'a> {
     ctx: &'a Context,
     cmd: vk::CommandBuffer,
+    /// Neither `Send` nor `Sync`: a command buffer records on one thread.
+    _one_thread: std::marker::PhantomData<*const ()>,
 }
 
 impl<'a> Recording<'a> {
@@ -84,7 +86,7 @@ impl<'a> Recording<'a> {
     ///   recorded passes begin and end with a full compute barrier of their own,
     ///   but cannot see what the host recorded around them.
     pub unsafe fn new(ctx: &'a Context, cmd: vk::CommandBuffer) -> Self {
-        Self { ctx, cmd }
+        Self { ctx, cmd, _one_thread: std::marker::PhantomData }
     }
 
     /// The context whose device the commands are for.
@@ -173,7 +175,16 @@ impl Context {
         };
         check("vkQueueSubmit", submitted)?;
         // SAFETY: the fence belongs to this device.
-        check("vkWaitForFences", unsafe { device.wait_for_fences(&[commands.fence], true, u64::MAX) })?;
+        let waited = unsafe { device.wait_for_fences(&[commands.fence], true, u64::MAX) };
+        if waited.is_err() {
+            // What the commands use is freed once this returns: let the queue
+            // finish them first (a lost device has nothing pending).
+            if let Ok(_queue) = s.queue_lock.lock() {
+                // SAFETY: the queue is externally synchronised by the queue lock held here.
+                let _ = unsafe { device.queue_wait_idle(s.queue) };
+            }
+        }
+        check("vkWaitForFences", waited)?;
         // SAFETY: the fence is signalled and not in use by a pending submission.
         check("vkResetFences", unsafe { device.reset_fences(&[commands.fence]) })
     }

@@ -212,6 +212,9 @@ impl Context {
                     // SAFETY: the device was made by `new` and nothing else uses it yet.
                     unsafe { device.destroy_device(None) };
                 }
+                // The messenger and instance before the message sink they write to.
+                drop(owned);
+                drop(messages);
                 return Err(e);
             }
         };
@@ -283,9 +286,10 @@ impl Drop for Shared {
         // uses the device; the device is idle before anything is destroyed.
         unsafe {
             let _ = self.device.device_wait_idle(); // best effort: a lost device is torn down anyway
-            if let Ok(commands) = self.commands.lock() {
-                commands.destroy(&self.device);
-            }
+                                                    // A panic in a recording poisons the lock; the pool and fence go all the same.
+            let commands = self.commands.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+            commands.destroy(&self.device);
+            drop(commands);
             ManuallyDrop::drop(&mut self.commands);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owned.is_some() {

@@ -34,6 +34,9 @@ pub struct DeviceInfo {
     pub subgroup_ballot: bool,
     /// Subgroup vote operations in compute shaders.
     pub subgroup_vote: bool,
+    /// Subgroup arithmetic (prefix sums) in compute shaders (the radix sort and
+    /// the transport need them).
+    pub subgroup_arithmetic: bool,
     /// shaderFloat64: 64-bit floats in shaders.
     pub float64: bool,
 }
@@ -148,6 +151,8 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::BALLOT),
         subgroup_vote: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::VOTE),
+        subgroup_arithmetic: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
+            && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::ARITHMETIC),
         float64,
     }
 }

@@ -105,7 +105,11 @@ impl Image {
     /// Records the layout a write through `target(after)` left it in (the
     /// renderer's calls take a target, not the image): the next copy's barrier
     /// moves it from there.
-    pub fn set_layout(&mut self, layout: vk::ImageLayout) {
+    ///
+    /// # Safety
+    /// Every layer of the image is in `layout` now, and stays so until the next
+    /// copy (the barriers fsot records move it from there).
+    pub unsafe fn set_layout(&mut self, layout: vk::ImageLayout) {
         self.layout = layout;
     }
 
@@ -120,10 +124,23 @@ impl Image {
                 desc.width, desc.height, desc.layers
             )));
         }
+        if texel_bytes_of(desc.format).is_none() {
+            return Err(Error::invalid(format!(
+                "image {name}: {:?} is not one of the plain colour formats fsot copies",
+                desc.format
+            )));
+        }
         let viewable = vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::INPUT_ATTACHMENT;
+        let known = viewable | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST;
+        if !known.contains(desc.usage) {
+            return Err(Error::invalid(format!(
+                "image {name}: usage {:?} is not a colour image's",
+                desc.usage
+            )));
+        }
         if !desc.usage.intersects(viewable) {
             return Err(Error::invalid(format!(
                 "image {name}: usage {:?} allows no view (give SAMPLED or STORAGE)",
@@ -345,11 +362,20 @@ pub fn check_copy(
             target.usage
         )));
     }
-    if let Some(real) = texel_bytes_of(target.format).filter(|b| *b != texel_bytes) {
-        return Err(Error::invalid(format!(
-            "{:?} has {real}-byte texels, the copy was given {texel_bytes}",
-            target.format
-        )));
+    match texel_bytes_of(target.format) {
+        None => {
+            return Err(Error::invalid(format!(
+                "fsot copies the plain colour formats only, not {:?}",
+                target.format
+            )))
+        }
+        Some(real) if real != texel_bytes => {
+            return Err(Error::invalid(format!(
+                "{:?} has {real}-byte texels, the copy was given {texel_bytes}",
+                target.format
+            )))
+        }
+        Some(_) => {}
     }
     let needed = target.width as u64 * target.height as u64 * target.layers as u64 * texel_bytes as u64;
     if target.width == 0 || target.height == 0 || target.layers == 0 || needed != bytes as u64 {

@@ -33,6 +33,7 @@ impl Requirement {
             "shaderInt64" | "shaderBufferInt64Atomics" => info.int64_atomics,
             "subgroupSupportedOperations: BALLOT" => info.subgroup_ballot,
             "subgroupSupportedOperations: VOTE" => info.subgroup_vote,
+            "subgroupSupportedOperations: ARITHMETIC" => info.subgroup_arithmetic,
             "shaderFloat64" => info.float64,
             "shaderBufferFloat32AtomicAdd" => info.float_atomic_add,
             _ => false,
@@ -74,6 +75,13 @@ pub fn requirements() -> &'static [Requirement] {
             extension: None,
             required: true,
             used_for: "the radix sort's digit counts and the transport's ranks",
+        },
+        Requirement {
+            name: "subgroupSupportedOperations: ARITHMETIC",
+            enabled_in: PROPERTY,
+            extension: None,
+            required: true,
+            used_for: "the radix sort's and the transport's prefix sums within a subgroup",
         },
         Requirement {
             name: "subgroupSupportedOperations: VOTE",
@@ -123,6 +131,7 @@ mod tests {
             int64_atomics: on,
             subgroup_ballot: on,
             subgroup_vote: on,
+            subgroup_arithmetic: on,
             float64: on,
         }
     }
@@ -139,6 +148,9 @@ mod tests {
         let mut no_ballot = device(true);
         no_ballot.subgroup_ballot = false;
         assert_eq!(missing(&no_ballot).map(|r| r.name), Some("subgroupSupportedOperations: BALLOT"));
+        let mut no_prefix_sums = device(true);
+        no_prefix_sums.subgroup_arithmetic = false;
+        assert_eq!(missing(&no_prefix_sums).map(|r| r.name), Some("subgroupSupportedOperations: ARITHMETIC"));
         let mut no_atomics = device(true);
         no_atomics.int64_atomics = false;
         assert_eq!(missing(&no_atomics).map(|r| r.name), Some("shaderInt64"));
@@ -148,7 +160,12 @@ mod tests {
         let required: Vec<&str> = requirements().iter().filter(|r| r.required).map(|r| r.name).collect();
         assert_eq!(
             required,
-            ["shaderInt64", "shaderBufferInt64Atomics", "subgroupSupportedOperations: BALLOT"]
+            [
+                "shaderInt64",
+                "shaderBufferInt64Atomics",
+                "subgroupSupportedOperations: BALLOT",
+                "subgroupSupportedOperations: ARITHMETIC"
+            ]
         );
     }
 }

@@ -153,7 +153,9 @@ impl<'a> SortCount<'a> {
     /// sort runs.
     ///
     /// # Safety
-    /// The sort made with it binds the buffer: `buffer` outlives the sort.
+    /// The sort made with it binds the buffer: `buffer` is a buffer of the
+    /// sort's device that outlives the sort, and its first word is at most the
+    /// sort's capacity whenever the sort runs (the passes are sized by it).
     pub unsafe fn device(buffer: &'a Buffer) -> Self {
         SortCount::Device(DeviceCount(buffer))
     }
@@ -388,8 +390,11 @@ impl RadixSort {
                 shape.workgroup, shape.items, info.name, info.subgroup_size, info.max_shared_memory
             )));
         }
-        if !info.subgroup_ballot {
-            return Err(Error::VulkanUnavailable(format!("{} lacks subgroup ballot in compute", info.name)));
+        if !info.subgroup_ballot || !info.subgroup_arithmetic {
+            return Err(Error::VulkanUnavailable(format!(
+                "{} lacks subgroup ballot or arithmetic in compute",
+                info.name
+            )));
         }
         let max = Self::capacity_limit(ctx, shape.scan_capacity());
         if capacity > max {
@@ -404,7 +409,10 @@ impl RadixSort {
         let bytes = capacity as u64 * 4;
         let host_count = match count {
             SortCount::Device(_) => None,
-            SortCount::Host => Some(Buffer::new(ctx, 16, Location::Upload, "sort-count")?),
+            SortCount::Host => {
+                // A count of 0 until `set_count`: never a count past the buffers.
+                Some(Buffer::with_data(ctx, &[0u32; 4], Location::Upload, "sort-count")?)
+            }
         };
         let pair = |name: &str| -> Result<[Buffer; 2]> {
             Ok([
@@ -585,9 +593,15 @@ impl RadixSort {
     /// whole 8-bit digits, so by the low 8 x ceil(bits / 8) bits: bits above
     /// `bits` should be zero);
     /// the result is in `keys[0]`/`vals[0]`. Barriers included before and after.
-    /// `known`: the element count when the host knows it (smaller dispatches);
-    /// None: the count is only on the GPU.
-    pub fn record(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>) {
+    /// `known`: the element count when the host knows it (smaller dispatches;
+    /// at most the capacity); None: the count is only on the GPU.
+    ///
+    /// # Safety
+    /// `cmd` records on this sort's device, and the sort (with every buffer
+    /// bound to it) outlives the execution of the recorded commands: a sort
+    /// dropped before its recording is submitted and waited for leaves the
+    /// commands reading freed objects.
+    pub unsafe fn record(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>) {
         self.record_stamped(cmd, bits, known, None)
     }
 
@@ -620,6 +634,8 @@ impl RadixSort {
     }
 
     fn record_stamped(&self, cmd: Recording<'_>, bits: u32, known: Option<u32>, timer: Option<&Timer>) {
+        // The buffers hold the capacity: a larger count would size the passes past them.
+        let known = known.map(|n| n.min(self.capacity));
         let stamp = |i: u32| {
             if let Some(t) = timer {
                 t.stamp(cmd, i);
@@ -891,7 +907,8 @@ impl RadixSort {
             return Ok((Vec::new(), Vec::new()));
         }
         self.upload_pairs(keys, vals)?;
-        self.ctx.submit(|cmd| self.record(cmd, bits, Some(n)))?;
+        // SAFETY: the sort outlives this submission, which is waited for.
+        self.ctx.submit(|cmd| unsafe { self.record(cmd, bits, Some(n)) })?;
         Ok((self.keys[0].download(n as usize)?, self.vals[0].download(n as usize)?))
     }
 }

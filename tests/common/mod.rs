@@ -86,6 +86,7 @@ pub fn sort_with_device_count(
 ) -> (Vec<u32>, Vec<u32>) {
     count.upload(&[keys.len() as u32]).unwrap();
     sort.upload_pairs(keys, vals).unwrap();
-    ctx.submit(|cmd| sort.record(cmd, 32, None)).unwrap();
+    // SAFETY: the sort outlives this submission, which is waited for.
+    ctx.submit(|cmd| unsafe { sort.record(cmd, 32, None) }).unwrap();
     (sort.keys().download(keys.len()).unwrap(), sort.vals().download(keys.len()).unwrap())
 }

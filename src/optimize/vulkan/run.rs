@@ -360,13 +360,16 @@ impl VulkanRun {
         let args = &self.buffers.large_args;
         large.args.dispatch(cmd, 0, [1, 1, 1], &[]);
         barrier(cmd);
-        sort.record(cmd, self.large.point_bits, None);
+        // SAFETY: the run holds the sort and waits for every submission it records.
+        unsafe { sort.record(cmd, self.large.point_bits, None) };
         large.gather.dispatch_indirect(cmd, GATHER_BY_PROJECTION, args, ARG_GATHER, &[]);
         barrier(cmd);
-        sort.record(cmd, 32, None);
+        // SAFETY: as above.
+        unsafe { sort.record(cmd, 32, None) };
         large.gather.dispatch_indirect(cmd, GATHER_BY_SEGMENT, args, ARG_GATHER, &[]);
         barrier(cmd);
-        sort.record(cmd, self.large.seg_bits, None);
+        // SAFETY: as above.
+        unsafe { sort.record(cmd, self.large.seg_bits, None) };
         large.transport.dispatch_indirect(cmd, 0, args, ARG_SEGMENTS, bytemuck::bytes_of(push));
         barrier(cmd);
     }

@@ -513,6 +513,7 @@ mod tests {
             int64_atomics: true,
             subgroup_ballot: true,
             subgroup_vote: true,
+            subgroup_arithmetic: true,
             float64: true,
         }
     }

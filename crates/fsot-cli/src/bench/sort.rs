@@ -87,7 +87,8 @@ pub fn bench_sort(ctx: &Context, n: u32, repeats: u32, path: SortPath) -> Result
             barrier(cmd);
             timer.stamp(cmd, 4 * r + 1);
             timer.stamp(cmd, 4 * r + 2);
-            sort.record(cmd, 32, Some(n));
+            // SAFETY: the sort outlives this submission, which is waited for.
+            unsafe { sort.record(cmd, 32, Some(n)) };
             timer.stamp(cmd, 4 * r + 3);
         }
     })?;
