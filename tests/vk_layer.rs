@@ -90,6 +90,11 @@ fn an_owned_2d_array_image_takes_every_layer_and_gives_it_back_and_a_wrong_size_
     assert!(err.to_string().contains("4-byte texels, the copy was given 16"), "{err}");
     let err = image.fill(&bytes, 4, vk::ImageLayout::UNDEFINED).unwrap_err();
     assert!(err.to_string().contains("cannot be left in UNDEFINED"), "{err}");
+    // Nor in a layout that is not a colour image's, nor in one its usage lacks.
+    let err = image.fill(&bytes, 4, vk::ImageLayout::DEPTH_STENCIL_ATTACHMENT_OPTIMAL).unwrap_err();
+    assert!(err.to_string().contains("not DEPTH_STENCIL_ATTACHMENT_OPTIMAL"), "{err}");
+    let err = image.fill(&bytes, 4, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL).unwrap_err();
+    assert!(err.to_string().contains("needs the usage COLOR_ATTACHMENT"), "{err}");
     // Images the device cannot make, refused before vkCreateImage: no usage a
     // view allows, more layers than the device holds, a format it cannot store to.
     let copy_only = fsot::vk::ImageDesc { usage: vk::ImageUsageFlags::TRANSFER_DST, ..desc };

@@ -356,6 +356,33 @@ pub fn check_copy(
             target.layout_after
         )));
     }
+    // The colour layouts a copy may leave an image in, each with the usage
+    // Vulkan asks of an image in it.
+    use vk::ImageUsageFlags as U;
+    let needs = match target.layout_after {
+        vk::ImageLayout::GENERAL => Some(U::empty()),
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL => Some(U::TRANSFER_SRC),
+        vk::ImageLayout::TRANSFER_DST_OPTIMAL => Some(U::TRANSFER_DST),
+        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL => Some(U::SAMPLED | U::INPUT_ATTACHMENT),
+        vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL => Some(U::COLOR_ATTACHMENT),
+        _ => None,
+    };
+    match needs {
+        None => {
+            return Err(Error::invalid(format!(
+                "fsot leaves an image in GENERAL, TRANSFER_SRC_OPTIMAL, TRANSFER_DST_OPTIMAL, \
+                 SHADER_READ_ONLY_OPTIMAL or COLOR_ATTACHMENT_OPTIMAL, not {:?}",
+                target.layout_after
+            )))
+        }
+        Some(any) if !any.is_empty() && !target.usage.intersects(any) => {
+            return Err(Error::invalid(format!(
+                "an image left in {:?} needs the usage {any:?}; it has {:?}",
+                target.layout_after, target.usage
+            )))
+        }
+        Some(_) => {}
+    }
     if !target.usage.contains(usage) {
         return Err(Error::invalid(format!(
             "the image's usage {:?} lacks {usage:?}, which this copy needs",
