@@ -46,31 +46,14 @@ pub fn assert_no_validation_messages(ctx: &Context) {
     );
 }
 
-/// Compiles a compute shader against `glsl/include` (the public include) for
-/// Vulkan 1.2 with shaderc, keeping its names; panics with the compiler's
+/// Compiles a compute shader against `glsl/include` (the public include) by
+/// shaderc-link's recipe, keeping its names; panics with the compiler's
 /// message when it does not compile.
 pub fn compile_glsl(source: &str) -> Vec<u8> {
-    try_compile_glsl(source).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// `compile_glsl`, with the compiler's message as the error.
-pub fn try_compile_glsl(source: &str) -> Result<Vec<u8>, String> {
-    use shaderc_link::shaderc;
     let include = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl/include");
-    let compiler = shaderc::Compiler::new().map_err(|e| format!("shaderc: {e}"))?;
-    let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
-    options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
-    options.set_generate_debug_info();
-    options.set_include_callback(move |name, _kind, _from, _depth| {
-        let path = include.join(name);
-        std::fs::read_to_string(&path)
-            .map(|content| shaderc::ResolvedInclude { resolved_name: path.display().to_string(), content })
-            .map_err(|e| format!("cannot include {}: {e}", path.display()))
-    });
-    compiler
-        .compile_into_spirv(source, shaderc::ShaderKind::Compute, "shader.comp", "main", Some(&options))
-        .map(|a| a.as_binary_u8().to_vec())
-        .map_err(|e| format!("the shader does not compile:\n{e}"))
+    let compiler = shaderc_link::shaderc::Compiler::new().expect("shaderc");
+    shaderc_link::compile_source(&compiler, source, "shader.comp", &include, "glsl/include", &[], true)
+        .unwrap_or_else(|e| panic!("the shader does not compile:\n{e}"))
 }
 
 /// Sorts `keys` and `vals` by all 32 bits with a sort made with

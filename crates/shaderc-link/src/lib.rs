@@ -105,7 +105,7 @@ struct Job {
     define: Option<String>,
 }
 
-/// One shader or variant, by the recipe.
+/// One shader or variant of a family, by the recipe.
 fn compile(
     compiler: &shaderc::Compiler,
     dir: &Path,
@@ -114,6 +114,30 @@ fn compile(
     debug_names: bool,
 ) -> Result<Shader, String> {
     let Job { source, source_name, name, define } = job;
+    let defines: Vec<&str> = define.iter().flat_map(|m| m.split_whitespace()).collect();
+    let shown = format!("glsl/{family}");
+    let spirv = compile_source(compiler, source, source_name, dir, &shown, &defines, debug_names)
+        .map_err(|e| format!("{source_name} ({name}) failed to compile:\n{e}"))?;
+    let what = match define {
+        Some(m) => format!("`{source_name}` with `{m}`"),
+        None => format!("`{source_name}`"),
+    };
+    Ok(Shader { file: format!("{}.spv", name.to_lowercase()), name: name.clone(), what, spirv })
+}
+
+/// Compiles one compute shader by the recipe (Vulkan 1.2, SPIR-V 1.3,
+/// optimised, warnings as errors; with `debug_names` its names kept), each of
+/// `defines` a macro defined: `#include "x"` reads `include_dir/x`, named
+/// `shown_dir/x` in the SPIR-V so its bytes do not depend on where the files lie.
+pub fn compile_source(
+    compiler: &shaderc::Compiler,
+    source: &str,
+    source_name: &str,
+    include_dir: &Path,
+    shown_dir: &str,
+    defines: &[&str],
+    debug_names: bool,
+) -> Result<Vec<u8>, String> {
     let mut options = shaderc::CompileOptions::new().map_err(|e| format!("shaderc: {e}"))?;
     options.set_target_env(shaderc::TargetEnv::Vulkan, shaderc::EnvVersion::Vulkan1_2 as u32);
     options.set_target_spirv(shaderc::SpirvVersion::V1_3);
@@ -122,33 +146,24 @@ fn compile(
     if debug_names {
         options.set_generate_debug_info();
     }
-    for m in define.iter().flat_map(|m| m.split_whitespace()) {
+    for m in defines {
         options.add_macro_definition(m, None);
     }
-    let include_dir = dir.to_path_buf();
-    let family_name = family.to_string();
+    let include_dir = include_dir.to_path_buf();
+    let shown_dir = shown_dir.to_string();
     options.set_include_callback(move |included, _kind, _from, _depth| {
         let path = include_dir.join(included);
         fs::read_to_string(&path)
             .map(|content| shaderc::ResolvedInclude {
-                resolved_name: format!("glsl/{family_name}/{included}"),
+                resolved_name: format!("{shown_dir}/{included}"),
                 content,
             })
             .map_err(|e| format!("cannot include {}: {e}", path.display()))
     });
     let artifact = compiler
         .compile_into_spirv(source, shaderc::ShaderKind::Compute, source_name, "main", Some(&options))
-        .map_err(|e| format!("{source_name} ({name}) failed to compile:\n{e}"))?;
-    let what = match define {
-        Some(m) => format!("`{source_name}` with `{m}`"),
-        None => format!("`{source_name}`"),
-    };
-    Ok(Shader {
-        file: format!("{}.spv", name.to_lowercase()),
-        name: name.clone(),
-        what,
-        spirv: artifact.as_binary_u8().to_vec(),
-    })
+        .map_err(|e| e.to_string())?;
+    Ok(artifact.as_binary_u8().to_vec())
 }
 
 /// The Rust module that embeds a family: one constant per shader, read with
