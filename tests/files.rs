@@ -152,6 +152,31 @@ fn reading_rejects_bad_masks_with_reasons() {
     }
 }
 
+/// A two-frame file of one block a frame: the byte offset of its offset tables
+/// (two u64s, the first pointing just past them) and of each frame's chunk.
+fn one_block_frames(bytes: &[u8]) -> (usize, [usize; 2]) {
+    let u64_at = |p: usize| u64::from_le_bytes(bytes[p..p + 8].try_into().unwrap()) as usize;
+    let table = (0..bytes.len() - 16).find(|&p| u64_at(p) == p + 16).expect("the offset tables");
+    (table, [u64_at(table), u64_at(table + 8)])
+}
+
+#[test]
+fn a_file_that_names_one_block_twice_is_refused_not_read_with_zeros_for_the_missing_one() {
+    let good = exr::encode(&Mask::white(Tile::new(4, 4, 2, 1, 2).unwrap(), 3)).unwrap();
+    let (table, chunks) = one_block_frames(&good);
+    assert!(exr::decode(&good).is_ok());
+    // The offset table sends frame 1's entry to frame 0's chunk.
+    let mut bytes = good.clone();
+    bytes.copy_within(table..table + 8, table + 8);
+    let reason = exr::decode(&bytes).unwrap_err();
+    assert!(reason.contains("appears twice"), "{reason}");
+    // Frame 1's chunk says it belongs to part 0 (a chunk starts with its part).
+    let mut bytes = good.clone();
+    bytes[chunks[1]..chunks[1] + 4].copy_from_slice(&0i32.to_le_bytes());
+    let reason = exr::decode(&bytes).unwrap_err();
+    assert!(reason.contains("frame 0") && reason.contains("appears twice"), "{reason}");
+}
+
 #[test]
 fn an_uncommitted_output_leaves_the_existing_file_untouched() {
     let dir = tempfile::tempdir().unwrap();

@@ -15,10 +15,13 @@ use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
+use exr::block::chunk::Chunk;
+use exr::block::UncompressedBlock;
+use exr::meta::header::Header;
 use exr::prelude::*;
 
 use crate::core::mask::Mask;
-use crate::core::tile::Tile;
+use crate::core::tile::{Tile, MAX_DIMS, MAX_SPP};
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 
@@ -181,75 +184,56 @@ fn check_promised_size(bytes: &[u8]) -> std::result::Result<(), String> {
 }
 
 /// Decodes EXR bytes into a mask; the error is a reason for the user.
+///
+/// Block by block: the full-resolution blocks of every frame must each arrive
+/// exactly once (a file whose offset table or chunks name a block twice, or leave
+/// one out, is refused rather than read with zeros where the block was missing),
+/// and only then are they decompressed into the mask.
 pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
     check_promised_size(bytes)?;
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .all_layers()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| format!("not a readable EXR file ({e})"))?;
-    let layers = &image.layer_data;
-    if layers.is_empty() {
-        return Err("the file holds no frames".into());
-    }
-    let size = layers[0].size;
-    let (w, h) = (size.0, size.1);
-    // Channel layout from the first frame.
-    let names: Vec<String> = layers[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
-    let (spp, dims) = layout_of(&names)?;
-    let tile = Tile::new(w, h, layers.len(), spp, dims).map_err(|e| e.to_string())?;
+    let unreadable = |e: exr::error::Error| format!("not a readable EXR file ({e})");
+    let reader = exr::block::read(Cursor::new(bytes), false).map_err(unreadable)?;
+    let meta = reader.meta_data().clone();
+    let (tile, layout) = frames_of(&meta.headers)?;
+    let chunks = reader
+        .filter_chunks(false, |_, block, _| block.is_largest_resolution_level())
+        .map_err(unreadable)?
+        .collect::<exr::error::Result<Vec<Chunk>>>()
+        .map_err(unreadable)?;
+    check_every_block_once(&meta.headers, &chunks)?;
+    let (w, spp, dims) = (tile.width, tile.spp, tile.dims);
     let mut samples = vec![0.0f32; tile.values()];
-    for (t, layer) in layers.iter().enumerate() {
-        let expected = format!("frame{t:04}");
-        let name = layer.attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_default();
-        if name != expected {
-            return Err(format!("part {t} is named {name:?}; expected {expected:?} (frames in order)"));
-        }
-        if layer.size != size {
-            return Err(format!("frame {t} is {}x{}, frame 0 is {w}x{h}", layer.size.0, layer.size.1));
-        }
-        let list = &layer.channel_data.list;
-        if list.len() != spp * dims {
-            return Err(format!("frame {t} has {} channels, frame 0 has {}", list.len(), spp * dims));
-        }
-        for s in 0..spp {
-            for k in 0..dims {
-                let want = channel_name(&tile, s, k);
-                let channel = list
-                    .iter()
-                    .find(|c| c.name.to_string() == want)
-                    .ok_or_else(|| format!("frame {t} lacks channel {want}"))?;
-                let values: Vec<f32> = match &channel.sample_data {
-                    FlatSamples::F32(v) => v.clone(),
-                    FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-                    FlatSamples::U32(_) => return Err(format!("channel {want} holds integers, not floats")),
-                };
-                if values.len() != w * h {
+    for chunk in chunks {
+        let block = UncompressedBlock::decompress_chunk(chunk, &meta, false).map_err(unreadable)?;
+        let t = block.index.layer;
+        let header = &meta.headers[t];
+        for line in block.lines(&header.channels) {
+            let (s, k) = layout[line.location.channel];
+            let name = || channel_name(&tile, s, k);
+            let values: Vec<f32> = match header.channels.list[line.location.channel].sample_type {
+                SampleType::F32 => line.read_samples::<f32>().collect::<exr::error::Result<_>>(),
+                SampleType::F16 => line.read_samples::<f16>().map(|v| v.map(f16::to_f32)).collect(),
+                SampleType::U32 => return Err(format!("channel {} holds integers, not floats", name())),
+            }
+            .map_err(unreadable)?;
+            let Vec2(x0, y) = line.location.position;
+            for (i, &v) in values.iter().enumerate() {
+                let x = x0 + i;
+                if x >= w || y >= tile.height {
+                    return Err(format!("frame {t}: a block reaches past its {w}x{} pixels", tile.height));
+                }
+                if !(v.is_finite() && (0.0..1.0).contains(&v)) {
                     return Err(format!(
-                        "channel {want} of frame {t} has {} values, expected {}",
-                        values.len(),
-                        w * h
+                        "frame {t}, pixel ({x}, {y}), channel {}: value {v} is outside [0, 1)",
+                        name()
                     ));
                 }
-                for (i, &v) in values.iter().enumerate() {
-                    if !(v.is_finite() && (0.0..1.0).contains(&v)) {
-                        return Err(format!(
-                            "frame {t}, pixel ({}, {}), channel {want}: value {v} is outside [0, 1)",
-                            i % w,
-                            i / w
-                        ));
-                    }
-                    let point = tile.pixel_index(i % w, i / w, t) * spp + s;
-                    samples[point * dims + k] = v;
-                }
+                samples[(tile.pixel_index(x, y, t) * spp + s) * dims + k] = v;
             }
         }
     }
-    let mut meta: Vec<(String, String)> = layers[0]
-        .attributes
+    let mut meta: Vec<(String, String)> = meta.headers[0]
+        .own_attributes
         .other
         .iter()
         .filter_map(|(k, v)| {
@@ -266,6 +250,82 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
         .collect();
     meta.sort();
     Ok(Mask { tile, samples, meta })
+}
+
+/// The tile the parts describe, and for each channel index of a part (every part
+/// lists the same names, in the file's order) the (sample, dimension) it holds:
+/// parts named frame0000.. in order, one size, a complete channel layout of full
+/// resolution floats.
+fn frames_of(headers: &[Header]) -> std::result::Result<(Tile, Vec<(usize, usize)>), String> {
+    let first = headers.first().ok_or("the file holds no frames")?;
+    let size = first.layer_size;
+    let names: Vec<String> = first.channels.list.iter().map(|c| c.name.to_string()).collect();
+    let (spp, dims) = layout_of(&names)?;
+    let tile = Tile::new(size.0, size.1, headers.len(), spp, dims).map_err(|e| e.to_string())?;
+    let mut layout = vec![(0, 0); names.len()];
+    for s in 0..spp {
+        for k in 0..dims {
+            let want = channel_name(&tile, s, k);
+            let at = names.iter().position(|n| *n == want).ok_or_else(|| format!("frame 0 lacks channel {want}"))?;
+            layout[at] = (s, k);
+        }
+    }
+    for (t, header) in headers.iter().enumerate() {
+        let expected = format!("frame{t:04}");
+        let name = header.own_attributes.layer_name.as_ref().map(|n| n.to_string()).unwrap_or_default();
+        if name != expected {
+            return Err(format!("part {t} is named {name:?}; expected {expected:?} (frames in order)"));
+        }
+        if header.layer_size != size {
+            return Err(format!(
+                "frame {t} is {}x{}, frame 0 is {}x{}",
+                header.layer_size.0, header.layer_size.1, size.0, size.1
+            ));
+        }
+        if header.deep {
+            return Err(format!("frame {t} holds deep data"));
+        }
+        let list = &header.channels.list;
+        if list.len() != names.len() {
+            return Err(format!("frame {t} has {} channels, frame 0 has {}", list.len(), names.len()));
+        }
+        for (channel, want) in list.iter().zip(&names) {
+            if channel.name.to_string() != *want {
+                return Err(format!("frame {t} lacks channel {want}"));
+            }
+            if channel.sampling != Vec2(1, 1) {
+                return Err(format!("channel {want} of frame {t} is subsampled"));
+            }
+        }
+    }
+    Ok((tile, layout))
+}
+
+/// Every full-resolution block of every part arrives exactly once.
+fn check_every_block_once(headers: &[Header], chunks: &[Chunk]) -> std::result::Result<(), String> {
+    let mut seen = std::collections::HashSet::new();
+    let mut found = vec![0usize; headers.len()];
+    for chunk in chunks {
+        let t = chunk.layer_index;
+        let header = headers.get(t).ok_or_else(|| format!("a block names part {t}, of {}", headers.len()))?;
+        let block = header
+            .get_block_data_indices(&chunk.compressed_block)
+            .map_err(|e| format!("not a readable EXR file ({e})"))?;
+        if !block.is_largest_resolution_level() {
+            return Err(format!("frame {t}: a block of a smaller resolution level stands for a full one"));
+        }
+        if !seen.insert((t, block.tile_index)) {
+            return Err(format!("frame {t}: block {:?} appears twice (and another is missing)", block.tile_index));
+        }
+        found[t] += 1;
+    }
+    for (t, header) in headers.iter().enumerate() {
+        let expected = header.blocks_increasing_y_order().filter(|b| b.location.is_largest_resolution_level()).count();
+        if found[t] != expected {
+            return Err(format!("frame {t} holds {} of its {expected} blocks of pixels", found[t]));
+        }
+    }
+    Ok(())
 }
 
 /// (spp, dims) from a frame's channel names.
@@ -289,6 +349,11 @@ fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
             .and_then(|(s, k)| Some((s.parse::<usize>().ok()?, k.parse::<usize>().ok()?)));
         let (s, k) = parsed
             .ok_or_else(|| format!("channel {n:?} is neither R/G/B/A nor sSS.dK (sample SS, dimension K)"))?;
+        if s >= MAX_SPP || k >= MAX_DIMS {
+            return Err(format!(
+                "channel {n:?}: a mask holds at most {MAX_SPP} samples of {MAX_DIMS} dimensions"
+            ));
+        }
         spp = spp.max(s + 1);
         dims = dims.max(k + 1);
     }
@@ -296,4 +361,26 @@ fn layout_of(names: &[String]) -> std::result::Result<(usize, usize), String> {
         return Err(format!("channels {names:?} do not cover {spp} samples x {dims} dimensions"));
     }
     Ok((spp, dims))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn channel_names_past_the_largest_tile_are_refused_not_overflowed() {
+        for names in [
+            vec!["s18446744073709551615.d0"],
+            vec!["s0.d18446744073709551615"],
+            vec!["s9223372036854775808.d1", "s0.d0"],
+            vec!["s64.d0"],
+            vec!["s00.d8"],
+        ] {
+            let names: Vec<String> = names.into_iter().map(String::from).collect();
+            let reason = layout_of(&names).unwrap_err();
+            assert!(reason.contains("at most 64 samples of 8 dimensions"), "{names:?}: {reason}");
+        }
+        let names: Vec<String> = ["s63.d7"].into_iter().map(String::from).collect();
+        assert!(layout_of(&names).unwrap_err().contains("do not cover 64 samples x 8 dimensions"));
+    }
 }
