@@ -97,6 +97,9 @@ pub fn decode(bytes: &[u8], expected: &str, tile: &Tile) -> std::result::Result<
     }
     let header_len = u32::from_le_bytes(body[8..12].try_into().map_err(|_| "truncated")?) as usize;
     let header = body.get(12..12 + header_len).ok_or("truncated header")?;
+    if header.len() as u64 > MAX_HEADER {
+        return Err("header longer than any checkpoint's".into());
+    }
     let header = std::str::from_utf8(header).map_err(|_| "header is not UTF-8")?;
     let field = |key: &str| -> std::result::Result<&str, String> {
         header
@@ -135,6 +138,9 @@ pub fn decode(bytes: &[u8], expected: &str, tile: &Tile) -> std::result::Result<
     if first.iter().chain(&second).any(|v| !v.is_finite()) {
         return Err("holds a non-finite optimizer state".into());
     }
+    if second.iter().any(|v| *v < 0.0) {
+        return Err("holds a negative second moment".into());
+    }
     let plateau = match header.lines().find_map(|l| l.strip_prefix("plateau=")) {
         Some(p) => Some(parse_plateau(p).ok_or("bad plateau in header")?),
         None => None,
@@ -159,7 +165,21 @@ pub fn write(path: &Path, fingerprint: &str, state: &RunState) -> Result<()> {
     AtomicFile::create(path)?.commit(&encode(fingerprint, state))
 }
 
+/// The most header bytes a checkpoint carries (its own are a few hundred).
+const MAX_HEADER: u64 = 1 << 16;
+
 pub fn read(path: &Path, fingerprint: &str, tile: &Tile) -> Result<RunState> {
+    // A checkpoint's size follows from the tile: a larger file is refused before
+    // it is read into memory.
+    let most = 20 + MAX_HEADER + 12 * tile.values() as u64;
+    if let Ok(len) = std::fs::metadata(path).map(|m| m.len()) {
+        if len > most {
+            return Err(Error::bad_file(
+                path,
+                format!("cannot resume: {len} bytes, more than a checkpoint of this tile holds ({most})"),
+            ));
+        }
+    }
     let bytes = crate::io::read_regular(path)
         .map_err(|e| Error::io(format!("cannot read the checkpoint {}", path.display()), e))?;
     decode(&bytes, fingerprint, tile).map_err(|why| Error::bad_file(path, format!("cannot resume: {why}")))
@@ -230,8 +250,26 @@ mod tests {
         let mut outside = state.clone();
         outside.samples[3] = 1.0;
         assert!(decode(&encode(&fp, &outside), &fp, &tile).unwrap_err().contains("outside"));
-        let mut nan = state;
+        let mut nan = state.clone();
         nan.first[0] = f32::NAN;
         assert!(decode(&encode(&fp, &nan), &fp, &tile).unwrap_err().contains("non-finite"));
+        let mut negative = state;
+        negative.second = vec![0.0; tile.values()];
+        assert!(decode(&encode(&fp, &negative), &fp, &tile).is_ok());
+        negative.second[5] = -1e-9;
+        assert!(decode(&encode(&fp, &negative), &fp, &tile).unwrap_err().contains("negative second moment"));
+    }
+
+    #[test]
+    fn a_file_larger_than_a_checkpoint_of_the_tile_is_refused_before_it_is_read() {
+        let (tile, fp, state) = setup();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.ckpt");
+        write(&path, &fp, &state).unwrap();
+        assert_eq!(read(&path, &fp, &tile).unwrap(), state);
+        // Sparse: its length is all that is looked at.
+        std::fs::File::options().write(true).open(&path).unwrap().set_len(1 << 30).unwrap();
+        let e = read(&path, &fp, &tile).unwrap_err().to_string();
+        assert!(e.contains("more than a checkpoint of this tile holds"), "{e}");
     }
 }

@@ -5,7 +5,7 @@
 use crate::core::kernel::{Kernel, KernelSpec};
 use crate::core::mask::Mask;
 use crate::core::slice::DEFAULT_AXIS_SHARE;
-use crate::core::step_rule::{Plateau, PlateauState, StepRule};
+use crate::core::step_rule::{Plateau, PlateauState, StepRule, FINAL_FRACTION};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 
@@ -270,8 +270,19 @@ impl RunState {
             return Err(Error::invalid("the saved state does not match this run's stopping rule"));
         }
         if let (Some(state), Some(rule)) = (self.plateau, settings.until.plateau()) {
-            if state.count >= rule.window.max(1) || !state.scale.is_finite() || state.scale <= 0.0 {
+            if state.count >= rule.window.max(1) {
                 return Err(Error::invalid("the saved state's plateau window does not fit this run's rule"));
+            }
+            // The step's scale starts at most at 1 and falls no lower than the
+            // schedule's floor; the objectives summed and averaged are
+            // non-negative (no window yet: NaN).
+            let scale = (FINAL_FRACTION..=1.0).contains(&state.scale);
+            let previous = state.previous.is_nan() || (state.previous.is_finite() && state.previous >= 0.0);
+            if !(scale && previous && state.sum.is_finite() && state.sum >= 0.0) {
+                return Err(Error::invalid(format!(
+                    "the saved state's plateau schedule is not one a run reaches (scale {}, window mean {}, sum {})",
+                    state.scale, state.previous, state.sum
+                )));
             }
         }
         if self.iteration > settings.iterations {
@@ -408,5 +419,22 @@ mod tests {
         assert!(saved(Plateau::DEFAULT.window - 1, 0.5).check(&tile, &settings).is_ok());
         assert!(saved(Plateau::DEFAULT.window, 0.5).check(&tile, &settings).is_err(), "a full window");
         assert!(saved(0, f32::NAN).check(&tile, &settings).is_err(), "a NaN step scale");
+        for scale in [1.0, FINAL_FRACTION] {
+            assert!(saved(0, scale).check(&tile, &settings).is_ok(), "{scale}");
+        }
+        for scale in [f32::MAX, 1.5, FINAL_FRACTION / 2.0, 0.0, -0.5] {
+            let e = saved(0, scale).check(&tile, &settings).unwrap_err().to_string();
+            assert!(e.contains("not one a run reaches"), "{scale}: {e}");
+        }
+        let with = |previous: f64, sum: f64| {
+            let mut state = saved(3, 0.5);
+            state.plateau = Some(PlateauState { previous, sum, ..state.plateau.unwrap() });
+            state.check(&tile, &settings)
+        };
+        assert!(with(f64::NAN, 0.0).is_ok() && with(0.25, 0.5).is_ok());
+        for (previous, sum) in [(f64::INFINITY, 0.0), (-1.0, 0.0), (0.25, f64::NAN), (0.25, -1.0), (0.25, f64::INFINITY)] {
+            let e = with(previous, sum).unwrap_err().to_string();
+            assert!(e.contains("not one a run reaches"), "{previous} {sum}: {e}");
+        }
     }
 }
