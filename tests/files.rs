@@ -177,6 +177,59 @@ fn a_file_that_names_one_block_twice_is_refused_not_read_with_zeros_for_the_miss
     assert!(reason.contains("frame 0") && reason.contains("appears twice"), "{reason}");
 }
 
+/// Another tool's file: tiles of 3 x 3 with mip levels below the full
+/// resolution, half floats, frames as parts named in order.
+#[test]
+fn a_tiled_mip_mapped_half_float_file_reads_its_full_resolution() {
+    use ::exr::prelude::*;
+    let (w, h, frames) = (8, 8, 2);
+    let value = |x: usize, y: usize, t: usize, k: usize| ((x + w * (y + h * t)) * 2 + k) as f32 / 512.0;
+    let layers: Vec<_> = (0..frames)
+        .map(|t| {
+            let channel = |name: &str, k: usize| {
+                let full: Vec<f16> = (0..w * h).map(|i| f16::from_f32(value(i % w, i / w, t, k))).collect();
+                // Smaller levels hold values no mask has: they must not be read.
+                let levels = [4usize, 2, 1].map(|s| FlatSamples::F16(vec![f16::from_f32(7.0); s * s]));
+                let level_data = std::iter::once(FlatSamples::F16(full)).chain(levels).collect();
+                AnyChannel::new(
+                    name,
+                    Levels::Mip { rounding_mode: ::exr::math::RoundingMode::Down, level_data },
+                )
+            };
+            Layer::new(
+                (w, h),
+                LayerAttributes::named(format!("frame{t:04}").as_str()),
+                Encoding {
+                    blocks: Blocks::Tiles(Vec2(3, 3)),
+                    compression: Compression::ZIP1,
+                    ..Encoding::default()
+                },
+                AnyChannels::sort(SmallVec::from_vec(vec![channel("R", 0), channel("G", 1)])),
+            )
+        })
+        .collect();
+    let image = Image::from_layers(ImageAttributes::new(IntegerBounds::from_dimensions((w, h))), layers);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write().to_buffered(&mut bytes).unwrap();
+    let meta = MetaData::read_from_buffered(std::io::Cursor::new(bytes.get_ref()), true).unwrap();
+    assert!(meta.headers.iter().all(|h| h.blocks
+        == ::exr::meta::BlockDescription::Tiles(TileDescription {
+            tile_size: Vec2(3, 3),
+            level_mode: ::exr::meta::attribute::LevelMode::MipMap,
+            rounding_mode: ::exr::math::RoundingMode::Down,
+        })));
+    let mask = exr::decode(bytes.get_ref()).unwrap();
+    assert_eq!((mask.tile.width, mask.tile.height, mask.tile.frames, mask.tile.dims), (w, h, frames, 2));
+    for t in 0..frames {
+        for y in 0..h {
+            for x in 0..w {
+                let want = [0, 1].map(|k| f16::from_f32(value(x, y, t, k)).to_f32());
+                assert_eq!(mask.sample(x, y, t, 0), &want[..], "({x}, {y}, {t})");
+            }
+        }
+    }
+}
+
 #[test]
 fn an_uncommitted_output_leaves_the_existing_file_untouched() {
     let dir = tempfile::tempdir().unwrap();
