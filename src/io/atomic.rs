@@ -74,17 +74,56 @@ impl AtomicFile {
     }
 
     /// Writes `bytes` to the temporary file, syncs it, renames it over the target.
-    pub fn commit(mut self, bytes: &[u8]) -> Result<()> {
+    pub fn commit(self, bytes: &[u8]) -> Result<()> {
+        self.stage(bytes)?.commit()
+    }
+
+    /// Writes `bytes` to the temporary file and syncs it, the target untouched
+    /// until `Staged::commit` (several outputs: `commit_all`). An existing
+    /// target's permissions carry over to the new file.
+    pub fn stage(mut self, bytes: &[u8]) -> Result<Staged> {
         let ctx = || format!("writing {}", self.temp.display());
         let mut file = File::create(&self.temp).map_err(|e| Error::io(ctx(), e))?;
         file.write_all(bytes).map_err(|e| Error::io(ctx(), e))?;
+        if let Ok(old) = fs::metadata(&self.dest) {
+            file.set_permissions(old.permissions()).map_err(|e| Error::io(ctx(), e))?;
+        }
         file.sync_all().map_err(|e| Error::io(ctx(), e))?;
-        drop(file);
+        let temp = std::mem::take(&mut self.temp);
+        Ok(Staged { dest: self.dest.clone(), temp })
+    }
+}
+
+/// An output written in full beside its target, waiting to be renamed over it;
+/// dropped uncommitted, it goes and the target stays as it was.
+pub struct Staged {
+    dest: PathBuf,
+    temp: PathBuf,
+}
+
+impl Staged {
+    /// Renames the written file over the target.
+    pub fn commit(mut self) -> Result<()> {
         fs::rename(&self.temp, &self.dest)
             .map_err(|e| Error::io(format!("renaming into {}", self.dest.display()), e))?;
         self.temp = PathBuf::new();
         Ok(())
     }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.temp.as_os_str().is_empty() && self.temp.exists() {
+            let _ = fs::remove_file(&self.temp); // best effort: nothing to report from drop
+        }
+    }
+}
+
+/// Writes every output in full before any target is replaced: one that cannot be
+/// written (a full disk) leaves every target as it was.
+pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
+    let staged = outputs.into_iter().map(|(file, bytes)| file.stage(&bytes)).collect::<Result<Vec<_>>>()?;
+    staged.into_iter().try_for_each(Staged::commit)
 }
 
 impl Drop for AtomicFile {
@@ -116,6 +155,42 @@ mod tests {
         AtomicFile::create(&p).unwrap().commit(b"new").unwrap();
         assert_eq!(fs::read(&p).unwrap(), b"new");
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 1, "no temporary file left");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn outputs_committed_together_replace_nothing_unless_every_one_is_written() {
+        let dir = scratch("together");
+        let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+        fs::write(&a, b"old a").unwrap();
+        fs::write(&b, b"old b").unwrap();
+        // b's temporary file cannot be made once its folder is gone.
+        let outputs = vec![(AtomicFile::create(&a).unwrap(), b"new a".to_vec())];
+        let sub = dir.join("sub");
+        fs::create_dir(&sub).unwrap();
+        let lost = AtomicFile::create(&sub.join("c.exr")).unwrap();
+        fs::remove_dir(&sub).unwrap();
+        let mut failing = outputs;
+        failing.push((lost, b"new c".to_vec()));
+        assert!(commit_all(failing).is_err());
+        assert_eq!(fs::read(&a).unwrap(), b"old a", "a stays as it was");
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 2, "no temporary file left");
+        let both = vec![(AtomicFile::create(&a).unwrap(), b"new a".to_vec()), (AtomicFile::create(&b).unwrap(), b"new b".to_vec())];
+        commit_all(both).unwrap();
+        assert_eq!((fs::read(&a).unwrap(), fs::read(&b).unwrap()), (b"new a".to_vec(), b"new b".to_vec()));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_replaced_file_keeps_its_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = scratch("mode");
+        let p = dir.join("m.exr");
+        fs::write(&p, b"old").unwrap();
+        fs::set_permissions(&p, fs::Permissions::from_mode(0o600)).unwrap();
+        AtomicFile::create(&p).unwrap().commit(b"new").unwrap();
+        assert_eq!(fs::metadata(&p).unwrap().permissions().mode() & 0o777, 0o600);
         fs::remove_dir_all(&dir).unwrap();
     }
 

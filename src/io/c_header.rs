@@ -8,7 +8,6 @@
 
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
-use crate::io::atomic::AtomicFile;
 use crate::io::ktx2::quantize;
 
 /// A C identifier from a file stem: letters, digits and `_`, not starting with
@@ -75,11 +74,10 @@ pub fn encode(mask: &Mask, name: &str) -> Result<String> {
     Ok(s)
 }
 
-/// Writes the header through an atomic file, the array named for the file.
-pub fn write(mask: &Mask, out: AtomicFile) -> Result<()> {
-    let stem = out.target().file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
-    let text = encode(mask, &identifier(&stem)?)?;
-    out.commit(text.as_bytes())
+/// The header for a file at `target`, its array named for the file.
+pub fn encode_for(mask: &Mask, target: &std::path::Path) -> Result<String> {
+    let stem = target.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+    encode(mask, &identifier(&stem)?)
 }
 
 #[cfg(test)]

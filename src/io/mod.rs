@@ -68,10 +68,16 @@ impl MaskFile {
 
     /// Writes `mask` in this kind of file.
     pub fn write(self, mask: &Mask, out: atomic::AtomicFile) -> Result<()> {
+        let bytes = self.encode(mask, out.target())?;
+        out.commit(&bytes)
+    }
+
+    /// The file's bytes; a C header's array is named for `target`'s file name.
+    pub fn encode(self, mask: &Mask, target: &Path) -> Result<Vec<u8>> {
         match self {
-            MaskFile::Exr => exr::write(mask, out),
-            MaskFile::Ktx2(f) => ktx2::write(mask, f, out),
-            MaskFile::CHeader => c_header::write(mask, out),
+            MaskFile::Exr => exr::encode(mask),
+            MaskFile::Ktx2(f) => ktx2::encode(mask, f),
+            MaskFile::CHeader => c_header::encode_for(mask, target).map(String::into_bytes),
         }
     }
 }
