@@ -287,6 +287,34 @@ fn a_run_that_stops_by_the_plateau_rule_resumes_exactly_and_stops_where_it_would
 }
 
 #[test]
+fn a_complete_run_keeps_its_checkpoint_until_its_mask_is_kept() {
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let options = checkpointed(RunOptions::default().backend(BackendChoice::Cpu), &dir);
+    let path = dir.path().join("run.ckpt");
+    let mut run = Run::start(tile, settings(20), None, options.clone()).unwrap();
+    run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    assert!(run.finished() && path.exists(), "a checkpoint every 7 iterations of 20");
+    let e = run.finish_with(|_| Err(fsot::Error::invalid("the disk is full"))).unwrap_err();
+    assert!(e.to_string().contains("the disk is full"), "{e}");
+    assert!(path.exists(), "a mask not kept leaves the checkpoint to resume from");
+    // Resumed, the run is complete: kept this time, its checkpoint goes.
+    let resume = Checkpointing { resume: true, ..options.checkpoint.clone().unwrap() };
+    let mut run = Run::start(tile, settings(20), None, options.checkpoint(Some(resume))).unwrap();
+    assert_eq!(run.resumed_from(), Some(14));
+    run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    let mut kept = Vec::new();
+    let mask = run
+        .finish_with(|m| {
+            kept = bits(m);
+            Ok(())
+        })
+        .unwrap();
+    assert_eq!(kept, bits(&mask));
+    assert!(!path.exists(), "a kept mask's checkpoint goes");
+}
+
+#[test]
 fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
     let _others = others();
     use fsot::optimize::settings::Until;

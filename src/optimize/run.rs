@@ -635,12 +635,20 @@ impl Run {
     /// The mask as it is now, with its provenance. When the run is complete its
     /// checkpoint is removed.
     pub fn finish(self) -> Result<Mask> {
-        self.finish_in_place()
+        self.finish_with(|_| Ok(()))
     }
 
-    /// As `finish`, leaving the run in place (for runs held in a slice).
-    pub fn finish_in_place(&self) -> Result<Mask> {
+    /// As `finish`, handing the mask to `keep` (writing it out) before the
+    /// checkpoint is removed: when `keep` fails, its error is returned and the
+    /// checkpoint stays to resume from.
+    pub fn finish_with(self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
+        self.finish_in_place_with(keep)
+    }
+
+    /// As `finish_with`, leaving the run in place (for runs held in a slice).
+    pub fn finish_in_place_with(&self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
         let mask = self.backend.mask()?;
+        keep(&mask)?;
         if let (Some(c), true) = (&self.options.checkpoint, self.finished()) {
             if c.path.exists() {
                 std::fs::remove_file(&c.path).map_err(|e| {

@@ -883,7 +883,9 @@ impl Plan {
                 }
                 let out = outs[index].take().ok_or_else(|| Error::invalid(format!("{file} ended twice")))?;
                 let (iterations, seconds) = (run.iteration(), run.seconds());
-                crate::io::exr::write(&run.finish_in_place()?, out)?;
+                // Written before its checkpoint goes: a failed write leaves the
+                // checkpoint to resume from.
+                run.finish_in_place_with(|mask| crate::io::exr::write(mask, out))?;
                 (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });
                 made[index] = Some(Made { file: file.clone(), iterations, seconds });
                 Ok(())
