@@ -368,6 +368,23 @@ fn an_output_folder_that_cannot_be_made_or_a_checkpoint_named_as_an_output_leave
     }
 }
 
+#[test]
+fn png_slices_that_cannot_all_be_written_are_refused_before_the_work_and_nothing_is_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    let slices = dir.path().join("slices");
+    std::fs::create_dir_all(slices.join("frame0002.png")).unwrap();
+    std::fs::write(slices.join("frame0000.png"), b"the user's slice").unwrap();
+    std::fs::write(dir.path().join("m.exr"), b"what the user had").unwrap();
+    let args = ["optimize", "--size", "8x8x4", "--iterations", "3", "--backend", "cpu", "--out", "m.exr"];
+    let o = fsot(&[&args[..], &["--png", "slices"]].concat(), dir.path());
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("frame0002.png is a directory"), "{err}");
+    assert!(!err.contains("optimizing"), "refused before the work: {err}");
+    assert_eq!(std::fs::read(slices.join("frame0000.png")).unwrap(), b"the user's slice");
+    assert!(!slices.join("frame0001.png").exists());
+    assert_eq!(std::fs::read(dir.path().join("m.exr")).unwrap(), b"what the user had");
+}
+
 /// Each case, `base` then its flags, fails with its message, no panic, and
 /// leaves no `m.exr` in `dir`.
 fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {

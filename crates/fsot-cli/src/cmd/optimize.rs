@@ -48,17 +48,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         })
         .collect::<Result<Vec<_>>>()?;
     if let Some(dir) = &args.png {
-        if dir.exists() && !dir.is_dir() {
-            return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
-        }
-        let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        if !dir.exists() && !parent.is_dir() {
-            return Err(Error::invalid(format!(
-                "--png {}: {} is not a folder to make it in",
-                dir.display(),
-                parent.display()
-            )));
-        }
+        check_png_folder(dir, &tile)?;
     }
     if args.method != Method::Fsot {
         if args.checkpoint.is_some() || args.resume || args.axis_share.is_some() {
@@ -153,16 +143,18 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let set_up = run.set_up();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let start_samples = run.start_samples()?;
-    let mask = run.finish()?;
-    // Scored after the run, so that a time budget is the run's alone.
-    let scored = scores(&tile, &[&start_samples, &mask.samples], spec, SCORE_SLICES);
+    let mut scored = Vec::new();
+    // The outputs are written before the checkpoint goes: a failed write leaves
+    // it to resume from.
+    run.finish_with(|mask| {
+        // Scored after the run, so that a time budget is the run's alone.
+        let after = mask.samples.clone();
+        scored = unless_interrupted(&cancel, &args.out, move || {
+            scores(&tile, &[&start_samples, &after], spec, SCORE_SLICES)
+        })?;
+        write_outputs(&args, mask, (file_kind, out), also, &cancel)
+    })?;
     let (before, after) = (scored[0], scored[1]);
-    // The PNG slices first: a folder that cannot be made leaves --out as it was.
-    write_png(&args, &mask)?;
-    file_kind.write(&mask, out)?;
-    for (kind, file) in also {
-        kind.write(&mask, file)?;
-    }
     println!(
         "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
         args.out.display(),
@@ -374,12 +366,10 @@ pub(crate) fn make_baseline(
     }
     let mask = made.mask;
     let seconds = start.elapsed().as_secs_f64();
-    let s = score(&mask, spec, SCORE_SLICES);
-    write_png(args, &mask)?;
-    kind.write(&mask, out)?;
-    for (kind, file) in also {
-        kind.write(&mask, file)?;
-    }
+    let cancel = cmd::env::interrupt_flag()?;
+    let scored = mask.clone();
+    let s = unless_interrupted(&cancel, &args.out, move || score(&scored, spec, SCORE_SLICES))?;
+    write_outputs(args, &mask, (kind, out), also, &cancel)?;
     println!(
         "wrote {}: {}, method {:?}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
         args.out.display(),
@@ -392,13 +382,82 @@ pub(crate) fn make_baseline(
     Ok(())
 }
 
-/// The mask's PNG slices into `--png`, if given.
-fn write_png(args: &OptimizeArgs, mask: &fsot::Mask) -> Result<()> {
+/// `--png`'s folder, checked before the long work: an existing folder whose
+/// slice files can each be replaced, or a folder that can be made.
+fn check_png_folder(dir: &std::path::Path, tile: &Tile) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
+    }
+    if dir.is_dir() {
+        for name in fsot::io::png::names(tile) {
+            AtomicFile::create(&dir.join(name))?;
+        }
+        return Ok(());
+    }
+    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    if !parent.is_dir() {
+        return Err(Error::invalid(format!(
+            "--png {}: {} is not a folder to make it in",
+            dir.display(),
+            parent.display()
+        )));
+    }
+    // Reserving the folder's name as a file checks that its parent takes writes.
+    AtomicFile::create(dir).map(drop)
+}
+
+/// Every output (`--out`, `--also`, `--png`'s slices) written in full before any
+/// is renamed into place: one that cannot be written leaves every file as it was.
+/// A Ctrl-C or SIGTERM that came while they were made stops before any is replaced.
+fn write_outputs(
+    args: &OptimizeArgs,
+    mask: &fsot::Mask,
+    out: (MaskFile, AtomicFile),
+    also: Vec<(MaskFile, AtomicFile)>,
+    cancel: &fsot::CancelFlag,
+) -> Result<()> {
+    let mut outputs = Vec::new();
+    for (kind, file) in std::iter::once(out).chain(also) {
+        let bytes = kind.encode(mask, file.target())?;
+        outputs.push((file, bytes));
+    }
+    let mut slices = 0;
     if let Some(dir) = &args.png {
-        let files = fsot::io::png::write(mask, dir, args.png_bits)?;
-        eprintln!("wrote {} PNG slices into {}", files.len(), dir.display());
+        let files = fsot::io::png::encode(mask, args.png_bits)?;
+        slices = files.len();
+        fsot::io::atomic::make_folder(dir)?;
+        for (name, bytes) in files {
+            outputs.push((AtomicFile::create(&dir.join(name))?, bytes));
+        }
+    }
+    if cancel.is_cancelled() {
+        eprintln!("interrupted: nothing written, {} untouched", args.out.display());
+        return Err(Error::Interrupted);
+    }
+    fsot::io::atomic::commit_all(outputs)?;
+    if let Some(dir) = &args.png {
+        eprintln!("wrote {slices} PNG slices into {}", dir.display());
     }
     Ok(())
+}
+
+/// `work` (scoring the mask for the report) on a thread of its own, so that a
+/// Ctrl-C or SIGTERM ends the command at once instead of after it; nothing has
+/// been written then.
+fn unless_interrupted<T: Send + 'static>(
+    cancel: &fsot::CancelFlag,
+    out: &std::path::Path,
+    work: impl FnOnce() -> T + Send + 'static,
+) -> Result<T> {
+    let worker = std::thread::spawn(work);
+    while !worker.is_finished() {
+        if cancel.is_cancelled() {
+            eprintln!("interrupted while scoring the mask: nothing written, {} untouched", out.display());
+            return Err(Error::Interrupted);
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    worker.join().map_err(|_| Error::invalid("scoring the mask failed"))
 }
 
 /// Whether two paths name one file: the same text, or the same file name in
