@@ -139,6 +139,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--threads", "100000"], "--threads must be 1 to 1024"),
         (&["--init", "existing.exr", "--start", "white"], "give one"),
         (&["--out", "m.png"], "cannot tell the format of m.png"),
+        (&["--ktx2-format", "r8_unorm", "--also", "m.h"], "neither --out nor --also names a .ktx2 file"),
         (&["--out", "m"], "cannot tell the format of m"),
         (&["--init", "missing.exr"], "cannot read"),
         (&["--init", "garbage.exr"], "not a readable EXR"),
@@ -618,10 +619,12 @@ fn a_ktx2_from_optimize_decodes_to_the_exr_of_the_same_command_within_one_level(
         let o = fsot(&args, dir.path());
         assert!(o.status.success(), "{}", stderr(&o));
     };
-    run("m.exr", &[]);
+    // The format applies to a .ktx2 given by --also as by --out.
+    run("m.exr", &["--also", "also.ktx2", "--ktx2-format", "r16g16_unorm"]);
     run("m.ktx2", &["--ktx2-format", "r16g16_unorm"]);
     let exr = fsot::io::exr::read(&dir.path().join("m.exr")).unwrap();
     let bytes = std::fs::read(dir.path().join("m.ktx2")).unwrap();
+    assert_eq!(std::fs::read(dir.path().join("also.ktx2")).unwrap(), bytes);
     let r = ktx2::Reader::new(&bytes[..]).unwrap();
     assert_eq!(r.header().format, Some(ktx2::Format::R16G16_UNORM));
     assert_eq!(r.header().layer_count, 16);

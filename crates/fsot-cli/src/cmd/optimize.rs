@@ -36,16 +36,22 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     }
     // Check the output's kind and reserve it before the long work: a bad path or
     // a format that cannot hold d fails now.
-    let file_kind = MaskFile::for_path(&args.out, dims, args.ktx2_format.as_deref())?;
+    // --ktx2-format applies to the .ktx2 outputs, --out's or --also's.
+    let is_ktx2 = |p: &std::path::Path| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("ktx2"));
+    if let Some(f) = args.ktx2_format.as_deref() {
+        if !is_ktx2(&args.out) && !args.also.iter().any(|p| is_ktx2(p)) {
+            return Err(Error::invalid(format!(
+                "a KTX2 format ({f}) was given, but neither --out nor --also names a .ktx2 file"
+            )));
+        }
+    }
+    let format_for = |p: &std::path::Path| args.ktx2_format.as_deref().filter(|_| is_ktx2(p));
+    let file_kind = MaskFile::for_path(&args.out, dims, format_for(&args.out))?;
     let out = AtomicFile::create(&args.out)?;
     let also = args
         .also
         .iter()
-        .map(|p| {
-            let ktx2 = p.extension().is_some_and(|e| e == "ktx2");
-            let format = args.ktx2_format.as_deref().filter(|_| ktx2);
-            Ok((MaskFile::for_path(p, dims, format)?, AtomicFile::create(p)?))
-        })
+        .map(|p| Ok((MaskFile::for_path(p, dims, format_for(p))?, AtomicFile::create(p)?)))
         .collect::<Result<Vec<_>>>()?;
     if let Some(dir) = &args.png {
         check_png_folder(dir, &tile)?;
