@@ -299,26 +299,22 @@ impl RunState {
 /// the tile's size is animated over its frames, `animate`) or white noise drawn
 /// from the seed.
 pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) -> Result<Vec<f32>> {
-    if let Some(m) = init {
-        m.check().map_err(|e| Error::invalid(format!("the initial mask: {e}")))?;
+    let Some(m) = init else { return Ok(Mask::white(*tile, settings.seed).samples) };
+    m.check().map_err(|e| Error::invalid(format!("the initial mask: {e}")))?;
+    // A mask of the tile, or one frame of it (set in motion over its frames).
+    let one_frame = Tile { frames: 1, ..*tile };
+    if m.tile != *tile && m.tile != one_frame {
+        return Err(Error::invalid(format!(
+            "the initial mask is {} but the run asks for {}{}",
+            m.tile.describe(),
+            tile.describe(),
+            if tile.frames > 1 { " (or one frame of it)" } else { "" }
+        )));
     }
-    let animated;
-    let init = match init {
-        Some(m) if m.tile.frames == 1 && tile.frames > 1 => {
-            animated = crate::core::animate::animate(m, tile.frames)?;
-            Some(&animated)
-        }
-        other => other,
-    };
-    match init {
-        Some(mask) if mask.tile != *tile => Err(Error::invalid(format!(
-            "the initial mask is {} but the run asks for {}",
-            mask.tile.describe(),
-            tile.describe()
-        ))),
-        Some(mask) => Ok(mask.samples.clone()),
-        None => Ok(Mask::white(*tile, settings.seed).samples),
+    if m.tile.frames == tile.frames {
+        return Ok(m.samples.clone());
     }
+    Ok(crate::core::animate::animate(m, tile.frames)?.samples)
 }
 
 /// The most slices an iteration or a score draws: 2^24, thirty times the default
@@ -401,6 +397,20 @@ mod tests {
         let small = Tile::new(1, 1, 1, 1, 1).unwrap();
         let (slices, _) = slices_and_hits(&small, &Kernel::new(spec, &small), &settings).unwrap();
         assert_eq!(slices, 16, "at least 16");
+    }
+
+    #[test]
+    fn an_initial_mask_of_another_shape_is_named_as_it_was_given() {
+        let settings = Settings::new(KernelSpec::named("taa").unwrap(), 0);
+        let one = Mask::white(Tile::new(8, 8, 1, 1, 2).unwrap(), 1);
+        for (w, t, d) in [(16, 4, 2), (8, 8, 1)] {
+            let e = initial_samples(&Tile::new(w, 8, t, 1, d).unwrap(), &settings, Some(&one)).unwrap_err();
+            let e = e.to_string();
+            assert!(e.contains("the initial mask is 8x8x1, 1 spp, d = 2") && e.contains("or one frame of it"), "{e}");
+        }
+        let moving = initial_samples(&Tile::new(8, 8, 4, 1, 2).unwrap(), &settings, Some(&one)).unwrap();
+        assert_eq!(moving.len(), 8 * 8 * 4 * 2);
+        assert_eq!(initial_samples(&one.tile, &settings, Some(&one)).unwrap(), one.samples);
     }
 
     #[test]
