@@ -386,6 +386,15 @@ fn png_slices_that_cannot_all_be_written_are_refused_before_the_work_and_nothing
     assert_eq!(std::fs::read(dir.path().join("m.exr")).unwrap(), b"what the user had");
 }
 
+#[test]
+fn the_stress_suite_refuses_a_named_device_it_cannot_find_rather_than_run_the_cpu_checks_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = fsot(&["stress", "--quick", "--device", "no-such-gpu"], dir.path());
+    let err = stderr(&o);
+    assert!(!o.status.success() && err.contains("no device matches"), "{err}");
+    assert!(!err.contains("checks held") && !dir.path().join("stress.md").exists(), "{err}");
+}
+
 /// Each case, `base` then its flags, fails with its message, no panic, and
 /// leaves no `m.exr` in `dir`.
 fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {

@@ -10,6 +10,9 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     } else {
         match super::env::context(args.device.clone()) {
             Ok(c) => Some(c),
+            // A device named (the flag or FSOT_DEVICE) and not found: its
+            // checks would silently not run.
+            Err(e) if super::env::device(args.device.clone()).is_some() => return Err(e),
             Err(e) => {
                 eprintln!("no Vulkan device, CPU checks only: {e}");
                 None
