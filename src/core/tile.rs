@@ -13,6 +13,9 @@ pub const MAX_DIMS: usize = 8;
 pub const MAX_SPP: usize = 64;
 /// Largest number of points in one tile (keeps every index in u32 and memory sane).
 pub const MAX_POINTS: usize = 1 << 28;
+/// Largest number of values (points x dims) in one tile: 1 GiB per buffer of
+/// 32-bit values, of which a run holds several.
+pub const MAX_VALUES: usize = 1 << 28;
 
 /// The shape of a tile: W x H pixels x T frames, wrapping in x, y and t, with
 /// `spp` samples of `dims` coordinates per pixel and frame.
@@ -51,14 +54,16 @@ impl Tile {
         if spp == 0 || spp > MAX_SPP {
             return Err(Error::invalid(format!("samples per pixel must be 1 to {MAX_SPP}, got {spp}")));
         }
-        let fits = width
-            .checked_mul(height)
-            .and_then(|p| p.checked_mul(frames))
-            .and_then(|p| p.checked_mul(spp))
-            .is_some_and(|p| p <= MAX_POINTS);
-        if !fits {
+        let points = width.checked_mul(height).and_then(|p| p.checked_mul(frames)).and_then(|p| p.checked_mul(spp));
+        if !points.is_some_and(|p| p <= MAX_POINTS) {
             return Err(Error::invalid(format!(
                 "tile {width}x{height}x{frames} with {spp} spp holds more than {MAX_POINTS} points"
+            )));
+        }
+        if !points.and_then(|p| p.checked_mul(dims)).is_some_and(|v| v <= MAX_VALUES) {
+            return Err(Error::invalid(format!(
+                "tile {width}x{height}x{frames} with {spp} spp of d = {dims} holds more than {MAX_VALUES} values \
+                 (points x d; 1 GiB a buffer)"
             )));
         }
         Ok(Self { width, height, frames, spp, dims })
@@ -116,6 +121,14 @@ mod tests {
         assert!(Tile::new(4, 4, 4, 0, 2).is_err());
         assert!(Tile::new(4, 4, 4, 1, 9).is_err());
         assert!(Tile::new(usize::MAX / 2, 4, 4, 1, 2).is_err());
+        // The largest tiles: 2^28 points of one value, 2^25 of eight; a value
+        // more is refused before anything is allocated for it.
+        assert!(Tile::new(1 << 14, 1 << 14, 1, 1, 1).is_ok());
+        assert!(Tile::new(1 << 14, 1 << 14, 2, 1, 1).unwrap_err().to_string().contains("points"));
+        assert!(Tile::new(4096, 4096, 2, 1, 8).is_ok());
+        let e = Tile::new(4096, 4096, 16, 1, 8).unwrap_err().to_string();
+        assert!(e.contains("more than 268435456 values"), "{e}");
+        assert!(Tile::new(1 << 14, 1 << 14, 1, 1, 2).is_err());
         let t = Tile::new(3, 2, 5, 4, 2).unwrap();
         assert_eq!(t.points(), 120);
         assert_eq!(t.pixel_index(2, 1, 4), (4 * 2 + 1) * 3 + 2);

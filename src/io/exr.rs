@@ -171,7 +171,7 @@ fn check_promised_size(bytes: &[u8]) -> std::result::Result<(), String> {
             .and_then(|b| promised.checked_add(b));
         promised = part.unwrap_or(usize::MAX);
     }
-    let largest_tile = crate::core::tile::MAX_POINTS * crate::core::tile::MAX_DIMS * 4;
+    let largest_tile = crate::core::tile::MAX_VALUES * 4;
     let limit = bytes.len().saturating_mul(MAX_EXPANSION).min(largest_tile);
     if promised > limit {
         return Err(format!(

@@ -115,6 +115,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--size", "0x8x8"], "width must be at least 1"),
         (&["--size", "8x8"], ""), // valid: one frame (checked below to succeed)
         (&["--size", "99999999x99999999x9999"], "more than"),
+        (&["--size", "4096x4096x16", "--dims", "8"], "more than 268435456 values"),
         (&["--size", "axb"], "size must look like"),
         (&["--dims", "0"], "dimensions per sample"),
         (&["--dims", "9"], "dimensions per sample"),
