@@ -55,12 +55,12 @@ impl Tile {
             return Err(Error::invalid(format!("samples per pixel must be 1 to {MAX_SPP}, got {spp}")));
         }
         let points = width.checked_mul(height).and_then(|p| p.checked_mul(frames)).and_then(|p| p.checked_mul(spp));
-        if !points.is_some_and(|p| p <= MAX_POINTS) {
+        if points.is_none_or(|p| p > MAX_POINTS) {
             return Err(Error::invalid(format!(
                 "tile {width}x{height}x{frames} with {spp} spp holds more than {MAX_POINTS} points"
             )));
         }
-        if !points.and_then(|p| p.checked_mul(dims)).is_some_and(|v| v <= MAX_VALUES) {
+        if points.and_then(|p| p.checked_mul(dims)).is_none_or(|v| v > MAX_VALUES) {
             return Err(Error::invalid(format!(
                 "tile {width}x{height}x{frames} with {spp} spp of d = {dims} holds more than {MAX_VALUES} values \
                  (points x d; 1 GiB a buffer)"
