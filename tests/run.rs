@@ -315,6 +315,23 @@ fn a_complete_run_keeps_its_checkpoint_until_its_mask_is_kept() {
 }
 
 #[test]
+fn a_start_cut_short_by_its_flag_ends_the_start_as_interrupted_and_saves_nothing() {
+    let tile = Tile::new(32, 32, 8, 1, 2).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let cancel = CancelFlag::new();
+    cancel.cancel();
+    let options =
+        checkpointed(RunOptions::default().backend(BackendChoice::Cpu), &dir).cancel_start(cancel.clone());
+    let s = settings(100).start(fsot::Start::Animated);
+    let e = Run::start(tile, s, None, options.clone()).err().expect("interrupted");
+    assert!(matches!(e, Error::Interrupted), "{e}");
+    assert!(!dir.path().join("run.ckpt").exists(), "nothing saved");
+    // A start of white noise has no work to cut short: the flag is left to `run`.
+    let mut run = Run::start(tile, settings(100).start(fsot::Start::White), None, options).unwrap();
+    assert!(matches!(run.run(&cancel, &mut |_| {}).unwrap(), Outcome::Cancelled { iteration: 0, .. }));
+}
+
+#[test]
 fn a_run_until_an_objective_stops_once_a_window_reaches_it() {
     let _others = others();
     use fsot::optimize::settings::Until;

@@ -72,6 +72,10 @@ pub struct RunOptions {
     /// `Run::start` begins]: a host's own start (its process's), or a plan's, so
     /// that the budget covers the work before the run too.
     pub budget_from: Option<Instant>,
+    /// A flag that cuts short the work `Run::start` does before the run (an
+    /// animated or a coarse start): set then, `Run::start` ends with
+    /// `Error::Interrupted` and saves nothing (resumed, the start is made again).
+    pub cancel_start: Option<CancelFlag>,
 }
 
 impl RunOptions {
@@ -116,6 +120,12 @@ impl RunOptions {
     /// The instant a time budget counts from (see `budget_from`).
     pub fn budget_from(mut self, from: Instant) -> Self {
         self.budget_from = Some(from);
+        self
+    }
+
+    /// A flag that cuts short the start's own work (see `cancel_start`).
+    pub fn cancel_start(mut self, cancel: CancelFlag) -> Self {
+        self.cancel_start = Some(cancel);
         self
     }
 }
@@ -301,12 +311,14 @@ impl Run {
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
                 let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
+                interrupted(&options)?;
                 start_note = Some(note);
                 started = mask;
                 Some(&started)
             }
             (None, None, start) if start.animates(settings.until, &tile) => {
-                started = animated_start(tile, &settings, left)?;
+                started = animated_start(tile, &settings, left, &options)?;
+                interrupted(&options)?;
                 Some(&started)
             }
             _ => init,
@@ -769,12 +781,20 @@ fn paced_iterations(pace: Option<f64>) -> u32 {
     }
 }
 
+/// `Error::Interrupted` when the start's flag was set while it was made.
+fn interrupted(options: &RunOptions) -> Result<()> {
+    match options.cancel_start.as_ref().is_some_and(CancelFlag::is_cancelled) {
+        true => Err(Error::Interrupted),
+        false => Ok(()),
+    }
+}
+
 /// The samples of `Start::Animated`: one frame of the tile optimized under the
 /// kernel's spatial filter, set in motion over the frames. On the CPU whatever
 /// the run's backend: one frame is small, and a device that fails later hands
 /// the run over from the same start. Under a time budget with `left` seconds
 /// of it left, the frame's run takes `SPATIAL_BUDGET_SHARE` of them.
-fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<Mask> {
+fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>, options: &RunOptions) -> Result<Mask> {
     let flat = Tile::new(tile.width, tile.height, 1, tile.spp, tile.dims)?;
     let until = match left {
         // A budget already spent leaves the frame its set-up and one iteration.
@@ -788,7 +808,7 @@ fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>) -> Result<
         .start(Start::White)
         .axis_share(settings.axis_share);
     let mut run = Run::start(flat, spatial, None, RunOptions::default().backend(BackendChoice::Cpu))?;
-    run.run(&CancelFlag::new(), &mut |_| {})?;
+    run.run(&options.cancel_start.clone().unwrap_or_default(), &mut |_| {})?;
     animate(&run.finish()?, tile.frames)
 }
 
@@ -809,8 +829,9 @@ fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions
     let first = Settings { until, start: Start::Auto, ..*settings };
     let options = RunOptions { checkpoint: None, budget_from: None, ..options.clone() };
     let began = Instant::now();
+    let cancel = options.cancel_start.clone().unwrap_or_default();
     let mut run = Run::start(quarter, first, None, options)?;
-    run.run(&CancelFlag::new(), &mut |_| {})?;
+    run.run(&cancel, &mut |_| {})?;
     let note = format!(
         "a quarter, {}, of {} iterations in {:.2} s, laid out 2x2",
         quarter.describe(),

@@ -778,7 +778,12 @@ impl Plan {
         }
         if !todo.is_empty() {
             // One Vulkan device for the plan, opened once.
-            let options = RunOptions { budget_from: Some(origin), ..crate::optimize::run::shared_context(options)? };
+            // A cancel cuts short a mask's animated start too.
+            let options = RunOptions {
+                budget_from: Some(origin),
+                cancel_start: Some(cancel.clone()),
+                ..crate::optimize::run::shared_context(options)?
+            };
             let together = crate::optimize::run::shares_device(&options);
             let ends = self.run_ends(&todo, origin, together)?;
             // Side by side, or (under a budget, on the CPU) one after the other,
