@@ -219,7 +219,7 @@ mod tests {
         for (w, h, t) in
             [(1, 1, 1), (32, 32, 16), (5, 3, 7), (64, 1, 1), (256, 256, 64), (1 << 14, 1 << 14, 1)]
         {
-            let tile = Tile::new(w, h, t, 1, 2).unwrap();
+            let tile = Tile::new(w, h, t, 1, 1).unwrap();
             for (dx, dy, dt) in [(0, 0, 0), (w - 1, h - 1, t - 1), (w / 2, h / 3, t / 2), (1 % w, 0, t - 1)] {
                 let (dx, dy, dt) = (dx as u32, dy as u32, dt as u32);
                 let p = pack_tap(&tile, dx, dy, dt).unwrap();
