@@ -325,6 +325,36 @@ impl KernelArgs {
         )
     }
 
+    /// An error for a flag the kernel has no use for: `--sigma-t` but for
+    /// gaussian, `--alpha` without TAA, `--fps` without the eye's response.
+    fn check_flags_apply(&self) -> Result<()> {
+        use KernelName::*;
+        let kernel = self.kernel.unwrap_or(PerceptualTaa);
+        let unused = [
+            (
+                "--sigma-t",
+                self.sigma_t.is_some() && kernel != Gaussian,
+                "the gaussian kernel's temporal width",
+            ),
+            (
+                "--alpha",
+                self.alpha.is_some() && !matches!(kernel, Taa | PerceptualTaa),
+                "TAA's blend weight (kernels taa and perceptual-taa)",
+            ),
+            (
+                "--fps",
+                self.fps.is_some() && !matches!(kernel, Perceptual | PerceptualTaa),
+                "the frame rate of the eye's response (kernels perceptual and perceptual-taa)",
+            ),
+        ];
+        match unused.iter().find(|(_, unused, _)| *unused) {
+            Some((flag, _, what)) => {
+                Err(Error::invalid(format!("{flag} sets {what}; --kernel {} has none", kernel.as_str())))
+            }
+            None => Ok(()),
+        }
+    }
+
     /// Whether any flag of the kernel was given.
     fn any_given(&self) -> bool {
         self.kernel.is_some()
@@ -480,7 +510,7 @@ struct OptimizeArgs {
     #[arg(long)]
     png: Option<PathBuf>,
     /// Bits per channel of the PNG slices: 16, or 8 (the published masks' depth).
-    #[arg(long, default_value_t = 16, value_parser = parse_png_bits)]
+    #[arg(long, default_value_t = 16, value_parser = parse_png_bits, requires = "png")]
     png_bits: u32,
 }
 

@@ -7,6 +7,10 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if let Some(scene) = &args.scene {
         return super::plan::optimize_scene(&args, scene);
     }
+    // The peers' methods read --sigma and --sigma-t as their own energy's.
+    if args.method == Method::Fsot {
+        args.kernel.check_flags_apply()?;
+    }
     let spec = args.kernel.spec()?;
     if args.init.is_some() && args.start != StartArg::Auto {
         return Err(Error::invalid("--init and --start both say where the run starts: give one"));
