@@ -512,6 +512,10 @@ struct OptimizeArgs {
     /// Bits per channel of the PNG slices: 16, or 8 (the published masks' depth).
     #[arg(long, default_value_t = 16, value_parser = parse_png_bits, requires = "png")]
     png_bits: u32,
+    /// The flags given on the command line (by their ids), for the notes on
+    /// those the method has no use for.
+    #[arg(skip)]
+    given: Vec<String>,
 }
 
 #[derive(Args)]
@@ -569,7 +573,15 @@ fn process_start() -> Instant {
 
 fn main() -> ExitCode {
     process_start();
-    let cli = Cli::parse();
+    let matches = <Cli as clap::CommandFactory>::command().get_matches();
+    let mut cli = <Cli as clap::FromArgMatches>::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    if let (Command::Optimize(args), Some(("optimize", sub))) = (&mut cli.command, matches.subcommand()) {
+        args.given = sub
+            .ids()
+            .filter(|id| sub.value_source(id.as_str()) == Some(clap::parser::ValueSource::CommandLine))
+            .map(|id| id.to_string())
+            .collect();
+    }
     let result = match cli.command {
         Command::Optimize(args) => cmd::optimize::optimize(*args),
         Command::Score(args) => cmd::score::score_command(args),

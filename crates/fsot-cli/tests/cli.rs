@@ -400,6 +400,32 @@ fn the_stress_suite_refuses_a_named_device_it_cannot_find_rather_than_run_the_cp
     assert!(!err.contains("checks held") && !dir.path().join("stress.md").exists(), "{err}");
 }
 
+#[test]
+fn a_flag_the_method_has_no_use_for_is_noted_and_the_run_goes_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = ["optimize", "--size", "8x8x4", "--backend", "cpu", "--out", "m.exr"];
+    let fsot_run =
+        ["--iterations", "3", "--passes", "4", "--fast-combine", "sum:0.5", "--checkpoint-every", "2"];
+    let o = fsot(&[&base[..], &fsot_run].concat(), dir.path());
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    for flag in ["--passes", "--fast-combine", "--checkpoint-every"] {
+        assert!(err.contains(&format!("note: {flag} does nothing here")), "{flag}: {err}");
+    }
+    assert!(!err.contains("note: --iterations"), "{err}");
+    let o = fsot(
+        &[&base[..], &["--method", "white", "--iterations", "3", "--until", "plateau"]].concat(),
+        dir.path(),
+    );
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("note: --iterations does nothing here: it is for --method fsot"), "{err}");
+    assert!(err.contains("note: --until does nothing here"), "{err}");
+    // Defaults are no flags given: nothing to note.
+    let o = fsot(&[&base[..], &["--method", "fast", "--passes", "1"]].concat(), dir.path());
+    assert!(o.status.success() && !stderr(&o).contains("note:"), "{}", stderr(&o));
+}
+
 /// Each case, `base` then its flags, fails with its message, no panic, and
 /// leaves no `m.exr` in `dir`.
 fn refused(dir: &Path, base: &[&str], cases: &[(&[&str], &str)]) {

@@ -11,6 +11,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if args.method == Method::Fsot {
         args.kernel.check_flags_apply()?;
     }
+    note_unused(&args);
     let spec = args.kernel.spec()?;
     if args.init.is_some() && args.start != StartArg::Auto {
         return Err(Error::invalid("--init and --start both say where the run starts: give one"));
@@ -390,6 +391,29 @@ pub(crate) fn make_baseline(
         s.ratio()
     );
     Ok(())
+}
+
+/// A note for each flag given that the method has no use for (the same flags
+/// can then be given to every method).
+fn note_unused(args: &OptimizeArgs) {
+    let (fsot, fast) = (args.method == Method::Fsot, args.method == Method::Fast);
+    let swaps = fast || args.method == Method::Stbn;
+    let unused = [
+        ("passes", "--passes", !swaps, "for the swap methods (fast, stbn)"),
+        ("fast_spatial", "--fast-spatial", !fast, "for --method fast"),
+        ("fast_temporal", "--fast-temporal", !fast, "for --method fast"),
+        ("fast_combine", "--fast-combine", !fast, "for --method fast"),
+        ("iterations", "--iterations", !fsot, "for --method fsot"),
+        ("slices", "--slices", !fsot, "for --method fsot"),
+        ("until", "--until", !fsot, "for --method fsot"),
+        ("budget", "--budget", !fsot, "for --method fsot"),
+        ("checkpoint_every", "--checkpoint-every", args.checkpoint.is_none(), "with --checkpoint"),
+    ];
+    for (id, flag, idle, what) in unused {
+        if idle && args.given.iter().any(|g| g == id) {
+            eprintln!("note: {flag} does nothing here: it is {what}");
+        }
+    }
 }
 
 /// `--png`'s folder, checked before the long work: an existing folder whose
