@@ -155,9 +155,17 @@ struct BenchArgs {
     /// Also write the figures as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Folder for convergence.md, convergence.csv, convergence.png and the cache.
-    #[arg(long, default_value = "bench-out")]
-    out: PathBuf,
+    /// Folder for convergence.md, convergence.csv, convergence.png and the cache
+    /// [default: bench-out].
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+impl BenchArgs {
+    /// `--out`, or its default.
+    fn out_dir(&self) -> &std::path::Path {
+        self.out.as_deref().unwrap_or(std::path::Path::new("bench-out"))
+    }
 }
 
 /// One GPU kernel measured on its own.

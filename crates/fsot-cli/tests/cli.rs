@@ -347,6 +347,13 @@ fn kernel_benchmarks_refuse_sizes_no_machine_holds_before_they_allocate() {
             (&["--repeats", "4294967295"], "--repeats 1 to 10000"),
         ];
         refused(dir.path(), &["bench", suite], cases);
+        // The whole suite's flags are refused with one suite, not ignored.
+        for flags in [&["--json", "b.json"][..], &["--out", "b"], &["--quick"]] {
+            let o = fsot(&[&["bench"][..], flags, &[suite, "--n", "16"]].concat(), dir.path());
+            let err = stderr(&o);
+            assert!(!o.status.success() && err.contains("are for the whole suite"), "{flags:?}: {err}");
+            assert!(!dir.path().join("b.json").exists() && !dir.path().join("b").exists());
+        }
     }
 }
 

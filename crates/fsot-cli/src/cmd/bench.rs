@@ -16,6 +16,11 @@ const MAX_BENCH_N: u32 = 1 << 28;
 const MAX_REPEATS: u32 = 10_000;
 
 pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
+    if args.suite.is_some() && (args.quick || args.json.is_some() || args.out.is_some()) {
+        return Err(Error::invalid(
+            "--quick, --json and --out are for the whole suite (fsot bench without a suite named)",
+        ));
+    }
     match args.suite {
         None => bench_suites(&args),
         Some(BenchSuite::ScalingOne { size, dims, spp, iterations }) => {
@@ -126,10 +131,11 @@ pub(crate) fn scatter_line(b: &fsot_cli::bench::ScatterBench) -> String {
 /// The convergence and time-to-quality suites, CPU path against Vulkan, then the
 /// scaling, sort and scatter suites; Markdown, CSV, a plot and JSON records.
 pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
-    fsot::io::atomic::make_folder(&args.out)?;
-    let md = AtomicFile::create(&args.out.join("convergence.md"))?;
-    let csv = AtomicFile::create(&args.out.join("convergence.csv"))?;
-    let plot = AtomicFile::create(&args.out.join("convergence.png"))?;
+    let out = args.out_dir();
+    fsot::io::atomic::make_folder(out)?;
+    let md = AtomicFile::create(&out.join("convergence.md"))?;
+    let csv = AtomicFile::create(&out.join("convergence.csv"))?;
+    let plot = AtomicFile::create(&out.join("convergence.png"))?;
     let json = args.json.as_ref().map(|p| AtomicFile::create(p)).transpose()?;
     let mut records: Vec<serde_json::Value> = Vec::new();
     let (points, mut table) = convergence_suite(args)?;
@@ -173,9 +179,9 @@ fn convergence_suite(args: &BenchArgs) -> Result<(Vec<Point>, String)> {
     let seed = 7;
     eprintln!(
         "scene judge: soft shadow, 64 x 64, 80 frames, TAA (reference cached in {})",
-        args.out.display()
+        args.out_dir().display()
     );
-    let judge = SceneJudge::new(tile, Some(&args.out.join("cache")))?;
+    let judge = SceneJudge::new(tile, Some(&args.out_dir().join("cache")))?;
     let base = RunOptions::default().device(super::env::device(None)).validation(super::env::validation());
     let mut points = Vec::new();
     let mut notes = Vec::new();
