@@ -315,7 +315,8 @@ fn check_every_block_once(headers: &[Header], chunks: &[Chunk]) -> std::result::
             return Err(format!("frame {t}: a block of a smaller resolution level stands for a full one"));
         }
         if !seen.insert((t, block.tile_index)) {
-            return Err(format!("frame {t}: block {:?} appears twice (and another is missing)", block.tile_index));
+            let Vec2(x, y) = block.tile_index;
+            return Err(format!("frame {t}: block ({x}, {y}) appears twice (and another is missing)"));
         }
         found[t] += 1;
     }
