@@ -231,6 +231,21 @@ fn a_tiled_mip_mapped_half_float_file_reads_its_full_resolution() {
 }
 
 #[test]
+fn provenance_a_format_cannot_hold_is_refused_not_a_panic_or_a_broken_file() {
+    let mut mask = Mask::white(Tile::new(4, 4, 2, 1, 2).unwrap(), 3);
+    mask.set_meta("note", "café");
+    let back = exr::decode(&exr::encode(&mask).unwrap()).unwrap();
+    assert_eq!(back.meta("note"), Some("café"), "Latin-1 reads back");
+    mask.set_meta("note", "cost 5 €");
+    let e = exr::encode(&mask).unwrap_err().to_string();
+    assert!(e.contains("Latin-1"), "{e}");
+    mask.set_meta("note", "plain");
+    mask.set_meta("a\0b", "v");
+    let e = fsot::io::ktx2::encode(&mask, fsot::io::ktx2::Format::R16G16Unorm).unwrap_err().to_string();
+    assert!(e.contains("NUL"), "{e}");
+}
+
+#[test]
 fn an_uncommitted_output_leaves_the_existing_file_untouched() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("keep.exr");

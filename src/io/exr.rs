@@ -54,9 +54,14 @@ pub fn encode_unchecked(mask: &Mask) -> Result<Vec<u8>> {
     let (w, h) = (tile.width, tile.height);
     let mut layers = Vec::with_capacity(tile.frames);
     let mut attributes: HashMap<Text, AttributeValue> = HashMap::new();
+    // EXR text is Latin-1: other characters are refused, not a panic.
+    let text = |t: &str| {
+        Text::new_or_none(t).ok_or_else(|| {
+            Error::invalid(format!("the mask's provenance {t:?} holds characters an EXR attribute cannot (Latin-1 only)"))
+        })
+    };
     for (k, v) in &mask.meta {
-        attributes
-            .insert(Text::from(format!("fsot.{k}").as_str()), AttributeValue::Text(Text::from(v.as_str())));
+        attributes.insert(text(&format!("fsot.{k}"))?, AttributeValue::Text(text(v)?));
     }
     attributes
         .insert(Text::from("fsot.spp"), AttributeValue::Text(Text::from(tile.spp.to_string().as_str())));

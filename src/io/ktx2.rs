@@ -220,8 +220,12 @@ fn descriptor(format: Format) -> Vec<u8> {
     d
 }
 
-/// Key/value data: entries sorted by key, each padded to 4 bytes.
-fn key_values(entries: &[(String, String)]) -> Vec<u8> {
+/// Key/value data: entries sorted by key, each padded to 4 bytes; a NUL in a
+/// key or value (which ends it in the file) is refused.
+fn key_values(entries: &[(String, String)]) -> Result<Vec<u8>> {
+    if let Some((k, v)) = entries.iter().find(|(k, v)| k.contains('\0') || v.contains('\0')) {
+        return Err(Error::invalid(format!("the mask's provenance {k:?} = {v:?} holds a NUL, which KTX2 cannot")));
+    }
     let mut sorted: Vec<&(String, String)> = entries.iter().collect();
     sorted.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
     let mut out = Vec::new();
@@ -236,7 +240,7 @@ fn key_values(entries: &[(String, String)]) -> Vec<u8> {
             out.push(0);
         }
     }
-    out
+    Ok(out)
 }
 
 /// The mask as a KTX2 file in `format`.
@@ -262,7 +266,7 @@ pub fn encode(mask: &Mask, format: Format) -> Result<Vec<u8>> {
         kv.push((format!("fsot.{k}"), v.clone()));
     }
     let dfd = descriptor(format);
-    let kvd = key_values(&kv);
+    let kvd = key_values(&kv)?;
     let dfd_offset = HEADER_BYTES + LEVEL_INDEX_BYTES;
     let kvd_offset = dfd_offset + dfd.len();
     // Level data aligned to lcm(texel bytes, 4).
