@@ -83,8 +83,8 @@ impl Mask {
     ///
     /// # Panics
     ///
-    /// Unless x < W, y < H, t < T and s < spp, or where `samples` holds fewer
-    /// values than the tile (`check` tells).
+    /// Unless x < W, y < H, t < T and s < spp, or where the tile is not valid or
+    /// `samples` holds fewer values than it (`check` tells).
     pub fn sample(&self, x: usize, y: usize, t: usize, s: usize) -> &[f32] {
         let tile = &self.tile;
         assert!(
@@ -92,7 +92,14 @@ impl Mask {
             "sample ({x}, {y}, {t}, {s}) outside the tile {}",
             tile.describe()
         );
-        let i = (tile.pixel_index(x, y, t) * tile.spp + s) * tile.dims;
+        // Checked: a tile built by hand past the largest panics here rather than
+        // wrapping round to another sample.
+        let i = t
+            .checked_mul(tile.height)
+            .and_then(|i| i.checked_add(y)?.checked_mul(tile.width))
+            .and_then(|i| i.checked_add(x)?.checked_mul(tile.spp))
+            .and_then(|i| i.checked_add(s)?.checked_mul(tile.dims))
+            .unwrap_or_else(|| panic!("the mask's tile {} is not a valid tile", tile.describe()));
         &self.samples[i..i + tile.dims]
     }
 
@@ -113,6 +120,14 @@ impl Mask {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    #[should_panic(expected = "is not a valid tile")]
+    fn a_sample_of_a_tile_built_past_the_largest_panics_rather_than_wrap_to_another() {
+        let tile = Tile { width: 1 << 63, height: 4, frames: 1, spp: 1, dims: 1 };
+        let mask = Mask { tile, samples: vec![0.5; 4], meta: Vec::new() };
+        let _ = mask.sample(0, 2, 0, 0);
+    }
+
     use super::*;
 
     #[test]

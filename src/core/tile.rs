@@ -83,17 +83,18 @@ impl Tile {
         Ok((v[0], v[1], v[2]))
     }
 
-    /// Pixels over every frame: W x H x T.
+    /// Pixels over every frame: W x H x T (`usize::MAX` where that overflows,
+    /// for a tile built by hand past `MAX_POINTS`; `check` refuses it).
     pub fn pixels(&self) -> usize {
-        self.width * self.height * self.frames
+        self.width.saturating_mul(self.height).saturating_mul(self.frames)
     }
-    /// Samples in the tile: pixels x spp.
+    /// Samples in the tile: pixels x spp (saturating as `pixels`).
     pub fn points(&self) -> usize {
-        self.pixels() * self.spp
+        self.pixels().saturating_mul(self.spp)
     }
-    /// Coordinates in the tile: points x dims.
+    /// Coordinates in the tile: points x dims (saturating as `pixels`).
     pub fn values(&self) -> usize {
-        self.points() * self.dims
+        self.points().saturating_mul(self.dims)
     }
     /// Pixel index of (x, y, t), all already wrapped into the tile.
     #[inline]
@@ -129,6 +130,10 @@ mod tests {
         let e = Tile::new(4096, 4096, 16, 1, 8).unwrap_err().to_string();
         assert!(e.contains("more than 268435456 values"), "{e}");
         assert!(Tile::new(1 << 14, 1 << 14, 1, 1, 2).is_err());
+        // Built by hand past the largest: the sizes saturate, and `check` refuses.
+        let huge = Tile { width: usize::MAX / 2 + 1, height: 2, frames: 1, spp: 1, dims: 1 };
+        assert_eq!((huge.pixels(), huge.points(), huge.values()), (usize::MAX, usize::MAX, usize::MAX));
+        assert!(huge.check().is_err());
         let t = Tile::new(3, 2, 5, 4, 2).unwrap();
         assert_eq!(t.points(), 120);
         assert_eq!(t.pixel_index(2, 1, 4), (4 * 2 + 1) * 3 + 2);
