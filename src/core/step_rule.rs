@@ -31,20 +31,27 @@ impl StepRule {
     /// Adam with lr 0.01, beta1 0.9, beta2 0.99 and eps 1e-8.
     pub const DEFAULT_ADAM: StepRule = StepRule::Adam { lr: 1e-2, beta1: 0.9, beta2: 0.99, eps: 1e-8 };
 
-    /// An error unless every step is finite and above 0 and every decay in
-    /// [0, 1): a rule outside them moves samples to NaN.
+    /// The largest step (`Momentum::step`, `Adam::lr`): past it a move wraps
+    /// round the unit interval many times over, and a 32-bit sample loses
+    /// every digit (a step of 1e30 left every value 0).
+    pub const MAX_STEP: f32 = 1000.0;
+
+    /// An error unless every step is above 0 and at most `MAX_STEP` and every
+    /// decay in [0, 1): a rule outside them moves samples to NaN or to nothing.
     pub fn check(&self) -> crate::error::Result<()> {
         let positive = |x: f32| x.is_finite() && x > 0.0;
+        let step = |x: f32| positive(x) && x <= Self::MAX_STEP;
         let decay = |x: f32| (0.0..1.0).contains(&x);
         let ok = match *self {
-            StepRule::Momentum { step, beta } => positive(step) && decay(beta),
-            StepRule::Adam { lr, beta1, beta2, eps } => positive(lr) && decay(beta1) && decay(beta2) && positive(eps),
+            StepRule::Momentum { step: s, beta } => step(s) && decay(beta),
+            StepRule::Adam { lr, beta1, beta2, eps } => step(lr) && decay(beta1) && decay(beta2) && positive(eps),
         };
         if ok {
             Ok(())
         } else {
             Err(crate::error::Error::invalid(format!(
-                "step rule {self:?} out of range (steps finite and above 0, decays in [0, 1))"
+                "step rule {self:?} out of range (steps above 0 and at most {}, decays in [0, 1))",
+                Self::MAX_STEP
             )))
         }
     }
@@ -222,6 +229,14 @@ pub fn step_value(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_step_past_the_largest_is_refused() {
+        for rule in [StepRule::Momentum { step: 1e30, beta: 0.0 }, StepRule::Adam { lr: 1e4, beta1: 0.9, beta2: 0.99, eps: 1e-8 }] {
+            assert!(rule.check().unwrap_err().to_string().contains("at most 1000"), "{rule:?}");
+        }
+        assert!(StepRule::Momentum { step: StepRule::MAX_STEP, beta: 0.0 }.check().is_ok());
+    }
+
     use super::*;
 
     #[test]
