@@ -178,6 +178,9 @@ fn a_get_reads_the_offset_texel_adds_the_shift_and_a_new_r4_turn_per_loop_of_the
     assert!((v[0] as f64 - q.fract()).abs() < 1e-6);
     // Past the last part: the include's hash fallback, not a mask.
     assert_eq!(plan.value(3, 0, 0, 0, 0, fmt), None);
+    // A 2-D mask in a one-channel format: no value (`texels` refuses it too).
+    assert_eq!(plan.value(1, 0, 0, 0, 0, Format::R16Unorm), None);
+    assert!(plan.texels(Format::R16Unorm).is_err());
 }
 
 #[test]

@@ -463,3 +463,31 @@ fn a_plan_under_a_budget_makes_every_mask_within_it_one_after_the_other_on_the_c
         .to_string_lossy()
         .ends_with(".ckpt")));
 }
+
+#[test]
+fn masks_given_for_a_plan_in_memory_are_checked_against_its_tiles() {
+    let text = format!("[tile]\nsize = \"8x8x4\"\n{ONE}");
+    let plan = Plan::new(&Scene::parse(&text, "t").unwrap(), &model()).unwrap();
+    let tile = plan.tile(&plan.masks[0]).unwrap();
+    let good = vec![fsot::Mask::white(tile, 1)];
+    assert!(fsot::render::sampler::SamplerPlan::from_plan(&plan, good).is_ok());
+    let other = vec![fsot::Mask::white(Tile::new(8, 8, 1, 1, 4).unwrap(), 1)];
+    let e = fsot::render::sampler::SamplerPlan::from_plan(&plan, other).err().unwrap().to_string();
+    assert!(e.contains("the plan's is 8x8x4"), "{e}");
+    // A plan set by hand that `Plan::check` refuses (a mask named twice).
+    let mut twice = plan.clone();
+    twice.masks.push(twice.masks[0].clone());
+    let masks = vec![fsot::Mask::white(tile, 1), fsot::Mask::white(tile, 2)];
+    assert!(fsot::render::sampler::SamplerPlan::from_plan(&twice, masks).is_err());
+}
+
+#[test]
+fn masks_whose_names_differ_by_a_second_exr_keep_checkpoints_of_their_own() {
+    let dir = std::path::Path::new("out");
+    let (a, b) = (
+        fsot::scene::plan::checkpoint_path(dir, "a.exr"),
+        fsot::scene::plan::checkpoint_path(dir, "a.exr.exr"),
+    );
+    assert_eq!(a, dir.join(".a.ckpt"));
+    assert_ne!(a, b);
+}

@@ -159,8 +159,21 @@ impl SamplerPlan {
     /// the mask of `plan.masks[i]`; laid out as `read` lays out the folder
     /// `Plan::execute` writes.
     pub fn from_plan(plan: &crate::scene::plan::Plan, masks: Vec<Mask>) -> Result<Self> {
+        plan.check()?;
         if masks.len() != plan.masks.len() {
             return Err(Error::invalid(format!("{} masks for a plan of {}", masks.len(), plan.masks.len())));
+        }
+        for (planned, mask) in plan.masks.iter().zip(&masks) {
+            let tile = plan.tile(planned)?;
+            if mask.tile != tile {
+                return Err(Error::invalid(format!(
+                    "the mask given for {} is {}; the plan's is {}",
+                    planned.file,
+                    mask.tile.describe(),
+                    tile.describe()
+                )));
+            }
+            mask.check()?;
         }
         let mut masks: Vec<Option<Mask>> = masks.into_iter().map(Some).collect();
         let parts = plan
@@ -321,7 +334,8 @@ impl SamplerPlan {
 
     /// The include's `fsot_get` for `part` at pixel (x, y), frame and sample,
     /// from texels as `format` stores them; past the last part, None (the
-    /// include's hash fallback). The include reads parts below its
+    /// include's hash fallback), and None for a format with fewer channels than
+    /// the part's mask. The include reads parts below its
     /// `FSOT_MAX_PARTS` (16 by default) and takes the fallback past them.
     pub fn value(
         &self,
@@ -333,6 +347,11 @@ impl SamplerPlan {
         format: Format,
     ) -> Option<[f32; 4]> {
         let p = self.parts.get(part)?;
+        // A format with fewer channels than the mask's d cannot hold it (`texels`
+        // refuses it): no value.
+        if self.masks[p.mask].tile.dims > format.channels() {
+            return None;
+        }
         let [w, h, t, spp] = self.tile();
         let f = frame.wrapping_add(p.offset[2]);
         let turn = f / t;

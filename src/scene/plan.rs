@@ -41,7 +41,7 @@
 //!   point of the rule, its time a cost model: a calibration run on this machine
 //!   and backend scaled by the scaling suite's factors for dimension and spp.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::Serialize;
@@ -323,6 +323,13 @@ impl CostModel {
 }
 
 /// A stable seed per mask file, so a plan makes the same masks every time.
+/// Where `Plan::execute` keeps the checkpoint of the mask `file` in `dir`:
+/// `.NAME.ckpt` for `NAME.exr` (one `.exr` taken off, so that `a.exr` and
+/// `a.exr.exr` keep checkpoints of their own).
+pub fn checkpoint_path(dir: &Path, file: &str) -> PathBuf {
+    dir.join(format!(".{}.ckpt", file.strip_suffix(".exr").unwrap_or(file)))
+}
+
 fn seed_of(scene: &str, file: &str) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for b in scene.bytes().chain([0]).chain(file.bytes()) {
@@ -850,7 +857,7 @@ impl Plan {
         match end {
             Some(seconds) => settings.until = Until::Seconds(seconds),
             None => {
-                let path = dir.join(format!(".{}.ckpt", m.file.trim_end_matches(".exr")));
+                let path = checkpoint_path(dir, &m.file);
                 let resume = resume && path.exists();
                 options.checkpoint = Some(Checkpointing { path, every, resume });
             }
