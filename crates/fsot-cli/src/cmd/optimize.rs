@@ -399,19 +399,19 @@ fn note_unused(args: &OptimizeArgs) {
     let (fsot, fast) = (args.method == Method::Fsot, args.method == Method::Fast);
     let swaps = fast || args.method == Method::Stbn;
     let unused = [
-        ("passes", "--passes", !swaps, "for the swap methods (fast, stbn)"),
-        ("fast_spatial", "--fast-spatial", !fast, "for --method fast"),
-        ("fast_temporal", "--fast-temporal", !fast, "for --method fast"),
-        ("fast_combine", "--fast-combine", !fast, "for --method fast"),
-        ("iterations", "--iterations", !fsot, "for --method fsot"),
-        ("slices", "--slices", !fsot, "for --method fsot"),
-        ("until", "--until", !fsot, "for --method fsot"),
-        ("budget", "--budget", !fsot, "for --method fsot"),
-        ("checkpoint_every", "--checkpoint-every", args.checkpoint.is_none(), "with --checkpoint"),
+        ("passes", "--passes", !swaps, "is for the swap methods (fast, stbn)"),
+        ("fast_spatial", "--fast-spatial", !fast, "is for --method fast"),
+        ("fast_temporal", "--fast-temporal", !fast, "is for --method fast"),
+        ("fast_combine", "--fast-combine", !fast, "is for --method fast"),
+        ("iterations", "--iterations", !fsot, "is for --method fsot"),
+        ("slices", "--slices", !fsot, "is for --method fsot"),
+        ("until", "--until", !fsot, "is for --method fsot"),
+        ("budget", "--budget", !fsot, "is for --method fsot"),
+        ("checkpoint_every", "--checkpoint-every", args.checkpoint.is_none(), "needs --checkpoint"),
     ];
     for (id, flag, idle, what) in unused {
         if idle && args.given.iter().any(|g| g == id) {
-            eprintln!("note: {flag} does nothing here: it is {what}");
+            eprintln!("note: {flag} does nothing here: it {what}");
         }
     }
 }
