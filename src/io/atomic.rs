@@ -164,14 +164,12 @@ mod tests {
         let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
         fs::write(&a, b"old a").unwrap();
         fs::write(&b, b"old b").unwrap();
-        // b's temporary file cannot be made once its folder is gone.
-        let outputs = vec![(AtomicFile::create(&a).unwrap(), b"new a".to_vec())];
+        // c's temporary file cannot be made once its folder is gone.
         let sub = dir.join("sub");
         fs::create_dir(&sub).unwrap();
         let lost = AtomicFile::create(&sub.join("c.exr")).unwrap();
         fs::remove_dir(&sub).unwrap();
-        let mut failing = outputs;
-        failing.push((lost, b"new c".to_vec()));
+        let failing = vec![(AtomicFile::create(&a).unwrap(), b"new a".to_vec()), (lost, b"new c".to_vec())];
         assert!(commit_all(failing).is_err());
         assert_eq!(fs::read(&a).unwrap(), b"old a", "a stays as it was");
         assert_eq!(fs::read_dir(&dir).unwrap().count(), 2, "no temporary file left");

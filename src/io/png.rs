@@ -103,18 +103,21 @@ pub fn encode(mask: &Mask, bits: u32) -> Result<Vec<(String, Vec<u8>)>> {
     Ok(files)
 }
 
+/// The slices as outputs into `dir` (made if missing), each reserved and
+/// encoded, for `atomic::commit_all` beside a run's other outputs.
+pub fn outputs(mask: &Mask, dir: &Path, bits: u32) -> Result<Vec<(AtomicFile, Vec<u8>)>> {
+    let files = encode(mask, bits)?;
+    crate::io::atomic::make_folder(dir)?;
+    files.into_iter().map(|(name, bytes)| Ok((AtomicFile::create(&dir.join(name))?, bytes))).collect()
+}
+
 /// Writes the slices into `dir` (made if missing) with `bits` bits per channel,
 /// 8 or 16, every one in full before any file there is replaced; the names
 /// written, in order.
 pub fn write(mask: &Mask, dir: &Path, bits: u32) -> Result<Vec<String>> {
-    let files = encode(mask, bits)?;
-    crate::io::atomic::make_folder(dir)?;
-    let outputs = files
-        .iter()
-        .map(|(name, bytes)| Ok((AtomicFile::create(&dir.join(name))?, bytes.clone())))
-        .collect::<Result<Vec<_>>>()?;
-    crate::io::atomic::commit_all(outputs)?;
-    Ok(files.into_iter().map(|(name, _)| name).collect())
+    let names = names(&mask.tile);
+    crate::io::atomic::commit_all(outputs(mask, dir, bits)?)?;
+    Ok(names)
 }
 
 /// 8-bit grey pixels (row-major) as PNG bytes.

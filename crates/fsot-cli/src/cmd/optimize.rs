@@ -455,15 +455,11 @@ fn write_outputs(
         let bytes = kind.encode(mask, file.target())?;
         outputs.push((file, bytes));
     }
-    let mut slices = 0;
+    let files = outputs.len();
     if let Some(dir) = &args.png {
-        let files = fsot::io::png::encode(mask, args.png_bits)?;
-        slices = files.len();
-        fsot::io::atomic::make_folder(dir)?;
-        for (name, bytes) in files {
-            outputs.push((AtomicFile::create(&dir.join(name))?, bytes));
-        }
+        outputs.extend(fsot::io::png::outputs(mask, dir, args.png_bits)?);
     }
+    let slices = outputs.len() - files;
     if cancel.is_cancelled() {
         eprintln!("interrupted: nothing written, {} untouched", args.out.display());
         return Err(Error::Interrupted);
