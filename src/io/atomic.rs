@@ -62,7 +62,11 @@ impl AtomicFile {
         let name = target
             .file_name()
             .ok_or_else(|| Error::invalid(format!("output {} has no file name", target.display())))?;
-        let temp = dir.join(format!(".{}.fsot-{}.tmp", name.to_string_lossy(), std::process::id()));
+        // Unique per file made, so that two reservations of one target (two
+        // threads, or one path given twice) never share a temporary file.
+        static MADE: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = MADE.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let temp = dir.join(format!(".{}.fsot-{}-{n}.tmp", name.to_string_lossy(), std::process::id()));
         File::create(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
         fs::remove_file(&temp).map_err(|e| Error::io(format!("cannot write in {}", dir.display()), e))?;
         Ok(Self { target: named.to_path_buf(), dest: target.to_path_buf(), temp })
@@ -120,10 +124,30 @@ impl Drop for Staged {
 }
 
 /// Writes every output in full before any target is replaced: one that cannot be
-/// written (a full disk) leaves every target as it was.
+/// written (a full disk) leaves every target as it was. Two outputs that replace
+/// one file are refused before anything is written.
 pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
+    for (i, (a, _)) in outputs.iter().enumerate() {
+        if let Some((b, _)) = outputs[..i].iter().find(|(b, _)| same_file(&a.dest, &b.dest)) {
+            return Err(Error::invalid(format!(
+                "outputs {} and {} are one file: name each output once",
+                b.target.display(),
+                a.target.display()
+            )));
+        }
+    }
     let staged = outputs.into_iter().map(|(file, bytes)| file.stage(&bytes)).collect::<Result<Vec<_>>>()?;
     staged.into_iter().try_for_each(Staged::commit)
+}
+
+/// Whether two paths name one file: the same text, or the same file name in one
+/// folder (links to folders resolved).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        Some(fs::canonicalize(dir).ok()?.join(p.file_name()?))
+    };
+    a == b || resolved(a).is_some_and(|r| Some(r) == resolved(b))
 }
 
 impl Drop for AtomicFile {
@@ -180,6 +204,20 @@ mod tests {
     }
 
     #[cfg(unix)]
+    #[test]
+    fn one_file_named_twice_is_refused_before_anything_is_written() {
+        let dir = scratch("twice");
+        let p = dir.join("m.exr");
+        fs::write(&p, b"old").unwrap();
+        let (a, b) = (AtomicFile::create(&p).unwrap(), AtomicFile::create(&dir.join(".").join("m.exr")).unwrap());
+        assert_ne!(a.temp, b.temp, "each reservation has a temporary file of its own");
+        let err = commit_all(vec![(a, b"one".to_vec()), (b, b"two".to_vec())]).unwrap_err();
+        assert!(err.to_string().contains("are one file"), "{err}");
+        assert_eq!(fs::read(&p).unwrap(), b"old");
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1, "no temporary file left");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn a_replaced_file_keeps_its_permissions() {
         use std::os::unix::fs::PermissionsExt;

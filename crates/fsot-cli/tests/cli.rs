@@ -358,7 +358,8 @@ fn kernel_benchmarks_refuse_sizes_no_machine_holds_before_they_allocate() {
 }
 
 #[test]
-fn an_output_folder_that_cannot_be_made_or_a_checkpoint_named_as_an_output_leaves_the_existing_file() {
+fn an_output_folder_that_cannot_be_made_an_output_named_twice_or_a_checkpoint_named_as_an_output_leaves_the_existing_file(
+) {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("m.exr"), b"what the user had").unwrap();
     std::fs::write(dir.path().join("file"), b"a file, not a folder").unwrap();
@@ -369,6 +370,9 @@ fn an_output_folder_that_cannot_be_made_or_a_checkpoint_named_as_an_output_leave
         (&["--checkpoint", "./m.exr"], "is also an output"),
         (&["--also", "m.ktx2", "--checkpoint", "m.ktx2"], "is also an output"),
         (&["--checkpoint", "/dev/null"], "is not a regular file"),
+        (&["--also", "m.exr"], "are one file"),
+        (&["--also", "./m.exr"], "are one file"),
+        (&["--also", "m.h", "--also", "./m.h"], "are one file"),
     ];
     for (extra, expect) in cases {
         let mut args = run.to_vec();
@@ -428,6 +432,10 @@ fn a_flag_the_method_has_no_use_for_is_noted_and_the_run_goes_on() {
     assert!(o.status.success(), "{err}");
     assert!(err.contains("note: --iterations does nothing here: it is for --method fsot"), "{err}");
     assert!(err.contains("note: --until does nothing here"), "{err}");
+    // A scalar STBN mask is void and cluster, not a swap search.
+    let o = fsot(&[&base[..], &["--method", "stbn", "--dims", "1", "--passes", "3"]].concat(), dir.path());
+    let err = stderr(&o);
+    assert!(o.status.success() && err.contains("note: --passes does nothing here"), "{err}");
     // Defaults are no flags given: nothing to note.
     let o = fsot(&[&base[..], &["--method", "fast", "--passes", "1"]].concat(), dir.path());
     assert!(o.status.success() && !stderr(&o).contains("note:"), "{}", stderr(&o));

@@ -1,6 +1,7 @@
 //! `fsot optimize`: the optimizer with checkpoints and interruption, and the peers' methods.
 
 use crate::*;
+use fsot::io::atomic::same_file;
 
 pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     set_threads(args.threads)?;
@@ -11,7 +12,6 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if args.method == Method::Fsot {
         args.kernel.check_flags_apply()?;
     }
-    note_unused(&args);
     let spec = args.kernel.spec()?;
     if args.init.is_some() && args.start != StartArg::Auto {
         return Err(Error::invalid("--init and --start both say where the run starts: give one"));
@@ -25,6 +25,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let dims = args.dims.or(init.as_ref().map(|m| m.tile.dims)).unwrap_or(2);
     let spp = args.spp.or(init.as_ref().map(|m| m.tile.spp)).unwrap_or(1);
     let tile = Tile::new(w, h, t, spp, dims)?;
+    note_unused(&args, &tile);
     let until = match &args.budget {
         Some(text) => Until::Seconds(parse_seconds(text)?),
         None => parse_until(args.until.as_deref())?,
@@ -58,6 +59,17 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         .iter()
         .map(|p| Ok((MaskFile::for_path(p, dims, format_for(p))?, AtomicFile::create(p)?)))
         .collect::<Result<Vec<_>>>()?;
+    let outputs: Vec<&std::path::Path> =
+        std::iter::once(&args.out).chain(&args.also).map(|p| p.as_path()).collect();
+    for (i, a) in outputs.iter().enumerate() {
+        if let Some(b) = outputs[..i].iter().find(|b| same_file(a, b)) {
+            return Err(Error::invalid(format!(
+                "{} and {} are one file: name each output once",
+                b.display(),
+                a.display()
+            )));
+        }
+    }
     if let Some(dir) = &args.png {
         check_png_folder(dir, &tile)?;
     }
@@ -395,11 +407,11 @@ pub(crate) fn make_baseline(
 
 /// A note for each flag given that the method has no use for (the same flags
 /// can then be given to every method).
-fn note_unused(args: &OptimizeArgs) {
+fn note_unused(args: &OptimizeArgs, tile: &Tile) {
     let (fsot, fast) = (args.method == Method::Fsot, args.method == Method::Fast);
-    let swaps = fast || args.method == Method::Stbn;
+    let swaps = fast || (args.method == Method::Stbn && tile.dims > 1);
     let unused = [
-        ("passes", "--passes", !swaps, "is for the swap methods (fast, stbn)"),
+        ("passes", "--passes", !swaps, "is for the swap methods (fast, stbn with d >= 2)"),
         ("fast_spatial", "--fast-spatial", !fast, "is for --method fast"),
         ("fast_temporal", "--fast-temporal", !fast, "is for --method fast"),
         ("fast_combine", "--fast-combine", !fast, "is for --method fast"),
@@ -488,14 +500,4 @@ fn unless_interrupted<T: Send + 'static>(
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     worker.join().map_err(|_| Error::invalid("scoring the mask failed"))
-}
-
-/// Whether two paths name one file: the same text, or the same file name in
-/// one folder (links to folders resolved).
-fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
-    let resolved = |p: &std::path::Path| {
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        Some(std::fs::canonicalize(dir).ok()?.join(p.file_name()?))
-    };
-    a == b || resolved(a).is_some_and(|r| Some(r) == resolved(b))
 }

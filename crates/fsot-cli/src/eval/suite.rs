@@ -862,7 +862,9 @@ enum Shown {
 
 /// One table: a row per scene, a column per method; `cell` gives a method's
 /// interval and how it is shown. The best (highest when `higher_better`) is
-/// bold where its interval does not overlap the runner-up's.
+/// bold where its interval does not overlap the runner-up's; with no runner-up
+/// (white noise is not ranked by an error measure, whose column is its ratio
+/// to white), nothing is bold.
 fn table(
     scenes: &[&str],
     methods: &[&str],
@@ -886,7 +888,6 @@ fn table(
         });
         let winner = match ranked.as_slice() {
             [best, next, ..] if !best.1.overlaps(&next.1) => Some(best.0),
-            [best] => Some(best.0),
             _ => None,
         };
         let cells: Vec<String> = methods
@@ -996,4 +997,40 @@ pub fn anatomy_markdown(records: &[Record]) -> String {
 /// Where the cache goes under an output folder.
 pub fn cache_dir(out: &Path) -> PathBuf {
     out.join("cache")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cells<'a>(values: &'a [(&'a str, f64, f64)]) -> impl Fn(&str, &str) -> Option<(Interval, Shown)> + 'a {
+        move |_, m| {
+            values.iter().find(|v| v.0 == m).map(|v| (Interval { mean: v.1, ci95: v.2 }, Shown::Fixed(2)))
+        }
+    }
+
+    #[test]
+    fn only_a_winner_whose_interval_clears_the_runner_up_s_is_bold() {
+        let apart = [("white", 5.0, 0.1), ("a", 7.0, 0.1), ("b", 6.0, 0.1)];
+        assert!(table(&["s"], &["white", "a", "b"], cells(&apart), true).contains("**7.00 +- 0.10**"));
+        let overlapping = [("a", 7.0, 0.6), ("b", 6.0, 0.6)];
+        assert!(!table(&["s"], &["a", "b"], cells(&overlapping), true).contains("**"));
+        // Lower is better for an error measure, whose ranking leaves white out.
+        let errors = [("white", 1.0, 0.1), ("a", 0.5, 0.01), ("b", 0.7, 0.01)];
+        assert!(table(&["s"], &["white", "a", "b"], cells(&errors), false).contains("**0.50 +- 0.01**"));
+    }
+
+    #[test]
+    fn a_method_with_no_runner_up_is_not_bold() {
+        let alone = [("white", 1.0, 0.1), ("stbn", 0.8, 0.8)];
+        let t = table(&["s"], &["white", "stbn"], cells(&alone), false);
+        assert!(!t.contains("**"), "{t}");
+        let one = [("white", 5.0, 0.1), ("stbn", 7.0, 0.1)];
+        assert!(
+            table(&["s"], &["white", "stbn"], cells(&one), true).contains("**7.00 +- 0.10**"),
+            "judged against white"
+        );
+        let missing = [("white", 5.0, 0.1)];
+        assert!(!table(&["s"], &["white", "stbn"], cells(&missing), true).contains("**"));
+    }
 }
