@@ -7,6 +7,9 @@ scripts/install-deps.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
+# The validation layer's synchronization checks too (hazards between dispatches,
+# copies and fills), on top of its default checks.
+export VK_LAYER_ENABLES="${VK_LAYER_ENABLES:-VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT}"
 cargo test --release --workspace "$@"
 # The device tests whose shapes follow the subgroup size, again on lavapipe with
 # 128-bit vectors: 4 lanes a subgroup where x86 gives 8, as lavapipe has on ARM64

@@ -485,6 +485,35 @@ fn classes_past(
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
+fn large_classes_past_the_buffers_room_are_skipped_and_counted_and_the_sort_stays_within_the_buffers() {
+    let ctx = common::gpu_context();
+    let tile = Tile::new(16, 16, 8, 4, 2).unwrap();
+    let s = settings("taa", 8, 3);
+    let largest = Kernel::new(s.kernel, &tile).taps.len() as u32 * 4;
+    // Room for one largest class and a little: most iterations draw several.
+    let options = VulkanOptions::default().deterministic(true).hooks(VulkanHooks {
+        transport: Some(TransportKind::Workgroup),
+        defer: Some(0),
+        large_capacity: Some(largest + 64),
+        ..VulkanHooks::default()
+    });
+    let mut gpu = VulkanRun::new(&ctx, tile, s, None, options).unwrap();
+    assert_eq!(gpu.large_capacity(), largest + 64);
+    let mut costs = Vec::new();
+    while costs.len() < 8 {
+        // A count past the buffers (the sort and the gather then run past them)
+        // fails the batch.
+        costs.extend(gpu.step_up_to(8 - costs.len() as u32).unwrap());
+    }
+    assert!(gpu.overflowed() > 0, "no class overflowed: the test must reach a full buffer");
+    assert!(costs.iter().all(|c| c.is_finite() && *c > 0.0), "{costs:?}");
+    eprintln!("{} large classes skipped in 8 iterations, costs {costs:?}", gpu.overflowed());
+    drop(gpu);
+    common::assert_no_validation_messages(&ctx);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
 fn float_atomics_agree_with_the_cpu_too() {
     let ctx = common::gpu_context();
     if !ctx.info().float_atomic_add && common::skip(&format!("no float atomics on {}", ctx.info().name)) {

@@ -82,12 +82,20 @@ float fsot_project(FsotSlice s, uint point) {
     return p;
 }
 
-// Reserves room for a large class in the radix sort's input; -1 if full.
+// Reserves room for a large class in the radix sort's input; -1 if full. The
+// count never passes the capacity: the sort and the gather read it as theirs.
 int fsot_reserve_large(uint slice, uint n) {
-    uint off = atomicAdd(large_count, n);
-    if (off + n > pc.large_capacity) {
-        atomicAdd(large_overflow, 1u);
-        return -1;
+    uint off = atomicAdd(large_count, 0u);
+    for (;;) {
+        if (n > pc.large_capacity - min(off, pc.large_capacity)) {
+            atomicAdd(large_overflow, 1u);
+            return -1;
+        }
+        uint seen = atomicCompSwap(large_count, off, off + n);
+        if (seen == off) {
+            break;
+        }
+        off = seen;
     }
     uint seg = atomicAdd(large_segments, 1u);
     segments[seg] = LargeSegment(slice, off, n, 0u);

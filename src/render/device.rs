@@ -33,12 +33,14 @@
 //! Every function here that takes an `ImageTarget` or a `BufferTarget` is
 //! `unsafe`: Vulkan cannot be asked how an image or a buffer was made, so fsot
 //! checks what the target states but cannot check the statement. The caller
-//! promises that the target's image (buffer) is alive, belongs to the context's
-//! device, was created with the format, width, height, layer count (size) and
-//! usage the target states, is in `layout_before` in every layer (an image),
-//! can be used on the context's queue family, and is used by no other work
-//! until the call returns (the host's own submissions to the queue take the
-//! queue lock).
+//! promises that the target's image (buffer) is alive with its memory bound,
+//! belongs to the context's device, was created with the format, width, height,
+//! layer count (size) and usage the target states, is in `layout_before` in
+//! every layer (an image), can be used on the context's queue family, and is
+//! used by no other work until the call returns (the host's own submissions to
+//! the queue take the queue lock). An image is also a plain 2-D array image: one
+//! sample per texel, OPTIMAL tiling. Only its mip level 0 is written and moved
+//! to `layout_after`; any other level keeps its layout and contents.
 
 use std::path::Path;
 

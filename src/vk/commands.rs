@@ -191,7 +191,9 @@ impl Context {
 }
 
 /// A full memory barrier between recorded commands (compute and transfer writes
-/// made visible to compute, transfer, host and indirect-argument reads).
+/// made visible to compute, transfer, host and indirect-argument reads, and
+/// ordered before later compute and transfer writes: a fill after a dispatch
+/// that wrote the buffer).
 pub fn barrier(cmd: Recording<'_>) {
     let mb = vk::MemoryBarrier::default()
         .src_access_mask(vk::AccessFlags::SHADER_WRITE | vk::AccessFlags::TRANSFER_WRITE)
@@ -199,6 +201,7 @@ pub fn barrier(cmd: Recording<'_>) {
             vk::AccessFlags::SHADER_READ
                 | vk::AccessFlags::SHADER_WRITE
                 | vk::AccessFlags::TRANSFER_READ
+                | vk::AccessFlags::TRANSFER_WRITE
                 | vk::AccessFlags::HOST_READ
                 | vk::AccessFlags::INDIRECT_COMMAND_READ,
         );

@@ -32,7 +32,9 @@ use super::error::{Error, Result};
 
 /// A 2-D array image as its creator made it: what a fill or read-back needs
 /// to know and checks. Vulkan cannot be asked how an image was created, so the
-/// host states it here and fsot checks it against what it writes.
+/// host states it here and fsot checks it against what it writes. The image is
+/// single-sampled with OPTIMAL tiling and its memory bound; a fill or read-back
+/// touches mip level 0 only.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ImageTarget {
     /// The host's image.

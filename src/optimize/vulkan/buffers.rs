@@ -60,6 +60,12 @@ impl LargePlan {
             point_bits: (32 - (tile.points() as u32).saturating_sub(1).leading_zeros()).max(1),
         }
     }
+
+    /// The same stage with at most `capacity` elements.
+    pub fn at_most(self, capacity: u32) -> Self {
+        let capacity = self.capacity.min(capacity);
+        Self { capacity, seg_bits: 32 - capacity.leading_zeros(), ..self }
+    }
 }
 
 /// Every buffer of a run.

@@ -115,4 +115,7 @@ pub struct VulkanHooks {
     /// Workgroups of the second pass at most, in place of 65535
     /// (`DEFER_GROUPS`), so that each workgroup takes several listed slices.
     pub defer_groups: Option<u32>,
+    /// The large-class buffers' capacity in elements, at most the planned one:
+    /// a small one makes classes overflow, as a device's largest buffer can.
+    pub large_capacity: Option<u32>,
 }

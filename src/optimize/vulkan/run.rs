@@ -130,7 +130,10 @@ impl VulkanRun {
         // Classes past both passes' limits go to the large-class stage.
         let local_max = shape.local_max.max(shape.defer_max);
         let thresholds = level_thresholds(&kernel);
-        let large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
+        let mut large = LargePlan::new(ctx, &tile, &thresholds, kernel.taps.len(), slices, local_max);
+        if let Some(capacity) = options.hooks.large_capacity {
+            large = large.at_most(capacity);
+        }
         let adam = matches!(settings.rule, StepRule::Adam { .. });
         // The per-lane transport's slice orders: a batch's worth at a time where
         // one binding holds them, fewer otherwise (at least one).
@@ -562,6 +565,18 @@ impl VulkanRun {
         let slots: Vec<CostSlot> = bytemuck::pod_collect_to_vec(&raw[..cost_bytes]);
         let head: LargeMetaHead = bytemuck::pod_read_unaligned(&raw[cost_bytes..cost_bytes + head_bytes]);
         self.overflowed += head.large_overflow as u64;
+        if head.large_count > self.large.capacity {
+            // The sort and the gather took the count as theirs: past the
+            // buffers, nothing they wrote can be trusted.
+            return Err(Error::VulkanUnavailable(format!(
+                "{} counted {} large-class elements in buffers of {} in iterations {} to {}: the batch is not kept",
+                self.ctx.info().name,
+                head.large_count,
+                self.large.capacity,
+                self.iteration + 1,
+                self.iteration + count
+            )));
+        }
         if head.loop_cut > 0 {
             // Some class's work was cut short: its displacements are wrong, and
             // so is every iteration after. Nothing of the batch is kept.
