@@ -322,10 +322,16 @@ pub fn initial_samples(tile: &Tile, settings: &Settings, init: Option<&Mask>) ->
 /// sums while it is transported).
 pub const MAX_SLICES: u32 = 1 << 24;
 
+/// The most class memberships a sample may expect per iteration. Its
+/// displacements (each at most sqrt(d) <= 2.83 along a coordinate) are summed in
+/// fixed point of 2^-40, whose range is +-2^23: a million leaves room for the
+/// busiest sample of a tile (the default is `DEFAULT_HITS`).
+pub const MAX_HITS: f64 = 1e6;
+
 /// Slices per iteration (the setting, or enough for DEFAULT_HITS class
 /// memberships per sample) and the resulting expected hits per sample; an
 /// error for slice settings no run can draw (no slices, an axis share outside
-/// [0, 1]).
+/// [0, 1], more than `MAX_HITS` hits per sample).
 pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Result<(u32, f64)> {
     check_axis_share(settings.axis_share)?;
     let mean_points = kernel.mean_class_len() * tile.spp as f64;
@@ -336,7 +342,14 @@ pub fn slices_and_hits(tile: &Tile, kernel: &Kernel, settings: &Settings) -> Res
         Some(s) => s,
         None => ((DEFAULT_HITS * tile.points() as f64 / mean_points).ceil() as u32).clamp(16, MAX_SLICES),
     };
-    Ok((slices, slices as f64 * mean_points / tile.points() as f64))
+    let hits = slices as f64 * mean_points / tile.points() as f64;
+    if hits > MAX_HITS {
+        return Err(Error::invalid(format!(
+            "{slices} slices per iteration put each sample in about {hits:.0} classes an iteration; at most \
+             {MAX_HITS:.0} (the range of the displacement sums): give fewer slices"
+        )));
+    }
+    Ok((slices, hits))
 }
 
 /// An error unless `share` is an axis share a run can draw by: in [0, 1].
@@ -384,6 +397,24 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
 mod tests {
     use super::*;
     use crate::core::kernel::{Kernel, KernelSpec};
+
+    #[test]
+    fn slices_that_would_overrun_the_displacement_sums_are_refused() {
+        // One pixel: every slice's class is the whole tile, so each sample is in
+        // every slice; its sum could reach slices x 2.83, past 2^23 at 2^24.
+        let tile = Tile::new(1, 1, 1, 64, 1).unwrap();
+        let kernel = Kernel::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), &tile);
+        let mut settings = Settings::new(kernel.spec, 0);
+        settings.slices = Some(MAX_SLICES);
+        let err = slices_and_hits(&tile, &kernel, &settings).unwrap_err();
+        assert!(err.to_string().contains("give fewer slices"), "{err}");
+        settings.slices = Some(1_000_000);
+        let (_, hits) = slices_and_hits(&tile, &kernel, &settings).unwrap();
+        assert_eq!(hits, 1e6);
+        // The worst sum a million hits can make stays inside the fixed point's range.
+        let worst = hits * 8f64.sqrt() * crate::optimize::cpu::FIXED_SCALE;
+        assert!(worst < i64::MAX as f64 / 2.0, "{worst:e}");
+    }
 
     #[test]
     fn the_default_slice_count_is_at_most_max_slices_however_large_the_tile_and_small_the_classes() {
