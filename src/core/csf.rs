@@ -28,9 +28,22 @@ pub const LUMINANCE: f64 = 100.0;
 /// The field size the sensitivity is taken at, degrees.
 pub const FIELD_DEGREES: f64 = 10.0;
 
-/// Widths of the mixture's Gaussians, pixels (exp(-r^2 / s^2)); the narrowest is
-/// all but the centre pixel alone.
+/// Widths of the mixture's Gaussians, pixels (exp(-r^2 / s^2)), up to
+/// `LADDER_PPD`; the narrowest is all but the centre pixel alone.
 pub const LADDER: [f64; 9] = [0.3, 0.45, 0.6, 0.9, 1.3, 1.8, 2.5, 3.5, 5.0];
+
+/// The most pixels per degree `LADDER` is made for. Above, its widths scale with
+/// ppd: the eye's filter, fixed in degrees, widens in pixels, and the target is
+/// a function of cycles per degree, so the fit at k times this ppd is the fit at
+/// this ppd widened k times (up to the pixel grid). The widest Gaussian unscaled
+/// would clip the kernel: at 500 ppd to 5 pixels of the 11.7 its fit needs.
+pub const LADDER_PPD: f64 = 150.0;
+
+/// The ladder's widths at `ppd`.
+pub fn ladder(ppd: f64) -> [f64; 9] {
+    let k = (ppd / LADDER_PPD).max(1.0);
+    LADDER.map(|s| s * k)
+}
 
 /// A Gaussian's support: offsets with exp(-r^2 / s^2) >= this are kept.
 const SUPPORT: f64 = 1e-6;
@@ -84,7 +97,7 @@ fn profile_response(p: &[f64], f: f64) -> f64 {
     p.iter().enumerate().map(|(i, w)| w * (std::f64::consts::TAU * f * (i as f64 - r)).cos()).sum()
 }
 
-/// The mixture's weights on `LADDER` (summing to 1) for a display of `ppd`
+/// The mixture's weights on `ladder(ppd)` (summing to 1) for a display of `ppd`
 /// pixels per degree (`fit`), fitted once per `ppd` in a process: a kernel's
 /// construction asks for it several times.
 pub fn mixture(ppd: f64) -> Vec<(f64, f64)> {
@@ -99,14 +112,15 @@ pub fn mixture(ppd: f64) -> Vec<(f64, f64)> {
     m
 }
 
-/// Non-negative least squares of the separable responses of `LADDER`'s
+/// Non-negative least squares of the separable responses of `ladder(ppd)`'s
 /// profiles against `target` at `ppd` on a 33 x 33 grid of frequencies in
 /// [0, 0.5]^2 cycles per pixel; weights summing to 1.
 fn fit(ppd: f64) -> Vec<(f64, f64)> {
     let n = 33;
     let freqs: Vec<f64> = (0..n).map(|k| 0.5 * k as f64 / (n - 1) as f64).collect();
+    let widths = ladder(ppd);
     let responses: Vec<Vec<f64>> =
-        LADDER.iter().map(|&s| freqs.iter().map(|&f| profile_response(&profile(s), f)).collect()).collect();
+        widths.iter().map(|&s| freqs.iter().map(|&f| profile_response(&profile(s), f)).collect()).collect();
     // Rows: grid points; columns: ladder entries.
     let mut a = Vec::with_capacity(n * n);
     let mut b = Vec::with_capacity(n * n);
@@ -118,7 +132,7 @@ fn fit(ppd: f64) -> Vec<(f64, f64)> {
     }
     let w = nnls(&a, &b);
     let sum: f64 = w.iter().sum();
-    LADDER.iter().zip(&w).filter(|(_, &w)| w > 0.0).map(|(&s, &w)| (w / sum, s)).collect()
+    widths.iter().zip(&w).filter(|(_, &w)| w > 0.0).map(|(&s, &w)| (w / sum, s)).collect()
 }
 
 /// Non-negative least squares, min |A w - b| with w >= 0, by cyclic coordinate
@@ -160,6 +174,59 @@ mod tests {
         assert!(matches!(limit, Some(l) if (45.0..=60.0).contains(&l)), "{limit:?}");
         // Dimmer light: less sensitivity, the peak lower.
         assert!(barten(4.0, 10.0, 10.0) < barten(4.0, 100.0, 10.0));
+    }
+
+    #[test]
+    fn barten_matches_its_closed_form_evaluated_outside_fsot() {
+        // S(u) at L = 100 cd/m^2, w = 10 degrees, from the formula in this
+        // module's notes evaluated by Python 3's math module.
+        let pinned = [
+            (0.5, 125.54761130002423),
+            (1.0, 240.24990574665966),
+            (3.0, 494.35574645014714),
+            (4.0, 517.0641608859086),
+            (10.0, 297.05508947442365),
+            (30.0, 26.63213012140464),
+        ];
+        for (u, want) in pinned {
+            let got = barten(u, LUMINANCE, FIELD_DEGREES);
+            assert!((got - want).abs() < 1e-12 * want, "S({u}) = {got}, not {want}");
+        }
+    }
+
+    #[test]
+    fn the_fit_follows_the_target_at_high_pixels_per_degree_and_widens_with_them() {
+        // The mixture's own response (its Gaussians' sums on the pixel grid, in
+        // f64) against the target, over the grid of frequencies the fit uses.
+        let response = |ppd: f64, f: f64| {
+            mixture(ppd).iter().map(|&(w, s)| w * profile_response(&profile(s), f)).sum::<f64>()
+        };
+        let rms = |ppd: f64| {
+            let freqs: Vec<f64> = (0..33).map(|k| 0.5 * k as f64 / 32.0).collect();
+            let mut sum = 0.0;
+            for fx in &freqs {
+                for fy in &freqs {
+                    let got = response(ppd, *fx) * response(ppd, *fy);
+                    sum += (got - target(fx.hypot(*fy), ppd)).powi(2);
+                }
+            }
+            (sum / (33.0 * 33.0)).sqrt()
+        };
+        let width = |ppd: f64| mixture(ppd).iter().map(|(w, s)| w * s).sum::<f64>();
+        // No worse past the ladder's own ppd than at it (an unscaled ladder's
+        // widest Gaussian clips the fit there: rms 0.026 at 300 against 0.018
+        // at 150).
+        let at_ladder = rms(LADDER_PPD);
+        for ppd in [200.0, 300.0, 500.0] {
+            let e = rms(ppd);
+            assert!(e <= at_ladder, "{ppd} ppd: rms {e} against {at_ladder} at {LADDER_PPD}");
+        }
+        // Past the ladder's ppd the kernel widens nearly in proportion.
+        let ratio = width(500.0) / width(250.0);
+        assert!((1.8..=2.0).contains(&ratio), "{ratio}");
+        // Up to it, the ladder is the unscaled one.
+        assert_eq!(ladder(LADDER_PPD), LADDER);
+        assert_eq!(ladder(37.84), LADDER);
     }
 
     #[test]
