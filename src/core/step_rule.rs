@@ -240,6 +240,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn adam_and_momentum_steps_follow_their_closed_forms_under_a_constant_gradient() {
+        // Adam's bias correction makes every step under a constant gradient g
+        // lr scale g / (|g| + eps); momentum's k-th moves step scale (1 - beta^k) g.
+        let (g, scale, t_max) = (-0.02f32, 0.7f32, 5u32);
+        let adam = StepRule::Adam { lr: 0.01, beta1: 0.9, beta2: 0.99, eps: 1e-8 };
+        let (mut x, mut m, mut v) = (0.5f32, 0.0f32, 0.0f32);
+        for t in 1..=t_max {
+            let expected = 0.01f64 * 0.7 * (-0.02) / (0.02 + 1e-8);
+            let next = step_value(adam, x, g, scale, t, &mut m, Some(&mut v));
+            assert!(((next - x) as f64 - expected).abs() < 1e-7, "t = {t}: moved {} not {expected}", next - x);
+            x = next;
+        }
+        let momentum = StepRule::Momentum { step: 2.0, beta: 0.8 };
+        let (mut x, mut m) = (0.5f32, 0.0f32);
+        for k in 1..=t_max {
+            let expected = 2.0f64 * 0.7 * (1.0 - 0.8f64.powi(k as i32)) * -0.02;
+            let next = step_value(momentum, x, g, scale, k, &mut m, None);
+            assert!(((next - x) as f64 - expected).abs() < 1e-7, "k = {k}: moved {} not {expected}", next - x);
+            x = next;
+        }
+    }
+
+    #[test]
     fn wrapping_stays_in_the_half_open_unit_interval() {
         assert_eq!(wrap01(1.0), 0.0);
         assert_eq!(wrap01(-0.25), 0.75);
