@@ -458,8 +458,11 @@ fn the_sort_sorts_a_hosts_own_buffers_in_place_and_refuses_ones_it_cannot_use() 
     for bits in [32u32, 24] {
         let keys: Vec<u32> = (0..n).map(|i| i.wrapping_mul(2_654_435_761) >> (32 - bits)).collect();
         let vals: Vec<u32> = (0..n).map(|i| i ^ 0x55).collect();
-        fsot::vk::buffer::fill_buffer(&ctx, &target(kb), bytemuck::cast_slice(&keys)).unwrap();
-        fsot::vk::buffer::fill_buffer(&ctx, &target(vb), bytemuck::cast_slice(&vals)).unwrap();
+        // SAFETY: the host's buffers, alive, on the device `ctx` wraps, as
+        // `target` states them; nothing else uses them now.
+        unsafe { fsot::vk::buffer::fill_buffer(&ctx, &target(kb), bytemuck::cast_slice(&keys)) }.unwrap();
+        // SAFETY: as above.
+        unsafe { fsot::vk::buffer::fill_buffer(&ctx, &target(vb), bytemuck::cast_slice(&vals)) }.unwrap();
         host.run(|cmd| {
             // SAFETY: the host's command buffer, begun on the device `ctx`
             // wraps, recorded only here; `run` waits before anything goes.

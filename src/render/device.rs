@@ -140,7 +140,8 @@ pub unsafe fn write_mask(ctx: &Context, mask: &Mask, image: &ImageTarget) -> Res
 /// # Safety
 /// The target is as the module's notes say (`# Safety`).
 pub unsafe fn write_plan_block(ctx: &Context, plan: &SamplerPlan, target: &BufferTarget) -> Result<()> {
-    Ok(fill_buffer(ctx, target, &plan.plan_block()?)?)
+    // SAFETY: the target is as this function's caller promised.
+    Ok(unsafe { fill_buffer(ctx, target, &plan.plan_block()?) }?)
 }
 
 /// Writes the plan block for a shader that defines `FSOT_MAX_PARTS` as
@@ -154,7 +155,8 @@ pub unsafe fn write_plan_block_for(
     capacity: usize,
     target: &BufferTarget,
 ) -> Result<()> {
-    Ok(fill_buffer(ctx, target, &plan.plan_block_for(capacity)?)?)
+    // SAFETY: the target is as this function's caller promised.
+    Ok(unsafe { fill_buffer(ctx, target, &plan.plan_block_for(capacity)?) }?)
 }
 
 /// Writes a mask's texels in `format` (laid out as in the image: layer by
@@ -162,7 +164,8 @@ pub unsafe fn write_plan_block_for(
 /// # Safety
 /// The target is as the module's notes say (`# Safety`).
 pub unsafe fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, target: &BufferTarget) -> Result<()> {
-    Ok(fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?)?)
+    // SAFETY: the target is as this function's caller promised.
+    Ok(unsafe { fill_buffer(ctx, target, &crate::io::ktx2::texels(mask, format)?) }?)
 }
 
 /// Makes a mask on the context's device (the Vulkan optimizer in its

@@ -297,7 +297,13 @@ pub struct BufferTarget {
 /// memory accesses around the copy); waits until done. No queue family
 /// ownership transfer (as for images: see `image`). Checked before any GPU
 /// work: the handle, the usage, the offset's alignment and the range.
-pub fn fill_buffer(ctx: &Context, target: &BufferTarget, bytes: &[u8]) -> Result<()> {
+///
+/// # Safety
+/// The target's buffer is alive with its memory bound, belongs to the context's
+/// device, was created with the size and usage the target states, can be used on
+/// the context's queue family, and is used by no other work until the call
+/// returns.
+pub unsafe fn fill_buffer(ctx: &Context, target: &BufferTarget, bytes: &[u8]) -> Result<()> {
     if target.buffer == vk::Buffer::null() {
         return Err(Error::invalid("the buffer handle is null"));
     }

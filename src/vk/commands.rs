@@ -223,7 +223,10 @@ pub fn barrier(cmd: Recording<'_>) {
 }
 
 /// Copies the first `bytes` bytes of `src` to `dst` at `dst_offset`.
+/// Panics for a range past either buffer.
 pub fn copy(cmd: Recording<'_>, src: &Buffer, dst: &Buffer, bytes: u64, dst_offset: u64) {
+    let fits = bytes > 0 && bytes <= src.size && dst_offset.checked_add(bytes).is_some_and(|end| end <= dst.size);
+    assert!(fits, "a copy of {bytes} bytes from a buffer of {} to offset {dst_offset} of one of {}", src.size, dst.size);
     copy_raw(cmd, src.raw, dst.raw, bytes, dst_offset)
 }
 
@@ -237,7 +240,12 @@ pub(crate) fn copy_raw(cmd: Recording<'_>, src: vk::Buffer, dst: vk::Buffer, byt
 }
 
 /// Sets every byte of `buffer` from `offset` for `bytes` bytes (vk::WHOLE_SIZE: to the end) to zero.
+/// Panics for a range past the buffer or not in whole 4-byte words.
 pub fn zero(cmd: Recording<'_>, buffer: &Buffer, offset: u64, bytes: u64) {
+    let fits = offset % 4 == 0
+        && offset < buffer.size
+        && (bytes == vk::WHOLE_SIZE || bytes > 0 && bytes % 4 == 0 && offset + bytes <= buffer.size);
+    assert!(fits, "zeroing {bytes} bytes at offset {offset} of a buffer of {}", buffer.size);
     // SAFETY: `cmd` is being recorded; the buffer has TRANSFER_DST usage.
     unsafe { cmd.context().device().cmd_fill_buffer(cmd.raw(), buffer.raw, offset, bytes, 0) };
 }

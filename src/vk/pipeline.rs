@@ -274,10 +274,19 @@ impl ComputePipeline {
         Ok(())
     }
 
-    /// Binds the pipeline, descriptor set `set` and the push constants.
+    /// Binds the pipeline, descriptor set `set` and the push constants. Panics
+    /// for push constants of another size than the pipeline's, or a set it has
+    /// not.
     fn bind_for_dispatch(&self, cmd: Recording<'_>, set: usize, push: &[u8]) {
+        assert!(
+            push.len() == self.push_bytes as usize && set < self.sets.len(),
+            "a dispatch with {} bytes of push constants and set {set}; the pipeline has {} and {} sets",
+            push.len(),
+            self.push_bytes,
+            self.sets.len()
+        );
         let device = self.ctx.device();
-        // SAFETY: `cmd` is being recorded; the set index was checked when bound.
+        // SAFETY: `cmd` is being recorded; the set index and the push range are checked above.
         unsafe {
             device.cmd_bind_pipeline(cmd.raw(), vk::PipelineBindPoint::COMPUTE, self.raw);
             device.cmd_bind_descriptor_sets(
