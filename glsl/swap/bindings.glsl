@@ -38,7 +38,7 @@ struct SwapPush {
     uint pass_key;     // rng::derive(search key, pass): the pass's proposal stream
     uint first;        // index in the pass of the batch's first proposal
     uint count;        // proposals in the batch
-    uint batch;        // rounds recorded so far in the search, from 1: tags the claims
+    uint batch;        // rounds recorded so far in the pass, from 1: tags the claims
     uint retry;        // 0: the batch's first round; else a round over its dropped proposals
     uint last;         // 1: the batch's last round (a proposal dropped now stays rejected)
 };

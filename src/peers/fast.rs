@@ -214,6 +214,19 @@ impl Default for FastSpec {
 const CUTOFF: f64 = 1e-3;
 
 impl FastSpec {
+    /// An error unless both filters are in range and a sum's spatial weight is
+    /// in [0, 1] (what `Filter::parse` and `Combine::parse` give).
+    pub fn check(&self) -> Result<()> {
+        self.spatial.validate()?;
+        self.temporal.validate()?;
+        match self.combine {
+            Combine::Sum { spatial_weight } if !(0.0..=1.0).contains(&spatial_weight) => Err(Error::invalid(format!(
+                "a sum's spatial weight must be in [0, 1], got {spatial_weight}"
+            ))),
+            _ => Ok(()),
+        }
+    }
+
     pub fn describe(&self) -> String {
         let c = match self.combine {
             Combine::Product => "product".to_string(),
@@ -309,7 +322,16 @@ pub fn fast_mask_from(
     device: &SwapDevice,
     on_pass: impl FnMut(u32, f64),
 ) -> Result<(Mask, SwapReport)> {
+    spec.check()?;
     let energy = PairEnergy::new(tile, &spec.offsets(&tile), ValueTerm::NegDistance)?;
+    if energy.offsets().is_empty() {
+        // No swap would change the loss: the result would be the start, unsearched.
+        return Err(Error::invalid(format!(
+            "{} weighs no pair of pixels on a {} tile: no filter (none and none), or one narrower than a pixel",
+            spec.describe(),
+            tile.describe()
+        )));
+    }
     let mut samples = match start {
         Some(m) if m.tile != tile => {
             return Err(Error::invalid(format!(
@@ -344,6 +366,25 @@ pub fn fast_mask_from(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn settings_out_of_range_or_that_weigh_no_pair_are_refused_through_the_api_too() {
+        let tile = Tile::new(8, 8, 4, 1, 1).unwrap();
+        let spec = |spatial, temporal, combine| FastSpec { spatial, temporal, combine };
+        let ema = Filter::Ema { alpha: 0.1, beta: 0.1 };
+        for bad in [
+            spec(Filter::Box { n: 0 }, ema, Combine::Product),
+            spec(Filter::Gaussian { sigma: f64::NAN }, ema, Combine::Product),
+            spec(Filter::Gaussian { sigma: 1e9 }, ema, Combine::Product),
+            spec(Filter::Gaussian { sigma: 1.0 }, ema, Combine::Sum { spatial_weight: f64::NAN }),
+            spec(Filter::None, Filter::None, Combine::Product),
+        ] {
+            let made = fast_mask(tile, &bad, 1, 0, &SwapDevice::Cpu, |_, _| {});
+            assert!(made.is_err(), "{bad:?} made a mask");
+        }
+        let good = spec(Filter::Gaussian { sigma: 1.0 }, ema, Combine::Product);
+        assert!(fast_mask(tile, &good, 1, 0, &SwapDevice::Cpu, |_, _| {}).is_ok());
+    }
 
     #[test]
     fn autocorrelations_match_direct_sums() {

@@ -301,6 +301,10 @@ fn swap_methods_refuse_bad_settings() {
         (&["--method", "fast", "--fast-combine", "sum:2"], "--fast-combine"),
         (&["--method", "fast", "--spp", "2"], "1 spp"),
         (&["--method", "stbn", "--spp", "2"], "1 spp"),
+        (
+            &["--method", "fast", "--fast-spatial", "none", "--fast-temporal", "none"],
+            "weighs no pair of pixels",
+        ),
     ];
     refused(dir.path(), &["optimize", "--size", "4x4x2", "--out", "m.exr"], cases);
 }

@@ -170,23 +170,29 @@ impl PairEnergy {
         }
     }
 
-    /// The energy summed pair by pair (what the searches track incrementally).
+    /// The energy summed pair by pair (what the searches track incrementally),
+    /// in chunks of pixels of a fixed size added in order: the same sum whatever
+    /// the thread count.
     pub fn total(&self, values: &[f32]) -> f64 {
+        const CHUNK: usize = 4096;
         let d = self.tile.dims;
-        (0..self.tile.pixels())
+        let pixel = |p: usize| {
+            let a = &values[p * d..p * d + d];
+            let at = self.coords(p);
+            self.offsets
+                .iter()
+                .map(|o| {
+                    let r = self.neighbour(at, o);
+                    o.weight * self.phi(a, &values[r * d..r * d + d])
+                })
+                .sum::<f64>()
+        };
+        let n = self.tile.pixels();
+        let chunks: Vec<f64> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|p| {
-                let a = &values[p * d..p * d + d];
-                let at = self.coords(p);
-                self.offsets
-                    .iter()
-                    .map(|o| {
-                        let r = self.neighbour(at, o);
-                        o.weight * self.phi(a, &values[r * d..r * d + d])
-                    })
-                    .sum::<f64>()
-            })
-            .sum()
+            .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).map(pixel).sum::<f64>())
+            .collect();
+        chunks.iter().sum()
     }
 
     /// The change of the energy if the values of p and q (p != q) were swapped.
@@ -401,7 +407,9 @@ pub(crate) fn mean_abs_delta(energy: &PairEnergy, values: &[f32], key: u32) -> f
     let mut rng = Stream::new(derive(key, 0x7e3b));
     let n = energy.tile.pixels();
     let proposals: Vec<_> = (0..256).map(|_| propose(&mut rng, n)).collect();
-    proposals.par_iter().map(|&(p, q, _)| energy.swap_delta(values, p, q).abs()).sum::<f64>() / 256.0
+    let deltas: Vec<f64> = proposals.par_iter().map(|&(p, q, _)| energy.swap_delta(values, p, q).abs()).collect();
+    // Summed in order: the temperature, and so every decision, whatever the thread count.
+    deltas.iter().sum::<f64>() / 256.0
 }
 
 #[cfg(test)]
@@ -536,6 +544,25 @@ mod tests {
         assert!(PairEnergy::new(tile, &[(1, 0, 0, 1.0)], ValueTerm::NegDistance).is_err());
         assert!(PairEnergy::new(tile, &[(1, 0, 0, 1.0), (-1, 0, 0, 1.0)], ValueTerm::NegDistance).is_ok());
         assert!(PairEnergy::new(Tile::new(8, 8, 2, 2, 1).unwrap(), &[], ValueTerm::NegDistance).is_err());
+    }
+
+    #[test]
+    fn the_temperature_scale_and_the_total_are_the_same_sums_whatever_the_thread_count() {
+        let tile = Tile::new(96, 96, 4, 1, 2).unwrap();
+        let e = PairEnergy::new(tile, &gaussian_offsets(1.9), ValueTerm::Gaussian { sigma: 1.0 }).unwrap();
+        let mut rng = Stream::new(11);
+        let values: Vec<f32> = (0..tile.values()).map(|_| rng.next_f32()).collect();
+        let with = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| (mean_abs_delta(&e, &values, 9).to_bits(), e.total(&values).to_bits()))
+        };
+        let one = with(1);
+        for threads in [2, 3, 7] {
+            assert_eq!(with(threads), one, "{threads} threads");
+        }
     }
 
     #[test]

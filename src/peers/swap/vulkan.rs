@@ -175,8 +175,9 @@ pub fn swap_search(
     let search = Passes::new(ctx, values, n, &table, n.min(MAX_BATCH))?;
     let mut acceptance = 0.5f64;
     let t0 = schedule.start_temperature * mean_abs_delta(energy, values, key);
-    let mut batch = 1u32;
     for pass in 0..schedule.passes {
+        // Claims are cleared at each pass, so rounds are counted within it.
+        let mut batch = 1u32;
         // Sized as the CPU path sizes its batches.
         let size = energy.batch_for(acceptance).clamp(8, MAX_BATCH).min(n);
         let base = SwapPush {
@@ -206,7 +207,7 @@ pub fn swap_search(
                     .ok_or_else(|| Error::invalid("swap search: more than 2^32 rounds"))?;
             }
         }
-        let stats = search.pass(&pushes, pass == 0)?;
+        let stats = search.pass(&pushes)?;
         report.proposed += n as u64;
         report.accepted += stats.accepted as u64;
         report.uphill += stats.uphill as u64;
@@ -298,14 +299,12 @@ impl Passes {
     }
 
     /// Records and runs one pass (its batches in order) in one submission;
-    /// returns what it did. The claims are cleared before the first pass.
-    fn pass(&self, batches: &[SwapPush], first: bool) -> Result<SwapStats> {
+    /// returns what it did. The claims are cleared before it.
+    fn pass(&self, batches: &[SwapPush]) -> Result<SwapStats> {
         let ctx = &self.ctx;
         ctx.submit(|cmd| {
             zero(cmd, &self.stats, 0, vk::WHOLE_SIZE);
-            if first {
-                zero(cmd, &self.claims, 0, vk::WHOLE_SIZE);
-            }
+            zero(cmd, &self.claims, 0, vk::WHOLE_SIZE);
             barrier(cmd);
             for push in batches {
                 let groups = [push.count.div_ceil(self.workgroup), 1, 1];
@@ -315,6 +314,7 @@ impl Passes {
                 barrier(cmd);
             }
             copy(cmd, &self.stats, &self.readback, std::mem::size_of::<SwapStats>() as u64, 0);
+            barrier(cmd);
         })?;
         self.readback
             .read::<SwapStats>(1)?
