@@ -151,8 +151,11 @@ impl Filter {
         for (k, w) in self.taps() {
             folded[k.rem_euclid(n as i64) as usize] += w;
         }
+        // Over the folded filter's taps only (the rest add exact zeros, so the
+        // sums are the same bits): n times the taps, not n^2.
+        let taps: Vec<usize> = (0..n).filter(|&j| folded[j] != 0.0).collect();
         let mut a: Vec<f64> =
-            (0..n).map(|tau| (0..n).map(|j| folded[j] * folded[(j + tau) % n]).sum::<f64>()).collect();
+            (0..n).map(|tau| taps.iter().map(|&j| folded[j] * folded[(j + tau) % n]).sum::<f64>()).collect();
         // Exact symmetry (A[tau] = A[n - tau] up to the order of the sum).
         for tau in 1..n {
             let m = 0.5 * (a[tau] + a[n - tau]);
