@@ -61,7 +61,7 @@ fn the_taa_history_that_matters_sets_the_frames() {
 #[test]
 fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white_noise() {
     let groups = "[[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
-                  [[group]]\nname = \"vol\"\ndims = 3\nspp = 2\n[[group]]\nname = \"quad\"\ndims = 4\n\
+                  [[group]]\nname = \"vol\"\ndims = 3\nshare = false\n[[group]]\nname = \"quad\"\ndims = 4\n\
                   [[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
     let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
     let parts = |name: &str| {
@@ -77,7 +77,6 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
     assert_eq!(deep.skipped.as_deref(), Some("not visible: white noise"));
     let white: Vec<&str> = plan.masks.iter().filter(|m| m.white).map(|m| m.file.as_str()).collect();
     assert_eq!(white, ["deep.exr"]);
-    assert!(plan.masks.iter().filter(|m| m.file.starts_with("vol")).all(|m| m.spp == 2));
     // Every mask its own seed; estimates from the cost model.
     let seeds: std::collections::HashSet<u64> = plan.masks.iter().map(|m| m.seed).collect();
     assert_eq!(seeds.len(), plan.masks.len(), "two masks share a seed");
@@ -93,7 +92,7 @@ fn each_decision_reads_masks_of_its_own_dimensions_and_invisible_ones_read_white
 fn a_scalar_mask_is_made_for_an_eye_no_sharper_than_standard_4ks() {
     assert_eq!(SCALAR_EYE_PPD, fsot::core::display::preset_ppd("standard_4k").unwrap());
     let groups = "[[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n\
-                  [[group]]\nname = \"vol\"\ndims = 3\nspp = 2\n";
+                  [[group]]\nname = \"vol\"\ndims = 3\nshare = false\n";
     // The eye each mask is made for: pixels per degree, or a Gaussian's sigma.
     let eyes = |display: &str| {
         let plan = Plan::new(&scene(display, groups), &model()).unwrap();
@@ -136,15 +135,15 @@ fn a_scalar_mask_is_made_for_an_eye_no_sharper_than_standard_4ks() {
 #[test]
 fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_and_shift() {
     let groups = "[[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n\
-                  [[group]]\nname = \"quad\"\ndims = 4\n[[group]]\nname = \"many\"\ndims = 2\nspp = 4\n\
-                  [[group]]\nname = \"own\"\ndims = 2\nshare = false\n";
+                  [[group]]\nname = \"quad\"\ndims = 4\n[[group]]\nname = \"own\"\ndims = 2\nshare = false\n";
     let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
     let files: Vec<&str> = plan.masks.iter().map(|m| m.file.as_str()).collect();
-    assert_eq!(
-        files,
-        ["light.exr", "many.exr", "own.exr"],
-        "other spp and share = false: masks of their own"
-    );
+    assert_eq!(files, ["light.exr", "own.exr"], "share = false: masks of their own");
+    // Groups of another spp cannot share a plan block, which holds one spp.
+    let mixed =
+        format!("[display]\ntaa_alpha = 0.1\n{groups}[[group]]\nname = \"many\"\ndims = 2\nspp = 4\n");
+    let err = Scene::parse(&mixed, "mixed").map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("share one spp"), "{err}");
     let reads: Vec<&fsot::scene::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
     let shared: Vec<&&fsot::scene::plan::Part> = reads.iter().filter(|p| p.mask == "light.exr").collect();
     assert_eq!(shared.len(), 4, "light, bsdf and quad's two pairs");
@@ -165,7 +164,7 @@ fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_a
         }
     }
     assert!(plan.groups[1].reason.contains("sharing light.exr"), "{}", plan.groups[1].reason);
-    assert!(plan.groups[4].reason.contains("share = false"), "{}", plan.groups[4].reason);
+    assert!(plan.groups[3].reason.contains("share = false"), "{}", plan.groups[3].reason);
 }
 
 #[test]
@@ -403,15 +402,16 @@ fn a_scene_may_give_a_time_budget_as_a_time_or_a_number_of_seconds() {
 
 #[test]
 fn under_a_budget_each_mask_gets_a_share_of_it_in_proportion_to_its_work_per_iteration() {
-    let groups = "[plan]\nbudget = 12\n[[group]]\nname = \"pick\"\ndims = 1\n\
-                  [[group]]\nname = \"lens\"\ndims = 2\nspp = 4\n[[group]]\nname = \"deep\"\ndims = 2\nvisible = false\n";
+    let groups = "[plan]\nbudget = 12\n[[group]]\nname = \"pick\"\ndims = 1\nspp = 4\n\
+                  [[group]]\nname = \"lens\"\ndims = 2\nspp = 4\n[[group]]\nname = \"deep\"\ndims = 2\nspp = 4\n\
+                  visible = false\n";
     let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
     assert_eq!(plan.budget, Some(12.0));
     let m = |f: &str| plan.masks.iter().find(|m| m.file == f).unwrap();
     assert_eq!((m("deep.exr").estimated_seconds, m("deep.exr").estimated_iterations), (0.0, 0));
     // The scaling suite's factors: d = 1 costs 0.52 of d = 2 per point, spp 4
-    // 0.60 of spp 1 per point, and the 2-D mask has four times the points.
-    let (pick, lens) = (0.52, 1.0 * 0.60 * 4.0);
+    // 0.60 of spp 1 per point, and spp 4 is four times the points.
+    let (pick, lens) = (0.52 * 0.60 * 4.0, 1.0 * 0.60 * 4.0);
     let expected = 12.0 * pick / (pick + lens);
     assert!((m("pick.exr").estimated_seconds - expected).abs() < 1e-9, "{}", m("pick.exr").estimated_seconds);
     assert!((plan.estimated_seconds - 12.0).abs() < 1e-9);

@@ -23,7 +23,7 @@
 //! [[group]]           # one per sampling decision, in the order the renderer consumes them
 //! name = "pick"       # unique, 1 to 64 of [a-z0-9_]
 //! dims = 1            # 1 to 8
-//! spp = 1             # optional, default 1
+//! spp = 1             # optional, default 1; every group of a scene the same
 //! visible = true      # optional; false: its error is not seen directly
 //! share = true        # optional; false: never reads another decision's mask
 //! ```
@@ -188,6 +188,17 @@ impl Scene {
             if groups.iter().any(|o| o.name == group.name) {
                 return Err(at(g.get_ref().name.span(), format!("a second group named {:?}", group.name)));
             }
+            if let Some(first) = groups.first().filter(|f| f.spp != group.spp) {
+                let span = g.get_ref().spp.as_ref().map_or_else(|| g.get_ref().name.span(), |s| s.span());
+                return Err(at(
+                    span,
+                    format!(
+                        "group {} has spp {}, group {} spp {}: a scene's groups share one spp (a renderer reads \
+                         every mask of a plan through one plan block, which holds one)",
+                        group.name, group.spp, first.name, first.spp
+                    ),
+                ));
+            }
             groups.push(group);
         }
         let reading = match file.tile.as_ref().and_then(|t| t.reading.as_ref()) {
@@ -253,6 +264,13 @@ impl Scene {
             }
             if !(1..=MAX_SPP).contains(&g.spp) {
                 return Err(Error::invalid(format!("group {}: spp must be 1 to {MAX_SPP}, got {}", g.name, g.spp)));
+            }
+            if let Some(first) = self.groups.first().filter(|f| f.spp != g.spp) {
+                return Err(Error::invalid(format!(
+                    "group {} has spp {} and group {} spp {}: a scene's groups share one spp (a renderer reads \
+                     every mask of a plan through one plan block, which holds one)",
+                    first.name, first.spp, g.name, g.spp
+                )));
             }
         }
         Ok(())

@@ -589,7 +589,7 @@ impl Plan {
     /// An error unless the plan is one `Plan::new` could make: for a plan
     /// whose public fields were set by hand. At least one mask; each named
     /// `NAME.exr`, a plain file name (no folder, not hidden), once; each of a
-    /// valid tile and kernel, read by some part; at least one group, each
+    /// valid tile and kernel, of one spp, read by some part; at least one group, each
     /// with parts, at most `MAX_BLOCK_PARTS` parts in all, every part reading
     /// a mask of the plan, within its dimensions, with a finite shift each; a
     /// budget of a millisecond to a day. `Plan::new` checks the plan it makes,
@@ -614,6 +614,12 @@ impl Plan {
             }
             self.tile(m)?;
             m.spec.check()?;
+            if m.spp != self.masks[0].spp {
+                return Err(Error::invalid(format!(
+                    "a plan's masks share one spp: {} has {}, {} has {}",
+                    self.masks[0].file, self.masks[0].spp, m.file, m.spp
+                )));
+            }
         }
         if self.groups.is_empty() {
             return Err(Error::invalid("a plan without groups"));
