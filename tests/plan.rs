@@ -319,6 +319,9 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
     plan.execute(straight.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
 
     let dir = tempfile::tempdir().unwrap();
+    // A plan.json left by an earlier plan in the folder must not describe this
+    // plan's masks while they are made.
+    std::fs::copy(straight.path().join("plan.json"), dir.path().join("plan.json")).unwrap();
     let cancel = CancelFlag::new();
     let outcome = plan
         .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
@@ -333,7 +336,10 @@ fn a_cancelled_plan_resumes_and_keeps_what_it_made() {
         .unwrap();
     assert!(matches!(outcome, Outcome::Cancelled { iteration: 25, .. }), "{outcome:?}");
     assert!(dir.path().join("a.exr").exists() && !dir.path().join("b.exr").exists());
-    assert!(!dir.path().join("plan.json").exists(), "plan.json only once every mask is made");
+    assert!(
+        !dir.path().join("plan.json").exists(),
+        "plan.json only once every mask is made; the earlier one gone"
+    );
     let made_a = std::fs::read(dir.path().join("a.exr")).unwrap();
     let mut started = Vec::new();
     plan.execute(dir.path(), &options, 10, true, &CancelFlag::new(), &mut |e| {
