@@ -196,6 +196,9 @@ fn a_sampler_plan_is_refused_unless_every_part_reads_a_mask_it_holds() {
         ("no dimensions", vec![Mask::white(tile(1), 1)], vec![part(0, 0, &[])]),
         ("a shift per dimension missing", vec![Mask::white(tile(2), 1)], vec![part(0, 2, &[0.0])]),
         ("a NaN shift", vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[f32::NAN])]),
+        // In f32, fract(-1e-9) is 1.0: a get would leave [0, 1).
+        ("a negative shift", vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[-1e-9])]),
+        ("a shift of 1", vec![Mask::white(tile(1), 1)], vec![part(0, 1, &[1.0])]),
         ("a mask of 5 dimensions", vec![Mask::white(tile(5), 1)], vec![part(0, 1, &[0.0])]),
         (
             "masks of two sizes",

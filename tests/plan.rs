@@ -266,7 +266,7 @@ fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
     let good = || Plan::new(&Scene::parse(text, "small").unwrap(), &model()).unwrap();
     assert!(good().check().is_ok());
     type SetByHand = fn(&mut Plan);
-    let cases: [(&str, SetByHand); 14] = [
+    let cases: [(&str, SetByHand); 17] = [
         ("no masks", |p| p.masks.clear()),
         ("no groups", |p| p.groups.clear()),
         ("a group that reads no mask", |p| p.groups[0].parts.clear()),
@@ -283,6 +283,9 @@ fn a_plan_set_out_of_range_by_hand_is_refused_before_any_file_is_written() {
         ("a kernel of NaN sigma", |p| p.masks[0].spec.spatial = Spatial::Gaussian { sigma: f64::NAN }),
         ("a part reading no mask of the plan", |p| p.groups[0].parts[0].mask = "other.exr".into()),
         ("a part of a NaN shift", |p| p.groups[1].parts[0].shift[1] = f32::NAN),
+        ("a part of a negative shift", |p| p.groups[1].parts[0].shift[1] = -1e-9),
+        ("a part of a shift of 1", |p| p.groups[1].parts[0].shift[0] = 1.0),
+        ("a mask file on a drive", |p| p.masks[0].file = "C:pick.exr".into()),
         ("a NaN budget", |p| p.budget = Some(f64::NAN)),
     ];
     let options = RunOptions::default().backend(BackendChoice::Cpu);

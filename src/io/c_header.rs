@@ -25,11 +25,16 @@ pub fn identifier(stem: &str) -> Result<String> {
 
 /// C's keywords (C23 and C++'s, which a header may also be read as): not names.
 const C_KEYWORDS: &[&str] = &[
-    "alignas", "alignof", "auto", "bool", "break", "case", "char", "class", "const", "constexpr", "continue",
-    "default", "delete", "do", "double", "else", "enum", "extern", "false", "float", "for", "goto", "if",
-    "inline", "int", "long", "namespace", "new", "nullptr", "register", "restrict", "return", "short",
-    "signed", "sizeof", "static", "static_assert", "struct", "switch", "template", "this", "true",
-    "typedef", "typeof", "union", "unsigned", "void", "volatile", "while",
+    "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",
+    "char", "char16_t", "char32_t", "char8_t", "class", "co_await", "co_return", "co_yield", "compl",
+    "concept", "const", "const_cast", "consteval", "constexpr", "constinit", "continue", "decltype",
+    "default", "delete", "do", "double", "dynamic_cast", "else", "enum", "explicit", "export", "extern",
+    "false", "float", "for", "friend", "goto", "if", "inline", "int", "long", "mutable", "namespace", "new",
+    "noexcept", "not", "not_eq", "nullptr", "operator", "or", "or_eq", "private", "protected", "public",
+    "register", "reinterpret_cast", "requires", "restrict", "return", "short", "signed", "sizeof", "static",
+    "static_assert", "static_cast", "struct", "switch", "template", "this", "thread_local", "throw", "true",
+    "try", "typedef", "typeid", "typename", "typeof", "typeof_unqual", "union", "unsigned", "using",
+    "virtual", "void", "volatile", "wchar_t", "while", "xor", "xor_eq",
 ];
 
 /// The header text, the array named `name`.
@@ -90,6 +95,9 @@ mod tests {
         assert_eq!(identifier("4k").unwrap(), "mask_4k");
         assert_eq!(identifier("int").unwrap(), "mask_int");
         assert_eq!(identifier("static").unwrap(), "mask_static");
+        // C++'s too: a header may be compiled as C++.
+        assert_eq!(identifier("private").unwrap(), "mask_private");
+        assert_eq!(identifier("and").unwrap(), "mask_and");
         assert_eq!(identifier("integer").unwrap(), "integer");
         assert!(identifier("").is_err());
     }

@@ -86,7 +86,7 @@ impl SamplerPlan {
     /// A plan of `masks` read by `parts`, checked: at least one mask, every
     /// mask valid (`Mask::check`) of at most 4 dimensions, all of one W, H, T
     /// and spp; every part reading a mask of the list, 1 to that mask's
-    /// dimensions, with a finite shift per dimension it reads; at most
+    /// dimensions, with a shift in [0, 1) per dimension it reads; at most
     /// `MAX_BLOCK_PARTS` parts.
     pub fn new(masks: Vec<Mask>, parts: Vec<SamplerPart>) -> Result<Self> {
         let plan = Self { masks, parts };
@@ -130,7 +130,7 @@ impl SamplerPlan {
             .flat_map(|g| &g.parts)
             .map(|p| (p.mask.as_str(), p.dims, p.offset, &p.shift[..]));
         Self::assemble(&format!("{}: ", path.display()), parts, |name| {
-            if name.contains(['/', '\\']) || name.starts_with('.') {
+            if !crate::scene::plan::is_plain_mask_name(name) {
                 return Err(Error::invalid(format!("{}: bad mask name {name:?}", path.display())));
             }
             let mask = crate::io::exr::read(&dir.join(name))?;
@@ -248,9 +248,9 @@ impl SamplerPlan {
                     p.dims, mask.tile.dims
                 )));
             }
-            if p.shift.len() != p.dims || !p.shift.iter().all(|s| s.is_finite()) {
+            if p.shift.len() != p.dims || !p.shift.iter().all(|s| (0.0..1.0).contains(s)) {
                 return Err(Error::invalid(format!(
-                    "part {k} needs a finite shift per dimension it reads ({}), got {:?}",
+                    "part {k} needs a shift in [0, 1) per dimension it reads ({}), got {:?}",
                     p.dims, p.shift
                 )));
             }

@@ -322,6 +322,11 @@ impl CostModel {
     }
 }
 
+/// Whether `file` is a plain `NAME.exr`: no folder, not hidden, no drive, no NUL.
+pub(crate) fn is_plain_mask_name(file: &str) -> bool {
+    file.ends_with(".exr") && file.len() > 4 && !file.starts_with('.') && !file.contains(['/', '\\', ':', '\0'])
+}
+
 /// A stable seed per mask file, so a plan makes the same masks every time.
 /// Where `Plan::execute` keeps the checkpoint of the mask `file` in `dir`:
 /// `.NAME.ckpt` for `NAME.exr` (one `.exr` taken off, so that `a.exr` and
@@ -591,7 +596,7 @@ impl Plan {
     /// `NAME.exr`, a plain file name (no folder, not hidden), once; each of a
     /// valid tile and kernel, of one spp, read by some part; at least one group, each
     /// with parts, at most `MAX_BLOCK_PARTS` parts in all, every part reading
-    /// a mask of the plan, within its dimensions, with a finite shift each; a
+    /// a mask of the plan, within its dimensions, with a shift in [0, 1) each; a
     /// budget of a millisecond to a day. `Plan::new` checks the plan it makes,
     /// `Plan::execute` and `make_plan_into_image` the plan they are given.
     pub fn check(&self) -> Result<()> {
@@ -599,11 +604,7 @@ impl Plan {
             return Err(Error::invalid("a plan without masks"));
         }
         for (k, m) in self.masks.iter().enumerate() {
-            let plain = m.file.ends_with(".exr")
-                && m.file.len() > 4
-                && !m.file.starts_with('.')
-                && !m.file.contains(['/', '\\', ':', '\0']);
-            if !plain {
+            if !is_plain_mask_name(&m.file) {
                 return Err(Error::invalid(format!(
                     "a plan's mask file must be a plain NAME.exr, got {:?}",
                     m.file
@@ -648,8 +649,8 @@ impl Plan {
                         p.shift.len()
                     )));
                 }
-                if !p.shift.iter().all(|s| s.is_finite()) {
-                    return Err(Error::invalid(format!("group {}: a shift is not finite", g.name)));
+                if !p.shift.iter().all(|s| (0.0..1.0).contains(s)) {
+                    return Err(Error::invalid(format!("group {}: a shift outside [0, 1): {:?}", g.name, p.shift)));
                 }
             }
         }
