@@ -500,3 +500,19 @@ fn masks_whose_names_differ_by_a_second_exr_keep_checkpoints_of_their_own() {
     assert_eq!(a, dir.join(".a.ckpt"));
     assert_ne!(a, b);
 }
+
+#[test]
+fn an_invisible_decision_of_more_than_four_dimensions_reads_white_masks_a_renderer_can_bind() {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n[[group]]\nname = \"pick\"\ndims = 1\n\
+                [[group]]\nname = \"deep\"\ndims = 6\nvisible = false\n";
+    let plan = Plan::new(&Scene::parse(text, "deep").unwrap(), &model()).unwrap();
+    let white: Vec<(&str, usize)> =
+        plan.masks.iter().filter(|m| m.white).map(|m| (m.file.as_str(), m.dims)).collect();
+    assert_eq!(white, [("deep-0.exr", 4), ("deep-4.exr", 2)], "a texel holds four dimensions");
+    let dir = tempfile::tempdir().unwrap();
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
+    plan.execute(dir.path(), &options, 50, false, &CancelFlag::new(), &mut |_| {}).unwrap();
+    let sampler = fsot::SamplerPlan::read(dir.path()).unwrap();
+    let parts: Vec<usize> = sampler.parts().iter().map(|p| p.dims).collect();
+    assert_eq!(parts, [1, 4, 2]);
+}

@@ -411,27 +411,34 @@ impl Plan {
         for g in &scene.groups {
             let mut parts = Vec::new();
             let (skipped, reason) = if !g.visible {
-                let file = format!("{}.exr", g.name);
-                masks.push(PlannedMask {
-                    file: file.clone(),
-                    dims: g.dims,
-                    spp: g.spp,
-                    white: true,
-                    seed: seed_of(&scene.name, &file),
-                    estimated_iterations: 0,
-                    estimated_seconds: 0.0,
-                    kernel: "none (white noise)".into(),
-                    spec: kernel,
-                });
-                parts.push(Part {
-                    mask: file,
-                    first: 0,
-                    dims: g.dims,
-                    offset: [0; 3],
-                    shift: vec![0.0; g.dims],
-                    shares: None,
-                    kernel: None,
-                });
+                // Masks of at most four dimensions (a texel's), as a renderer binds them.
+                for first in (0..g.dims).step_by(4) {
+                    let dims = (g.dims - first).min(4);
+                    let file = match g.dims <= 4 {
+                        true => format!("{}.exr", g.name),
+                        false => format!("{}-{first}.exr", g.name),
+                    };
+                    masks.push(PlannedMask {
+                        file: file.clone(),
+                        dims,
+                        spp: g.spp,
+                        white: true,
+                        seed: seed_of(&scene.name, &file),
+                        estimated_iterations: 0,
+                        estimated_seconds: 0.0,
+                        kernel: "none (white noise)".into(),
+                        spec: kernel,
+                    });
+                    parts.push(Part {
+                        mask: file,
+                        first,
+                        dims,
+                        offset: [0; 3],
+                        shift: vec![0.0; dims],
+                        shares: None,
+                        kernel: None,
+                    });
+                }
                 (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
             } else {
                 let pieces = split(g.dims, reading);
