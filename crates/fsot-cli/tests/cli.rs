@@ -575,6 +575,9 @@ fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_b
     let resumed = fsot(&[&with_checkpoint[..], &["--out", "existing.exr", "--resume"]].concat(), dir.path());
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     assert!(stderr(&resumed).contains("resumed from"), "{}", stderr(&resumed));
+    // A white start is made from the seed again: its objective is reported.
+    let report = String::from_utf8_lossy(&resumed.stdout);
+    assert!(report.contains("objective ") && report.contains(" -> "), "{report}");
     assert!(!ckpt.exists(), "the checkpoint of a completed run is removed");
     assert_eq!(
         read_samples(&dir.path().join("existing.exr")),

@@ -166,6 +166,12 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let set_up = run.set_up();
     let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
     let start_samples = run.start_samples()?;
+    // A resumed run knows its start again only where it is made from the seed
+    // or given (a white start, --init); an animated or coarse start is not kept.
+    let s = run.settings();
+    let start_lost = run
+        .resumed_from()
+        .filter(|_| init.is_none() && (s.start.animates(s.until, &tile) || s.start == fsot::Start::Coarse));
     let mut scored = Vec::new();
     // The outputs are written before the checkpoint goes: a failed write leaves
     // it to resume from.
@@ -178,13 +184,16 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         write_outputs(&args, mask, (file_kind, out), also, &cancel)
     })?;
     let (before, after) = (scored[0], scored[1]);
+    let before = match start_lost {
+        None => format!("{:.4e} -> ", before.objective),
+        Some(from) => format!("(resumed from iteration {from}: the start's not kept) "),
+    };
     println!(
-        "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {:.4e} -> {:.4e} ({:.3} x white noise)",
+        "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {before}{:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
         spec.describe(),
         kind.name(),
-        before.objective,
         after.objective,
         after.ratio()
     );
