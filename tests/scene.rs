@@ -84,6 +84,8 @@ fn every_mistake_is_refused_naming_its_line() {
         (format!("[tile]\nsize = \"0x0\"\n{group}"), "line 2", "tile width must be at least 1"),
         (format!("[plan]\nbudget = \"1e-300s\"\n{group}"), "line 2", "must be at least 0.001 s"),
         (format!("[tile]\nsize = \"65536x65536x65536\"\n{group}"), "line 2", "holds more than"),
+        // A tile the scene's size allows, that a group's spp takes past the largest.
+        (format!("[tile]\nsize = \"16384x16384x1\"\n{group}spp = 2\n"), "line 6", "holds more than"),
         (
             (0..2048).map(|k| format!("[[group]]\nname = \"g{k}\"\ndims = 1\n")).collect(),
             "line 6142",

@@ -188,6 +188,12 @@ impl Scene {
             if groups.iter().any(|o| o.name == group.name) {
                 return Err(at(g.get_ref().name.span(), format!("a second group named {:?}", group.name)));
             }
+            // The largest mask the group can need: its dimensions up to a texel's
+            // four (a white mask), at its spp, on the scene's tile.
+            if let Some((w, h, t)) = size {
+                let span = g.get_ref().spp.as_ref().map_or_else(|| g.get_ref().dims.span(), |s| s.span());
+                Tile::new(w, h, t, group.spp, group.dims.min(4)).map_err(|e| at(span, e.to_string()))?;
+            }
             if let Some(first) = groups.first().filter(|f| f.spp != group.spp) {
                 let span = g.get_ref().spp.as_ref().map_or_else(|| g.get_ref().name.span(), |s| s.span());
                 return Err(at(
