@@ -122,6 +122,13 @@ pub struct Part {
     pub kernel: Option<String>,
 }
 
+impl Part {
+    /// A read of a mask the part's group owns: at no offset, no shift.
+    fn own(mask: String, first: usize, dims: usize, kernel: Option<String>) -> Self {
+        Self { mask, first, dims, offset: [0; 3], shift: vec![0.0; dims], shares: None, kernel }
+    }
+}
+
 /// One sampling decision's plan.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PlannedGroup {
@@ -429,15 +436,7 @@ impl Plan {
                         kernel: "none (white noise)".into(),
                         spec: kernel,
                     });
-                    parts.push(Part {
-                        mask: file,
-                        first,
-                        dims,
-                        offset: [0; 3],
-                        shift: vec![0.0; dims],
-                        shares: None,
-                        kernel: None,
-                    });
+                    parts.push(Part::own(file, first, dims, None));
                 }
                 (Some("not visible: white noise".to_string()), "its error is not seen directly".to_string())
             } else {
@@ -484,15 +483,7 @@ impl Plan {
                             readers: 0,
                         });
                     }
-                    parts.push(Part {
-                        mask: file,
-                        first,
-                        dims,
-                        offset: [0; 3],
-                        shift: vec![0.0; dims],
-                        shares: None,
-                        kernel: Some(spec.describe()),
-                    });
+                    parts.push(Part::own(file, first, dims, Some(spec.describe())));
                 }
                 let what = match (g.dims, reading) {
                     (1, _) => "a 1-D decision: a scalar mask".to_string(),
