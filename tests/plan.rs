@@ -133,7 +133,7 @@ fn a_scalar_mask_is_made_for_an_eye_no_sharper_than_standard_4ks() {
 }
 
 #[test]
-fn a_decision_reads_an_earlier_mask_of_its_dimension_and_spp_at_its_own_offset_and_shift() {
+fn a_decision_reads_an_earlier_mask_of_its_dimension_at_its_own_offset_and_shift() {
     let groups = "[[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"bsdf\"\ndims = 2\n\
                   [[group]]\nname = \"quad\"\ndims = 4\n[[group]]\nname = \"own\"\ndims = 2\nshare = false\n";
     let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
@@ -515,4 +515,32 @@ fn an_invisible_decision_of_more_than_four_dimensions_reads_white_masks_a_render
     let sampler = fsot::SamplerPlan::read(dir.path()).unwrap();
     let parts: Vec<usize> = sampler.parts().iter().map(|p| p.dims).collect();
     assert_eq!(parts, [1, 4, 2]);
+}
+
+#[test]
+fn a_plan_that_fails_before_its_first_mask_keeps_the_folder_s_plan_json_and_a_linked_one_is_replaced_through_the_link(
+) {
+    let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
+    let plan = Plan::new(&Scene::parse(text, "kept").unwrap(), &model()).unwrap();
+    let options = RunOptions::default().backend(BackendChoice::Cpu);
+    // A folder where b.exr should go: refused while the files are reserved.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("plan.json"), b"an earlier plan").unwrap();
+    std::fs::create_dir(dir.path().join("b.exr")).unwrap();
+    assert!(plan.execute(dir.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).is_err());
+    assert_eq!(std::fs::read(dir.path().join("plan.json")).unwrap(), b"an earlier plan");
+    assert!(!dir.path().join("a.exr").exists(), "no mask written");
+    #[cfg(unix)]
+    {
+        let dir = tempfile::tempdir().unwrap();
+        let (out, kept) = (dir.path().join("out"), dir.path().join("kept.json"));
+        std::fs::create_dir(&out).unwrap();
+        std::fs::write(&kept, b"an earlier plan").unwrap();
+        std::os::unix::fs::symlink(&kept, out.join("plan.json")).unwrap();
+        plan.execute(&out, &options, 10, false, &CancelFlag::new(), &mut |_| {}).unwrap();
+        assert!(std::fs::symlink_metadata(out.join("plan.json")).unwrap().file_type().is_symlink());
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&kept).unwrap()).unwrap();
+        assert_eq!(json["scene"], "kept");
+    }
 }

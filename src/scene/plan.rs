@@ -393,7 +393,8 @@ pub fn share_shift(k: u32, dims: usize) -> Vec<f32> {
     for _ in 0..64 {
         phi = (1.0 + phi).powf(1.0 / (dims as f64 + 1.0));
     }
-    (0..dims).map(|j| (k as f64 * phi.powi(-(j as i32 + 1))).fract() as f32).collect()
+    // A fraction within 2^-25 of 1 would round to 1.0 in f32: kept below it.
+    (0..dims).map(|j| ((k as f64 * phi.powi(-(j as i32 + 1))).fract() as f32).min(1.0 - f32::EPSILON / 2.0)).collect()
 }
 
 impl Plan {
@@ -763,17 +764,11 @@ impl Plan {
         let origin = options.budget_from.unwrap_or_else(Instant::now);
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
-        // A plan.json of an earlier plan would describe the masks this one
-        // replaces: it goes now, and this plan's is written once every mask is.
-        match std::fs::remove_file(dir.join("plan.json")) {
-            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                return Err(Error::io(format!("removing the earlier plan.json in {}", dir.display()), e))
-            }
-            _ => {}
-        }
         let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
-        // The masks to make (their indices) and, by index, their files reserved.
+        // The masks to make (their indices) and, by index, their files reserved;
+        // the white masks with theirs.
         let mut todo: Vec<usize> = Vec::new();
+        let mut whites: Vec<(usize, Tile, AtomicFile)> = Vec::new();
         let mut outs: Vec<Option<AtomicFile>> = Vec::new();
         for (index, m) in self.masks.iter().enumerate() {
             outs.push(None);
@@ -781,10 +776,7 @@ impl Plan {
             let out = AtomicFile::create(&path)?;
             let tile = self.tile(m)?;
             if m.white {
-                let mut mask = Mask::white(tile, m.seed);
-                mask.set_meta("version", env!("CARGO_PKG_VERSION"));
-                crate::io::exr::write(&mask, out)?;
-                made[index] = Some(Made { file: m.file.clone(), iterations: 0, seconds: 0.0 });
+                whites.push((index, tile, out));
                 continue;
             }
             if resume {
@@ -796,23 +788,40 @@ impl Plan {
             todo.push(index);
             outs[index] = Some(out);
         }
-        if !todo.is_empty() {
-            // One Vulkan device for the plan, opened once.
-            // A cancel cuts short a mask's animated start too.
-            let options = RunOptions {
-                budget_from: Some(origin),
-                cancel_start: Some(cancel.clone()),
-                ..crate::optimize::run::shared_context(options)?
-            };
-            let together = crate::optimize::run::shares_device(&options);
-            // Each display's eye fitted now (about a tenth of a second each, once
-            // per process), not out of the share of the first mask that uses it.
-            for &i in &todo {
-                if let Spatial::Display { ppd } = self.masks[i].spec.spatial {
-                    crate::core::csf::mixture(ppd);
+        // The device and each run's end, before any file is written.
+        let runs = match todo.is_empty() {
+            true => None,
+            false => {
+                // One Vulkan device for the plan, opened once.
+                // A cancel cuts short a mask's animated start too.
+                let options = RunOptions {
+                    budget_from: Some(origin),
+                    cancel_start: Some(cancel.clone()),
+                    ..crate::optimize::run::shared_context(options)?
+                };
+                let together = crate::optimize::run::shares_device(&options);
+                // Each display's eye fitted now (about a tenth of a second each, once
+                // per process), not out of the share of the first mask that uses it.
+                for &i in &todo {
+                    if let Spatial::Display { ppd } = self.masks[i].spec.spatial {
+                        crate::core::csf::mixture(ppd);
+                    }
                 }
+                let ends = self.run_ends(&todo, origin, together)?;
+                Some((options, together, ends))
             }
-            let ends = self.run_ends(&todo, origin, together)?;
+        };
+        // A plan.json of an earlier plan would describe the masks this one
+        // replaces: it goes before the first of them (through a link, the file
+        // the link leads to, which this plan's replaces once every mask is made).
+        remove_earlier(&dir.join("plan.json"))?;
+        for (index, tile, out) in whites {
+            let mut mask = Mask::white(tile, self.masks[index].seed);
+            mask.set_meta("version", env!("CARGO_PKG_VERSION"));
+            crate::io::exr::write(&mask, out)?;
+            made[index] = Some(Made { file: self.masks[index].file.clone(), iterations: 0, seconds: 0.0 });
+        }
+        if let Some((options, together, ends)) = runs {
             // Side by side, or (under a budget, on the CPU) one after the other,
             // each started as the one before it ends.
             let batches: Vec<&[usize]> = match (self.budget, together) {
@@ -852,14 +861,19 @@ impl Plan {
         let tiles: Vec<Option<Tile>> =
             indices.iter().map(|&i| self.tile(&self.masks[i]).map(Some)).collect::<Result<_>>()?;
         let mut end = spent.max(f64::MIN_POSITIVE);
-        Ok(budget_shares((budget - spent).max(0.0), &tiles)
+        let mut ends: Vec<Option<f64>> = budget_shares((budget - spent).max(0.0), &tiles)
             .into_iter()
             .map(|share| {
                 end += share;
                 // The sum of the shares may round past the budget itself.
                 Some(end.min(budget))
             })
-            .collect())
+            .collect();
+        // ... or short of it: the last run ends at the budget.
+        if let Some(last) = ends.last_mut() {
+            *last = Some(budget);
+        }
+        Ok(ends)
     }
 
     /// Starts the run of mask `m`: ending at `end` seconds from the budget's
@@ -970,6 +984,17 @@ fn budget_shares(seconds: f64, tiles: &[Option<Tile>]) -> Vec<f64> {
     let work: Vec<f64> = tiles.iter().map(|t| t.as_ref().map_or(0.0, |t| unit.seconds_per_iteration(t))).collect();
     let all: f64 = work.iter().sum();
     work.iter().map(|w| if all > 0.0 { seconds * w / all } else { 0.0 }).collect()
+}
+
+/// Removes `path`, or the file it links to; nothing to remove is fine.
+fn remove_earlier(path: &Path) -> Result<()> {
+    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
+    match std::fs::remove_file(&target) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            Err(Error::io(format!("removing the earlier {}", path.display()), e))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The iterations of a mask already written by this very plan (same tile, seed
