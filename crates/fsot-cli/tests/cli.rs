@@ -889,3 +889,47 @@ fn an_axis_share_at_one_dimension_is_said_to_do_nothing() {
     let two = fsot(&[&args[..], &["--dims", "2", "--axis-share", "0.9"]].concat(), dir.path());
     assert!(two.status.success() && !stderr(&two).contains("does nothing"), "{}", stderr(&two));
 }
+
+#[test]
+fn a_resumed_run_whose_animated_start_the_checkpoint_does_not_keep_reports_the_result_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = [
+        "optimize",
+        "--backend",
+        "cpu",
+        "--size",
+        "16x16x8",
+        "--kernel",
+        "taa",
+        "--start",
+        "animated",
+        "--iterations",
+        "4000",
+        "--checkpoint",
+        "run.ckpt",
+        "--checkpoint-every",
+        "50",
+        "--out",
+        "m.exr",
+    ];
+    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(run)
+        .current_dir(dir.path())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let ckpt = dir.path().join("run.ckpt");
+    let started = std::time::Instant::now();
+    while !ckpt.exists() {
+        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
+    let resumed = fsot(&[&run[..], &["--resume"]].concat(), dir.path());
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    let report = String::from_utf8_lossy(&resumed.stdout);
+    assert!(report.contains("the start's not kept") && !report.contains(" -> "), "{report}");
+}
