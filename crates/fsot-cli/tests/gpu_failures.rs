@@ -94,3 +94,32 @@ fn without_a_vulkan_driver_vulkan_fails_clearly_and_auto_uses_the_cpu() {
     assert!(o.status.success(), "{t}");
     assert!(t.contains("backend: cpu") && t.contains("no Vulkan GPU used"), "{t}");
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_swap_search_the_gpu_cannot_finish_starts_again_on_the_cpu_with_auto_and_stops_with_vulkan() {
+    let dir = setup();
+    let run = |backend: &str, out: &str, fault: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_fsot"));
+        c.args(["optimize", "--method", "fast", "--size", "16x16x8", "--passes", "4", "--out", out]);
+        c.args(["--backend", backend, "--device", "0"]).current_dir(dir.path());
+        if let Some(f) = fault {
+            c.env("FSOT_FAULT", f);
+        }
+        c.output().unwrap()
+    };
+    let lost = run("vulkan", "existing.exr", Some("device-lost:2"));
+    assert_eq!(lost.status.code(), Some(1), "{}", text(&lost));
+    assert!(untouched(dir.path()));
+    let handed = run("auto", "auto.exr", Some("device-lost:2"));
+    let t = text(&handed);
+    assert!(handed.status.success(), "{t}");
+    assert!(t.contains("the GPU was lost") && t.contains("the search runs on the cpu"), "{t}");
+    // Started again from its seed: the CPU's own mask, bit for bit.
+    let cpu = run("cpu", "cpu.exr", None);
+    assert!(cpu.status.success(), "{}", text(&cpu));
+    assert_eq!(
+        std::fs::read(dir.path().join("auto.exr")).unwrap(),
+        std::fs::read(dir.path().join("cpu.exr")).unwrap()
+    );
+}

@@ -150,7 +150,8 @@ pub fn swap_search(
         )));
     }
     if offsets.len() > MAX_OFFSETS {
-        return Err(Error::invalid(format!(
+        // Unavailable, not invalid: the CPU backend takes it (`--backend auto` goes there).
+        return Err(Error::VulkanUnavailable(format!(
             "the energy has {} neighbours per pixel; the Vulkan swap search takes at most {MAX_OFFSETS} \
              (the loop budget of a shader invocation); use the CPU backend",
             offsets.len()

@@ -375,7 +375,7 @@ pub(crate) fn make_baseline(
     };
     // The swap searches go where --backend says, as fsot's runs do; white noise
     // and void-and-cluster are made on the CPU.
-    let device = if method.swaps(&tile) {
+    let mut device = if method.swaps(&tile) {
         let (device, note) = fsot::peers::swap::swap_device(&run_options(args)?)?;
         eprintln!("backend: {note}");
         device
@@ -384,11 +384,23 @@ pub(crate) fn make_baseline(
     };
     let start = Instant::now();
     let bar = swap_bar(args.passes, method.swaps(&tile));
-    let made =
-        fsot::peers::method::make(&method, tile, args.seed.unwrap_or(0), init, &device, &mut |_, e| {
-            bar.inc(1);
-            bar.set_message(format!("{e:.6e}"));
-        })?;
+    let seed = args.seed.unwrap_or(0);
+    let mut on_pass = |_, e: f64| {
+        bar.inc(1);
+        bar.set_message(format!("{e:.6e}"));
+    };
+    let made = match fsot::peers::method::make(&method, tile, seed, init, &device, &mut on_pass) {
+        // As fsot's runs do under auto: a GPU that cannot take the search (an
+        // energy past its shaders' budget, a lost device) hands it to the CPU,
+        // which starts it again.
+        Err(e) if e.is_device_failure() && args.backend == Backend::Auto && device.kind() != "cpu" => {
+            bar.reset();
+            device = SwapDevice::Cpu;
+            eprintln!("note: {e}; the search runs on the {}", device.describe());
+            fsot::peers::method::make(&method, tile, seed, init, &device, &mut on_pass)?
+        }
+        made => made?,
+    };
     bar.finish_and_clear();
     if let Some(note) = &made.note {
         eprintln!("{note}");
