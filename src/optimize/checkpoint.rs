@@ -15,14 +15,14 @@ use crate::core::step_rule::PlateauState;
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::optimize::settings::{recorded_axis_share, RunState, Settings, Until};
+use crate::optimize::settings::{recorded_axis_share, RunState, Settings, Start, Until};
 
 const MAGIC: &[u8; 8] = b"FSOTCKP1";
 
 /// What a checkpoint must match to be resumed: the tile and every setting that
 /// changes the run's iterations (kernel, iterations, slices, seed, step rule,
-/// the stopping rule, the axis share where it is not the default and d >= 2).
-/// The start is not: a checkpoint holds the samples the start led to.
+/// the stopping rule, the axis share where it is not the default and d >= 2,
+/// the start where it is not white noise: a mask records how it started).
 /// The backend is not part of it: a run may resume on the other backend.
 pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     let s = settings;
@@ -37,6 +37,11 @@ pub fn fingerprint(tile: &Tile, settings: &Settings) -> String {
     }
     if let Some(share) = recorded_axis_share(tile, s) {
         f += &format!("; axis share {share}");
+    }
+    if s.start.animates(s.until, tile) {
+        f += "; start animated";
+    } else if s.start == Start::Coarse {
+        f += "; start coarse";
     }
     f
 }
@@ -114,7 +119,7 @@ pub fn decode(bytes: &[u8], expected: &str, tile: &Tile) -> std::result::Result<
     if found != expected {
         return Err(format!(
             "it was made by a different run.\n  checkpoint: {found}\n  this run:   {expected}\n\
-             Resume with the same size, kernel, iterations, slices, seed and step rule as the run that wrote it"
+             Resume with the same size, kernel, iterations, slices, seed, step rule, stopping rule, axis share and start as the run that wrote it"
         ));
     }
     let iteration: u32 = field("iteration")?.parse().map_err(|_| "bad iteration in header")?;
@@ -230,6 +235,10 @@ mod tests {
         assert_ne!(fingerprint(&tile, &until), fp);
         // Another axis share draws other slices: another run.
         assert_ne!(fingerprint(&tile, &s.axis_share(0.85)), fp);
+        // An animated start is another run too (its mask says how it started);
+        // a white one keeps the fingerprint above.
+        assert_eq!(fingerprint(&tile, &Settings { start: Start::White, ..s }), fp);
+        assert_ne!(fingerprint(&tile, &Settings { start: Start::Animated, ..s }), fp);
     }
 
     #[test]
