@@ -123,12 +123,12 @@ impl Drop for Staged {
     }
 }
 
-/// Writes every output in full before any target is replaced: one that cannot be
-/// written (a full disk) leaves every target as it was. Two outputs that replace
-/// one file are refused before anything is written.
-pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
-    for (i, (a, _)) in outputs.iter().enumerate() {
-        if let Some((b, _)) = outputs[..i].iter().find(|(b, _)| same_file(&a.dest, &b.dest)) {
+/// An error unless the files replace different files (links resolved): one
+/// file named twice would be written twice, the last write winning.
+pub fn distinct<'a>(files: impl IntoIterator<Item = &'a AtomicFile>) -> Result<()> {
+    let files: Vec<&AtomicFile> = files.into_iter().collect();
+    for (i, a) in files.iter().enumerate() {
+        if let Some(b) = files[..i].iter().find(|b| same_file(&a.dest, &b.dest)) {
             return Err(Error::invalid(format!(
                 "outputs {} and {} are one file: name each output once",
                 b.target.display(),
@@ -136,6 +136,14 @@ pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
             )));
         }
     }
+    Ok(())
+}
+
+/// Writes every output in full before any target is replaced: one that cannot be
+/// written (a full disk) leaves every target as it was. Two outputs that replace
+/// one file are refused before anything is written (`distinct`).
+pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
+    distinct(outputs.iter().map(|(file, _)| file))?;
     let staged = outputs.into_iter().map(|(file, bytes)| file.stage(&bytes)).collect::<Result<Vec<_>>>()?;
     staged.into_iter().try_for_each(Staged::commit)
 }

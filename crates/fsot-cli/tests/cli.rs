@@ -516,6 +516,25 @@ fn read_samples(path: &Path) -> Vec<u32> {
     fsot::io::exr::read(path).unwrap().samples.iter().map(|v| v.to_bits()).collect()
 }
 
+/// `fsot args` in `dir`, sent SIGINT (as a user's Ctrl-C) once its checkpoint
+/// `run.ckpt` is on disk; what it printed and how it ended.
+fn interrupted_once_checkpointed(args: &[&str], dir: &Path) -> Output {
+    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
+        .args(args)
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (ckpt, started) = (dir.join("run.ckpt"), std::time::Instant::now());
+    while !ckpt.exists() {
+        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
+    child.wait_with_output().unwrap()
+}
+
 #[test]
 fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_bit() {
     let dir = tempfile::tempdir().unwrap();
@@ -537,24 +556,11 @@ fn ctrl_c_saves_a_checkpoint_and_resuming_gives_the_uninterrupted_mask_bit_for_b
 
     std::fs::write(dir.path().join("existing.exr"), b"the user's mask").unwrap();
     let with_checkpoint = [&run[..], &["--checkpoint", "run.ckpt", "--checkpoint-every", "50"]].concat();
-    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
-        .args(&with_checkpoint)
-        .args(["--out", "existing.exr"])
-        .current_dir(dir.path())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Interrupt once the first checkpoint is on disk, as a user's Ctrl-C would.
+    let out = interrupted_once_checkpointed(
+        &[&with_checkpoint[..], &["--out", "existing.exr"]].concat(),
+        dir.path(),
+    );
     let ckpt = dir.path().join("run.ckpt");
-    let started = std::time::Instant::now();
-    while !ckpt.exists() {
-        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    let pid = child.id().to_string();
-    assert!(Command::new("kill").args(["-INT", &pid]).status().unwrap().success());
-    let out = child.wait_with_output().unwrap();
     let message = stderr(&out);
     assert_eq!(out.status.code(), Some(130), "{message}");
     assert!(message.contains("interrupted at iteration") && message.contains("--resume"), "{message}");
@@ -912,21 +918,7 @@ fn a_resumed_run_whose_animated_start_the_checkpoint_does_not_keep_reports_the_r
         "--out",
         "m.exr",
     ];
-    let child = Command::new(env!("CARGO_BIN_EXE_fsot"))
-        .args(run)
-        .current_dir(dir.path())
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let ckpt = dir.path().join("run.ckpt");
-    let started = std::time::Instant::now();
-    while !ckpt.exists() {
-        assert!(started.elapsed().as_secs() < 120, "no checkpoint appeared");
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    assert!(Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success());
-    let out = child.wait_with_output().unwrap();
+    let out = interrupted_once_checkpointed(&run, dir.path());
     assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
     let resumed = fsot(&[&run[..], &["--resume"]].concat(), dir.path());
     assert!(resumed.status.success(), "{}", stderr(&resumed));

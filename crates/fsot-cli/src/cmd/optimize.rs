@@ -59,17 +59,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         .iter()
         .map(|p| Ok((MaskFile::for_path(p, dims, format_for(p))?, AtomicFile::create(p)?)))
         .collect::<Result<Vec<_>>>()?;
-    let outputs: Vec<&std::path::Path> =
-        std::iter::once(&args.out).chain(&args.also).map(|p| p.as_path()).collect();
-    for (i, a) in outputs.iter().enumerate() {
-        if let Some(b) = outputs[..i].iter().find(|b| same_file(a, b)) {
-            return Err(Error::invalid(format!(
-                "{} and {} are one file: name each output once",
-                b.display(),
-                a.display()
-            )));
-        }
-    }
+    fsot::io::atomic::distinct(std::iter::once(&out).chain(also.iter().map(|(_, file)| file)))?;
     if let Some(dir) = &args.png {
         check_png_folder(dir, &tile)?;
     }
