@@ -119,6 +119,10 @@ struct EvalArgs {
     /// `rgb` (three equal channels, as a display shows grey: achromatic only).
     #[arg(long, value_enum, default_value = "rgb")]
     grey: GreyArg,
+    /// Which TAA settings to judge: `both`, or `with` or `without` alone (half
+    /// the judging; `fsot-planned` makes only that setting's masks).
+    #[arg(long, value_enum, default_value = "both")]
+    taa: TaaArg,
     /// Also judge the frames by FLIP (NVIDIA's flip-evaluator) run with this Python;
     /// `bench/flip/setup.sh` installs it and prints the path.
     #[arg(long, value_name = "PYTHON")]
@@ -208,6 +212,16 @@ enum BenchSuite {
         #[arg(long)]
         iterations: u32,
     },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum TaaArg {
+    /// Judge the frames with TAA and without.
+    Both,
+    /// Only after TAA.
+    With,
+    /// Only without TAA.
+    Without,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

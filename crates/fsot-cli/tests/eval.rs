@@ -33,6 +33,7 @@ fn tiny() -> EvalSize {
         grey: fsot_cli::eval::jod::Grey::Rgb,
         flip: None,
         anatomy: false,
+        judged: [true, true],
     }
 }
 
@@ -188,6 +189,50 @@ fn the_planned_method_reads_each_decision_from_its_own_mask_with_and_without_taa
         planned.masks[0].meta("kernel").unwrap().starts_with("taa ("),
         "no TAA: a short blend over frames"
     );
+}
+
+#[test]
+fn a_run_judging_one_taa_setting_gives_that_settings_records_and_makes_only_its_planned_masks() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = ["white".to_string(), "fsot-planned".to_string()];
+    let only = fsot_cli::eval::suite::Only::Named(&names);
+    let size = EvalSize { planned: true, planned_unshared: false, ..tiny() };
+    let run = |judged: [bool; 2], log: &mut Vec<String>| {
+        let size = EvalSize { judged, ..size.clone() };
+        run_eval(&size, &[2.1], &[Scene::LightPick], dir.path(), None, &[], only, |l| log.push(l.to_string()))
+            .unwrap()
+    };
+    let mut without_log = Vec::new();
+    let without = run([true, false], &mut without_log);
+    assert!(without.iter().all(|r| !r.taa) && without.len() == 2, "{without:?}");
+    // Only the no-TAA plan's mask was made: the TAA plan's is made by the run judging both.
+    assert!(without_log.iter().any(|l| l.contains("(no-TAA plan)") && !l.contains("(cached)")));
+    assert!(!without_log.iter().any(|l| l.contains("(TAA plan)")), "{without_log:?}");
+    let mut both_log = Vec::new();
+    let both = run([true, true], &mut both_log);
+    assert!(both_log.iter().any(|l| l.contains("(TAA plan)") && !l.contains("(cached)")), "{both_log:?}");
+    let both_without: Vec<_> = both.iter().filter(|r| !r.taa).cloned().collect();
+    assert_eq!(without, both_without, "the same records as the run judging both settings");
+    let with = run([false, true], &mut Vec::new());
+    assert_eq!(with, both.iter().filter(|r| r.taa).cloned().collect::<Vec<_>>());
+    let tables = to_markdown(&with);
+    assert!(tables.contains("with TAA") && !tables.contains("without TAA"), "{tables}");
+}
+
+#[test]
+fn the_records_do_not_depend_on_the_number_of_threads_the_placements_are_judged_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = ["white".to_string(), "stbn".to_string()];
+    let only = fsot_cli::eval::suite::Only::Named(&names);
+    let size = EvalSize { seeds: 3, ..tiny() };
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| run_eval(&size, &[2.1], &[Scene::Occlusion], dir.path(), None, &[], only, |_| {}))
+            .unwrap()
+    };
+    let one = on(1);
+    assert_eq!(one.len(), 4);
+    assert_eq!(on(3), one);
 }
 
 #[test]

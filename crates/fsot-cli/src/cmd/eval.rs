@@ -54,6 +54,11 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         GreyArg::Luminance => fsot_cli::eval::jod::Grey::Luminance,
         GreyArg::Rgb => fsot_cli::eval::jod::Grey::Rgb,
     };
+    size.judged = match args.taa {
+        TaaArg::Both => [true, true],
+        TaaArg::With => [false, true],
+        TaaArg::Without => [true, false],
+    };
     if let Some(i) = args.iterations {
         if !(1..=1_000_000).contains(&i) {
             return Err(Error::invalid(format!("--iterations must be in 1..=1000000, got {i}")));
@@ -152,8 +157,11 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         eprintln!("{line}")
     })?;
     // Judges that differ from the optimizer, on the sigma 2.1 column's masks
-    // (every method's: not with --methods).
-    let robust = match sigmas.contains(&robustness::MADE_FOR_SIGMA) && args.methods.is_empty() {
+    // (every method's, in both TAA settings: not with --methods or --taa).
+    let robust = match sigmas.contains(&robustness::MADE_FOR_SIGMA)
+        && args.methods.is_empty()
+        && args.taa == TaaArg::Both
+    {
         true => {
             let r = robustness::run_robustness(&size, &scenes, &cache, |line| eprintln!("{line}"))?;
             rb.commit(format!("{}\n", serde_json::to_string_pretty(&r).unwrap_or_default()).as_bytes())?;
@@ -195,10 +203,11 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
             fsot_cli::eval::jod::Grey::Luminance => "one luminance channel",
             fsot_cli::eval::jod::Grey::Rgb => "three equal RGB channels",
         },
-        if size.planned && !size.planned_without_taa {
-            " fsot-planned: the TAA plan only (its no-TAA plan left out for time)."
-        } else {
-            ""
+        match (args.taa, size.planned && !size.planned_without_taa) {
+            (TaaArg::With, _) => " Judged with TAA only.",
+            (TaaArg::Without, _) => " Judged without TAA only.",
+            (TaaArg::Both, true) => " fsot-planned: the TAA plan only (its no-TAA plan left out for time).",
+            (TaaArg::Both, false) => "",
         },
         start.elapsed().as_secs_f64(),
         to_markdown(&records) + &robust

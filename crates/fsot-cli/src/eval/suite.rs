@@ -91,6 +91,9 @@ pub struct EvalSize {
     /// Also dissect each record's error (`anatomy.rs`): its spectra and what
     /// ColorVideoVDP pools per channel and band.
     pub anatomy: bool,
+    /// The TAA settings judged, `[without, with]`: a run asking for one
+    /// judges half the frames (and makes only that setting's planned masks).
+    pub judged: [bool; 2],
 }
 
 impl EvalSize {
@@ -114,6 +117,7 @@ impl EvalSize {
             grey: Grey::Rgb,
             flip: None,
             anatomy: false,
+            judged: [true, true],
         }
     }
 
@@ -136,6 +140,7 @@ impl EvalSize {
             grey: Grey::Rgb,
             flip: None,
             anatomy: false,
+            judged: [true, true],
         }
     }
 }
@@ -185,8 +190,9 @@ struct SeedValues {
     anatomy: [Vec<Vec<Anatomy>>; 2],
 }
 
-/// The records (without and with TAA, per display judged: `displays` names the
-/// judges `values` hold, in order) of a method's seeds.
+/// The records (per display judged, `displays` naming the judges `values`
+/// hold, in order: without TAA, then with, of the settings `judged` names) of
+/// a method's seeds.
 fn records_of(
     scene: Scene,
     method: &str,
@@ -194,10 +200,11 @@ fn records_of(
     seeds: u32,
     values: &[SeedValues],
     displays: &[&str],
+    judged: [bool; 2],
 ) -> Vec<Record> {
     let mut out = Vec::new();
     for (d, display) in displays.iter().enumerate() {
-        for taa in [false, true] {
+        for taa in [false, true].into_iter().filter(|&t| judged[t as usize]) {
             let k = taa as usize;
             let of = |j: usize| Interval::of(&values.iter().map(|v| v.errors[k][j]).collect::<Vec<_>>());
             let dissected: Vec<Anatomy> =
@@ -440,17 +447,19 @@ struct Judging<'a> {
 }
 
 impl Judging<'_> {
-    /// One render's pRelMSE and RelMSE without and with TAA, and its JOD on each
-    /// of the displays `which` indexes; the frames (without and with TAA) too.
+    /// One render's pRelMSE and RelMSE in the TAA settings `judged` names
+    /// (`[without, with]`), and its JOD on each of the displays `which`
+    /// indexes; the frames (without and with TAA) too.
     fn measure(
         &self,
         image: Vec<Vec<f64>>,
         which: &[usize],
+        judged: [bool; 2],
     ) -> Result<(SeedValues, crate::eval::pictures::Frames)> {
         let n = self.size.shot.image;
         let with_taa = taa(&image, TAA_ALPHA);
         let mut out = SeedValues::default();
-        for (k, frames) in [&image, &with_taa].into_iter().enumerate() {
+        for (k, frames) in [&image, &with_taa].into_iter().enumerate().filter(|&(k, _)| judged[k]) {
             let r = &self.reference;
             let (p, rel) = relative_errors(frames, &r.frames[k], &r.seen[k], &self.eye, self.start, n);
             out.errors[k] = [p, rel];
@@ -478,19 +487,24 @@ impl Judging<'_> {
         Ok((out, (image, with_taa)))
     }
 
-    /// Every seed's values on the displays `which` indexes: `sampler(seed
-    /// index, placement seed)` gives the numbers of a render; the first render
-    /// of the first seed is kept in `kept`.
+    /// Every seed's values in the TAA settings `judged` names, on the
+    /// displays `which` indexes: `render_with(seed index, placement seed)`
+    /// gives the numbers of a render. The seeds run in parallel, each its
+    /// own renders and judgments, and come back in their order (the values
+    /// do not depend on the threads). The first render of the first seed is
+    /// kept in `kept`.
     fn seeds(
         &self,
         seeds: u32,
         which: &[usize],
-        mut render_with: impl FnMut(u32, u64) -> Result<Vec<Vec<f64>>>,
+        judged: [bool; 2],
+        render_with: impl Fn(u32, u64) -> Result<Vec<Vec<f64>>> + Sync,
         mut kept: Option<&mut Vec<crate::eval::pictures::Frames>>,
     ) -> Result<Vec<SeedValues>> {
+        use rayon::prelude::*;
         let renders = self.size.renders.max(1);
-        let mut values = Vec::with_capacity(seeds as usize);
-        for k in 0..seeds {
+        let keep = kept.is_some();
+        let seed = |k: u32| -> Result<(SeedValues, Option<crate::eval::pictures::Frames>)> {
             let flips = if self.flip.is_some() { which.len() } else { 0 };
             let mut mean = SeedValues {
                 display_errors: [vec![0.0; which.len()], vec![0.0; which.len()]],
@@ -499,10 +513,11 @@ impl Judging<'_> {
                 anatomy: [vec![Vec::new(); which.len()], vec![Vec::new(); which.len()]],
                 ..Default::default()
             };
+            let mut first = None;
             for r in 0..renders {
                 let image = render_with(k, 100 + 1000 * k as u64 + r as u64)?;
-                let (v, frames) = self.measure(image, which)?;
-                for t in 0..2 {
+                let (v, frames) = self.measure(image, which, judged)?;
+                for t in (0..2).filter(|&t| judged[t]) {
                     for (a, b) in mean.errors[t].iter_mut().zip(v.errors[t]) {
                         *a += b / renders as f64;
                     }
@@ -519,9 +534,17 @@ impl Judging<'_> {
                         a.extend(b.iter().cloned());
                     }
                 }
-                if let (Some(keep), 0, 0) = (kept.as_deref_mut(), k, r) {
-                    keep.push(frames);
+                if keep && k == 0 && r == 0 {
+                    first = Some(frames);
                 }
+            }
+            Ok((mean, first))
+        };
+        let done: Vec<_> = (0..seeds).into_par_iter().map(seed).collect::<Result<_>>()?;
+        let mut values = Vec::with_capacity(done.len());
+        for (mean, first) in done {
+            if let (Some(keep), Some(frames)) = (kept.as_deref_mut(), first) {
+                keep.push(frames);
             }
             values.push(mean);
         }
@@ -637,26 +660,41 @@ pub fn run_eval(
                 let values = judging.seeds(
                     seeds,
                     &every,
+                    size.judged,
                     |k, placement| {
                         let mask = &masks[(k as usize).min(masks.len() - 1)];
                         Ok(render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement)))
                     },
                     keep.then_some(&mut kept),
                 )?;
-                let made = records_of(scene, method, sigma, masks.len() as u32, &values, &size.displays);
-                for pair in made.chunks(2) {
+                let made = records_of(
+                    scene,
+                    method,
+                    sigma,
+                    masks.len() as u32,
+                    &values,
+                    &size.displays,
+                    size.judged,
+                );
+                for display in &size.displays {
+                    let parts: Vec<String> = made
+                        .iter()
+                        .filter(|r| r.display == *display)
+                        .map(|r| {
+                            format!(
+                                "{}: pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}",
+                                if r.taa { "TAA" } else { "no TAA" },
+                                r.prelmse,
+                                r.prelmse_ci95,
+                                r.jod,
+                                r.jod_ci95
+                            )
+                        })
+                        .collect();
                     log(&format!(
-                        "{} sigma {sigma} {method} on {}: pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3} (TAA: {:.4e} +- {:.1e}, JOD {:.3} +- {:.3})",
+                        "{} sigma {sigma} {method} on {display}: {}",
                         scene.name(),
-                        pair[0].display,
-                        pair[0].prelmse,
-                        pair[0].prelmse_ci95,
-                        pair[0].jod,
-                        pair[0].jod_ci95,
-                        pair[1].prelmse,
-                        pair[1].prelmse_ci95,
-                        pair[1].jod,
-                        pair[1].jod_ci95
+                        parts.join("; ")
                     ));
                 }
                 records.extend(made);
@@ -697,9 +735,10 @@ fn planned_records(
             }
             // Each TAA setting has its own plan (kernel); of each, the record of that setting.
             for (k, with_taa) in [false, true].into_iter().enumerate() {
-                if !with_taa && !size.planned_without_taa {
+                if !with_taa && !size.planned_without_taa || !size.judged[k] {
                     continue;
                 }
+                let judged = [!with_taa, with_taa];
                 let planned: Vec<PlannedMasks> = (1..=size.planned_masks.clamp(1, size.seeds) as u64)
                     .map(|seed| planned_masks(scene, viewing, with_taa, share, size, cache, seed))
                     .collect::<Result<_>>()?;
@@ -708,6 +747,7 @@ fn planned_records(
                 let values = judging.seeds(
                     size.seeds,
                     &[d],
+                    judged,
                     |k, placement| {
                         Ok(render(
                             scene,
@@ -718,7 +758,8 @@ fn planned_records(
                     None,
                 )?;
                 let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
-                let record = records_of(scene, method, sigma, size.seeds, &values, &[display])[k].clone();
+                let record =
+                    records_of(scene, method, sigma, size.seeds, &values, &[display], judged).remove(0);
                 let seconds: f64 = planned.iter().map(|p| p.seconds).sum();
                 log(&format!(
                     "{} sigma {sigma} {method} on {display} ({}): pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}; masks made in {seconds:.1} s{}",
@@ -775,6 +816,9 @@ pub fn to_markdown(records: &[Record]) -> String {
     for &display in &displays {
         for &sigma in &sigmas {
             for taa in [true, false] {
+                if !records.iter().any(|r| r.taa == taa && r.sigma == sigma && r.display == display) {
+                    continue;
+                }
                 let setting = if taa { "with TAA" } else { "without TAA" };
                 let find = |scene: &str, m: &str| {
                     records.iter().find(|r| {
