@@ -196,7 +196,7 @@ fn a_run_judging_one_taa_setting_gives_that_settings_records_and_makes_only_its_
     let dir = tempfile::tempdir().unwrap();
     let names = ["white".to_string(), "fsot-planned".to_string()];
     let only = fsot_cli::eval::suite::Only::Named(&names);
-    let size = EvalSize { planned: true, planned_unshared: false, ..tiny() };
+    let size = EvalSize { planned: true, planned_unshared: false, planned_masks: 1, ..tiny() };
     let run = |judged: [bool; 2], log: &mut Vec<String>| {
         let size = EvalSize { judged, ..size.clone() };
         run_eval(&size, &[2.1], &[Scene::LightPick], dir.path(), None, &[], only, |l| log.push(l.to_string()))
@@ -205,6 +205,9 @@ fn a_run_judging_one_taa_setting_gives_that_settings_records_and_makes_only_its_
     let mut without_log = Vec::new();
     let without = run([true, false], &mut without_log);
     assert!(without.iter().all(|r| !r.taa) && without.len() == 2, "{without:?}");
+    // Masks measured: white noise's two seeds, the plan's one mask at both placements.
+    let masks: Vec<(&str, u32)> = without.iter().map(|r| (r.method.as_str(), r.seeds)).collect();
+    assert_eq!(masks, [("white", 2), ("fsot-planned", 1)]);
     // Only the no-TAA plan's mask was made: the TAA plan's is made by the run judging both.
     assert!(without_log.iter().any(|l| l.contains("(no-TAA plan)") && !l.contains("(cached)")));
     assert!(!without_log.iter().any(|l| l.contains("(TAA plan)")), "{without_log:?}");

@@ -77,9 +77,10 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         }
     }
     if let Some(k) = args.planned_masks {
-        if !(1..=size.seeds).contains(&k) {
+        if k != 1 && k != size.seeds {
             return Err(Error::invalid(format!(
-                "--planned-masks must be in 1..={} (the seeds), got {k}",
+                "--planned-masks must be 1 (one mask judged at every placement) or the seeds, {} \
+                 (a mask per seed), got {k}",
                 size.seeds
             )));
         }

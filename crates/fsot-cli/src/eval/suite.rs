@@ -73,10 +73,11 @@ pub struct EvalSize {
     /// Also `fsot-planned-unshared` where a plan shares masks: the full run
     /// leaves it out for time.
     pub planned_unshared: bool,
-    /// Masks `fsot-planned` makes per setting (display, TAA): seed k renders
-    /// with mask k mod `planned_masks` at its own placement. One mask judged at
-    /// every placement is how the published masks are judged (the full run);
-    /// `seeds` masks add the spread between masks to the interval.
+    /// Masks `fsot-planned` makes per setting (display, TAA): 1 or `seeds`;
+    /// seed k renders with mask k mod `planned_masks` at its own placement. One
+    /// mask judged at every placement is how the published masks are judged
+    /// (the full run); `seeds` masks add the spread between masks to the
+    /// interval.
     pub planned_masks: u32,
     /// The ColorVideoVDP display models every render is judged on
     /// (`jod::DISPLAY` by default); `fsot-planned` plans for each.
@@ -599,6 +600,14 @@ pub fn run_eval(
     if size.seeds == 0 {
         return Err(Error::invalid("the evaluation needs at least one seed"));
     }
+    // Placements shared unevenly between masks would count one mask's repeats
+    // as independent in the interval.
+    if size.planned && size.planned_masks != 1 && size.planned_masks != size.seeds {
+        return Err(Error::invalid(format!(
+            "fsot-planned makes 1 mask (judged at every placement) or one per seed ({}), not {}",
+            size.seeds, size.planned_masks
+        )));
+    }
     let mut records = Vec::new();
     for &scene in scenes {
         let refs = references(scene, size.shot, size.reference_samples, Some(cache))?;
@@ -758,8 +767,8 @@ fn planned_records(
                     None,
                 )?;
                 let method = if share { "fsot-planned" } else { "fsot-planned-unshared" };
-                let record =
-                    records_of(scene, method, sigma, size.seeds, &values, &[display], judged).remove(0);
+                let masks = planned.len() as u32;
+                let record = records_of(scene, method, sigma, masks, &values, &[display], judged).remove(0);
                 let seconds: f64 = planned.iter().map(|p| p.seconds).sum();
                 log(&format!(
                     "{} sigma {sigma} {method} on {display} ({}): pRelMSE {:.4e} +- {:.1e}, JOD {:.3} +- {:.3}; masks made in {seconds:.1} s{}",
@@ -922,6 +931,8 @@ fn table(
             .iter()
             .filter(|m| **m != "white" || higher_better)
             .filter_map(|m| cell(scene, m).map(|c| (*m, c.0)))
+            // A value that is not a number ranks nowhere (NaN would sort first).
+            .filter(|(_, i)| i.mean.is_finite() && i.ci95.is_finite())
             .collect();
         ranked.sort_by(|a, b| {
             if higher_better {
@@ -1062,6 +1073,18 @@ mod tests {
         // Lower is better for an error measure, whose ranking leaves white out.
         let errors = [("white", 1.0, 0.1), ("a", 0.5, 0.01), ("b", 0.7, 0.01)];
         assert!(table(&["s"], &["white", "a", "b"], cells(&errors), false).contains("**0.50 +- 0.01**"));
+    }
+
+    #[test]
+    fn a_value_that_is_not_a_number_is_never_bold_and_ranks_nowhere() {
+        let nan = [("a", 7.0, 0.1), ("b", f64::NAN, f64::NAN)];
+        let t = table(&["s"], &["a", "b"], cells(&nan), true);
+        assert!(!t.contains("**"), "one number has no runner-up: {t}");
+        let three = [("a", 7.0, 0.1), ("b", f64::NAN, 0.1), ("c", 6.0, 0.1)];
+        let t = table(&["s"], &["a", "b", "c"], cells(&three), true);
+        assert!(t.contains("**7.00 +- 0.10**") && !t.contains("**NaN"), "{t}");
+        let unbounded = [("a", 7.0, 0.1), ("b", 9.0, f64::INFINITY)];
+        assert!(!table(&["s"], &["a", "b"], cells(&unbounded), true).contains("**"));
     }
 
     #[test]
