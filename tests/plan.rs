@@ -127,6 +127,11 @@ fn a_scalar_mask_is_made_for_an_eye_no_sharper_than_standard_4ks() {
     assert!(reason("pick").contains("75.4 pixels per degree"), "{}", reason("pick"));
     assert!(reason("vol").contains("75.4 pixels per degree"), "{}", reason("vol"));
     assert!(!reason("lens").contains("pixels per degree"), "{}", reason("lens"));
+    assert!(
+        reason("vol").starts_with("a 3-D decision, read in pairs as renderers consume it: a 2-D mask per pair and a scalar mask of its own (share = false)"),
+        "{}",
+        reason("vol")
+    );
     let vol = plan.groups.iter().find(|g| g.name == "vol").unwrap();
     let kernels: Vec<&str> = vol.parts.iter().map(|p| p.kernel.as_deref().unwrap()).collect();
     assert!(kernels[0].contains("ppd = 37.84") && kernels[1].contains("ppd = 75.4"), "{kernels:?}");

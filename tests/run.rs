@@ -219,7 +219,7 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
     for dims in [2, 3, 8] {
         let on_gpu =
             Run::start(Tile::new(8, 8, 2, 1, dims).unwrap(), settings(5), None, handed.clone()).unwrap();
-        assert_eq!(on_gpu.backend().kind(), BackendKind::Vulkan, "d = {dims}: a handed context is taken");
+        assert_eq!(on_gpu.backend_kind(), BackendKind::Vulkan, "d = {dims}: a handed context is taken");
     }
     // A device without shaderFloat64 takes d >= 3 too (the float32-pair targets).
     // SAFETY: ctx's live device, with fewer features claimed than it has; guest is dropped first.
@@ -228,7 +228,7 @@ fn auto_takes_a_context_it_is_handed_and_says_which_backend_it_chose() {
             .unwrap();
     let handed = RunOptions::default().context(Some(guest.clone()));
     let taken = Run::start(tile, settings(5), None, handed).unwrap();
-    assert_eq!(taken.backend().kind(), BackendKind::Vulkan, "{}", taken.note());
+    assert_eq!(taken.backend_kind(), BackendKind::Vulkan, "{}", taken.note());
     drop((taken, guest));
     common::assert_no_validation_messages(&ctx);
 }

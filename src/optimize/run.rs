@@ -17,7 +17,7 @@ use crate::core::step_rule::{schedule_between, Plateau, PlateauState, FROM_MASK_
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
-use crate::optimize::backend::{Backend, BackendChoice};
+use crate::optimize::backend::{Backend, BackendChoice, BackendKind, Report};
 use crate::optimize::checkpoint;
 use crate::optimize::cpu::CpuRun;
 use crate::optimize::settings::{
@@ -61,7 +61,7 @@ pub struct RunOptions {
     /// instead of making one; `Auto` then takes it whatever its type.
     #[cfg(feature = "vulkan")]
     pub context: Option<Context>,
-    /// Vulkan's validation layer on (its messages in `Backend::report`).
+    /// Vulkan's validation layer on (its messages in `Run::report`).
     pub validation: bool,
     /// How a Vulkan run works.
     #[cfg(feature = "vulkan")]
@@ -397,6 +397,29 @@ impl Run {
         fn start_samples(&self) -> Result<Vec<f32>> {
             crate::optimize::settings::initial_samples(&self.tile, &self.settings, self.init.as_ref())
         }
+    }
+    /// Where the run goes: the CPU or Vulkan (`note` says why).
+    pub fn backend_kind(&self) -> BackendKind {
+        self.backend.kind()
+    }
+    /// What the backend reports so far: its time per pass (with
+    /// `VulkanOptions::profile`), the validation layer's messages (with
+    /// `RunOptions::validation`; a run that has any should not be trusted),
+    /// large classes skipped.
+    ///
+    /// ```
+    /// use fsot::{BackendChoice, BackendKind, CancelFlag, KernelSpec, Run, RunOptions, Settings, Tile};
+    /// let tile = Tile::new(8, 8, 4, 1, 2)?;
+    /// let settings = Settings::new(KernelSpec::named("perceptual-taa")?, 1).iterations(4);
+    /// let options = RunOptions::default().backend(BackendChoice::Cpu);
+    /// let mut run = Run::start(tile, settings, None, options)?;
+    /// run.run(&CancelFlag::new(), &mut |_| {})?;
+    /// assert_eq!(run.backend_kind(), BackendKind::Cpu);
+    /// assert!(run.report().validation_messages.is_empty());
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn report(&self) -> Report {
+        self.backend.report()
     }
     internal! {
         fn backend(&self) -> &dyn Backend {

@@ -490,9 +490,10 @@ impl Plan {
                     (1, _) => "a 1-D decision: a scalar mask".to_string(),
                     (d, Reading::Scalar) => format!("a {d}-D decision: a scalar mask per dimension"),
                     (2, Reading::Vector) => "a 2-D decision: a 2-D mask".to_string(),
-                    (d, Reading::Vector) => {
-                        format!("{d}-D: split into pairs and a single, as renderers consume them")
-                    }
+                    (d, Reading::Vector) => format!(
+                        "a {d}-D decision, read in pairs as renderers consume it: a 2-D mask per pair{}",
+                        if d % 2 == 1 { " and a scalar mask" } else { "" }
+                    ),
                 };
                 // A scalar mask of its own for an eye wider than the display's.
                 let wider = parts.iter().any(|p| p.shares.is_none() && p.dims == 1)
@@ -923,7 +924,7 @@ impl Plan {
                 let index = batch[r];
                 let file = &self.masks[index].file;
                 // With Vulkan's validation layer on, any message means a fault: stop.
-                if let Some(first) = run.backend().report().validation_messages.first() {
+                if let Some(first) = run.report().validation_messages.first() {
                     return Err(Error::invalid(format!(
                         "the Vulkan validation layer reported, making {file}: {first}"
                     )));

@@ -34,8 +34,9 @@ pub struct ContextOptions {
 /// A device made by a host application (a renderer) for fsot to work on. fsot
 /// never destroys these handles; the host keeps them alive while the Context
 /// lives. `int64_atomics`, `float_atomic_add` and `float64` say which of those
-/// features the host enabled on the device (the Vulkan optimizer needs the first,
-/// and the third for d >= 3; the second is optional).
+/// features the host enabled on the device (the Vulkan optimizer needs the first;
+/// the others are optional: d >= 3 keeps its targets in float64 where it is
+/// enabled, else in pairs of float32).
 #[derive(Clone)]
 pub struct ExternalDevice {
     /// The loader the host's instance was made with.
@@ -50,11 +51,12 @@ pub struct ExternalDevice {
     pub queue_family: u32,
     /// The queue's index in its family.
     pub queue_index: u32,
-    /// shaderBufferInt64Atomics was enabled on the device.
+    /// shaderInt64 and shaderBufferInt64Atomics were both enabled on the device
+    /// (the shaders use 64-bit integers and atomics on them).
     pub int64_atomics: bool,
     /// shaderBufferFloat32AtomicAdd was enabled on the device.
     pub float_atomic_add: bool,
-    /// shaderFloat64.
+    /// shaderFloat64 was enabled on the device.
     pub float64: bool,
     /// The lock the host takes around its own submissions to this queue; fsot
     /// takes it around each of its submissions. None: the host does not submit to
@@ -137,19 +139,34 @@ impl Context {
     /// queue under the queue lock.
     ///
     /// The queue family must be one of the physical device's, with compute, and
-    /// the queue's index within its queue count: an error otherwise, before the
-    /// queue is asked for.
+    /// the queue's index within its queue count, and the physical device must
+    /// support Vulkan `API_VERSION` (1.2): an error otherwise, before the queue is
+    /// asked for.
     ///
     /// # Safety
     /// fsot cannot check these of a device it did not make:
     /// - `device` was made from `physical_device` of `instance`, with each
-    ///   feature whose flag is set, and with the queue `queue_index` of
-    ///   `queue_family` where the physical device has that queue (checked above);
+    ///   feature whose flag is set (both features for `int64_atomics`), and with
+    ///   the queue `queue_index` of `queue_family` where the physical device has
+    ///   that queue (checked above);
+    /// - `instance` was made with an `apiVersion` of at least `API_VERSION`
+    ///   (Vulkan 1.2; the physical device's own version is checked above), and
+    ///   `entry` is the loader it was made with;
     /// - the instance and the device stay alive until this context and
     ///   everything made with it (buffers, images, runs, clones) are dropped;
     /// - every other submission to the queue takes `queue_lock` (with None, no
     ///   other submits to it while the context lives).
     pub unsafe fn wrap(external: ExternalDevice) -> Result<Self> {
+        // SAFETY: plain queries on the host's live instance.
+        let version =
+            unsafe { external.instance.get_physical_device_properties(external.physical_device).api_version };
+        if version < crate::vk::API_VERSION {
+            return Err(Error::VulkanUnavailable(format!(
+                "the device supports Vulkan {}.{}; fsot needs 1.2",
+                vk::api_version_major(version),
+                vk::api_version_minor(version)
+            )));
+        }
         // SAFETY: a plain query on the host's live instance.
         let families = unsafe {
             external.instance.get_physical_device_queue_family_properties(external.physical_device)

@@ -836,10 +836,13 @@ impl RadixSort {
     /// `sort_pairs` is refused from then on (the pairs are the host's).
     ///
     /// # Safety
-    /// The host keeps both buffers alive, on this sort's device, for as long as
-    /// the sort may record or its recorded commands may run; and no submission
-    /// that uses the sort is pending when this is called (it rewrites the
-    /// sort's descriptor sets).
+    /// Each buffer was created on this sort's device with the size and usage its
+    /// target states (the checks above trust them), has its memory bound, and
+    /// can be used on the sort's queue family; the host keeps both alive for as
+    /// long as the sort may record or its recorded commands may run, and no other
+    /// work uses them while those commands run; and no submission that uses the
+    /// sort is pending when this is called (it rewrites the sort's descriptor
+    /// sets).
     pub unsafe fn bind_pairs(&mut self, keys: &BufferTarget, vals: &BufferTarget) -> Result<()> {
         if self.views.is_some() {
             return Err(Error::invalid(

@@ -335,6 +335,33 @@ struct KernelArgs {
     fps: Option<f64>,
 }
 
+/// An error for a flag the kernel (perceptual-taa when none is named) has no
+/// use for: `--sigma-t` but for gaussian, `--alpha` without TAA, `--fps`
+/// without the eye's response.
+fn kernel_flags_apply(kernel: Option<KernelName>, sigma_t: bool, alpha: bool, fps: bool) -> Result<()> {
+    use KernelName::*;
+    let kernel = kernel.unwrap_or(PerceptualTaa);
+    let unused = [
+        ("--sigma-t", sigma_t && kernel != Gaussian, "the gaussian kernel's temporal width"),
+        (
+            "--alpha",
+            alpha && !matches!(kernel, Taa | PerceptualTaa),
+            "TAA's blend weight (kernels taa and perceptual-taa)",
+        ),
+        (
+            "--fps",
+            fps && !matches!(kernel, Perceptual | PerceptualTaa),
+            "the frame rate of the eye's response (kernels perceptual and perceptual-taa)",
+        ),
+    ];
+    match unused.iter().find(|(_, unused, _)| *unused) {
+        Some((flag, _, what)) => {
+            Err(Error::invalid(format!("{flag} sets {what}; --kernel {} has none", kernel.as_str())))
+        }
+        None => Ok(()),
+    }
+}
+
 impl KernelArgs {
     fn spec(&self) -> Result<KernelSpec> {
         kernel_spec(
@@ -347,34 +374,9 @@ impl KernelArgs {
         )
     }
 
-    /// An error for a flag the kernel has no use for: `--sigma-t` but for
-    /// gaussian, `--alpha` without TAA, `--fps` without the eye's response.
+    /// An error for a flag the kernel has no use for (`kernel_flags_apply`).
     fn check_flags_apply(&self) -> Result<()> {
-        use KernelName::*;
-        let kernel = self.kernel.unwrap_or(PerceptualTaa);
-        let unused = [
-            (
-                "--sigma-t",
-                self.sigma_t.is_some() && kernel != Gaussian,
-                "the gaussian kernel's temporal width",
-            ),
-            (
-                "--alpha",
-                self.alpha.is_some() && !matches!(kernel, Taa | PerceptualTaa),
-                "TAA's blend weight (kernels taa and perceptual-taa)",
-            ),
-            (
-                "--fps",
-                self.fps.is_some() && !matches!(kernel, Perceptual | PerceptualTaa),
-                "the frame rate of the eye's response (kernels perceptual and perceptual-taa)",
-            ),
-        ];
-        match unused.iter().find(|(_, unused, _)| *unused) {
-            Some((flag, _, what)) => {
-                Err(Error::invalid(format!("{flag} sets {what}; --kernel {} has none", kernel.as_str())))
-            }
-            None => Ok(()),
-        }
+        kernel_flags_apply(self.kernel, self.sigma_t.is_some(), self.alpha.is_some(), self.fps.is_some())
     }
 
     /// Whether any flag of the kernel was given.
@@ -572,7 +574,7 @@ struct ScoreArgs {
     /// Spatial Gaussian exp(-r^2 / sigma^2), in pixels, instead of the display's eye.
     #[arg(long, allow_negative_numbers = true)]
     sigma: Option<f64>,
-    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma].
+    /// Temporal sigma of the gaussian kernel, in frames [default: --sigma, else 2.1].
     #[arg(long, allow_negative_numbers = true)]
     sigma_t: Option<f64>,
     /// TAA blend weight of the current frame [default: 0.1 when choosing the kernel here].

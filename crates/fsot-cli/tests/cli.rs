@@ -53,6 +53,15 @@ fn optimize_writes_exr_and_png_and_score_reads_it() {
     let recorded = String::from_utf8_lossy(&s.stdout).into_owned();
     assert!(recorded.contains("kernel taa (ppd = 37.84, alpha = 0.1) (recorded in the mask)"), "{recorded}");
     assert_eq!(recorded.split(": objective").nth(1), asked.split(": objective").nth(1));
+    // A kernel flag the kernel has no use for is refused, as by optimize.
+    for (flags, says) in [
+        (&["--kernel", "taa", "--fps", "30"][..], "--kernel taa has none"),
+        (&["--kernel", "perceptual", "--sigma-t", "3"][..], "--kernel perceptual has none"),
+        (&["--alpha", "0.2", "--sigma-t", "3"][..], "--kernel perceptual-taa has none"),
+    ] {
+        let s = fsot(&[&["score", "m.exr"][..], flags].concat(), dir.path());
+        assert!(!s.status.success() && stderr(&s).contains(says), "{flags:?}: {}", stderr(&s));
+    }
     // --init continues from the file, taking its shape.
     let c = fsot(
         &[

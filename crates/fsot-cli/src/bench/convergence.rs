@@ -175,7 +175,7 @@ pub fn convergence(
         &mut |_| {},
     )?;
     let mut run = Run::start(tile, settings, None, options)?;
-    let kind = run.backend().kind();
+    let kind = run.backend_kind();
     let machine = match kind {
         BackendKind::Vulkan => run.note().trim_start_matches("vulkan on ").to_string(),
         BackendKind::Cpu => super::machine::cpu_description(),
@@ -187,7 +187,7 @@ pub fn convergence(
             machine: machine.clone(),
             iteration: run.iteration(),
             seconds: elapsed.as_secs_f64(),
-            gpu_seconds: run.backend().report().profile.map(|p| p.seconds()),
+            gpu_seconds: run.report().profile.map(|p| p.seconds()),
             objective_ratio: score(&mask, spec, SCORE_SLICES).ratio(),
             prelmse_ratio: judge.ratio(&mask),
             perceived_ratio: judge.perceived_ratio(&mask),
@@ -204,7 +204,7 @@ pub fn convergence(
         elapsed += start.elapsed();
         points.push(judge_at(&run, elapsed)?);
     }
-    let messages = run.backend().report().validation_messages;
+    let messages = run.report().validation_messages;
     if !messages.is_empty() {
         return Err(fsot::error::Error::invalid(format!(
             "the Vulkan validation layer reported {} message(s), the first: {}",

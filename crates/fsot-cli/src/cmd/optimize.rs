@@ -154,7 +154,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     let seconds = start.elapsed().as_secs_f64();
     let since_start = run.elapsed();
     let set_up = run.set_up();
-    let (iterations, kind, report) = (run.iteration(), run.backend().kind(), run.backend().report());
+    let (iterations, kind, report) = (run.iteration(), run.backend_kind(), run.report());
     let start_samples = run.start_samples()?;
     // A resumed run knows its start again only where it is made from the seed
     // or given (a white start, --init); an animated or coarse start is not kept.
@@ -405,10 +405,10 @@ pub(crate) fn make_baseline(
     let s = unless_interrupted(&cancel, &args.out, move || score(&scored, spec, SCORE_SLICES))?;
     write_outputs(args, &mask, (kind, out), also, &cancel)?;
     println!(
-        "wrote {}: {}, method {:?}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
+        "wrote {}: {}, method {}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
-        args.method,
+        args.method.to_possible_value().map(|v| v.get_name().to_string()).unwrap_or_default(),
         spec.describe(),
         s.objective,
         s.ratio()

@@ -19,6 +19,12 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
         || args.fps.is_some();
     let (spec, whence) = match chosen {
         true => {
+            kernel_flags_apply(
+                args.kernel,
+                args.sigma_t.is_some(),
+                args.alpha.is_some(),
+                args.fps.is_some(),
+            )?;
             let name = args.kernel.map(|k| k.as_str()).unwrap_or("perceptual-taa");
             let spec = kernel_spec(
                 name,
