@@ -41,6 +41,9 @@ for entry in "${masks[@]}"; do
     --png "masks/$name" --png-bits 8 2>&1 | grep -v '^optimizing' | tee "$work/$name.log"
 done
 
+# Checksums of every shipped file, for `sha256sum -c SHA256SUMS` in masks/.
+(cd masks && sha256sum ./*.ktx2 ./*/frame*.png | sed 's| \./| |' > SHA256SUMS)
+
 if [[ ${MASKS_EVAL:-1} == 0 ]]; then
   exit 0
 fi

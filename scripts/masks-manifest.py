@@ -11,6 +11,19 @@ import os
 import re
 import sys
 
+
+def viewing(flags):
+    """The display and time model a mask was made for, from its optimize flags."""
+    kernel = re.search(r"--kernel (\S+)", flags).group(1)
+    alpha = re.search(r"--alpha (\S+)", flags)
+    alpha = alpha.group(1) if alpha else "0.1"
+    eye = "standard_fhd (37.84 pixels per degree)"
+    if kernel == "perceptual-taa":
+        return f"{eye}, 60 fps, TAA alpha {alpha}"
+    if kernel == "taa":
+        return f"{eye}, no TAA: the eye's integration over frames as a blend of weight {alpha} per frame"
+    sys.exit(f"masks-manifest.py: no description of kernel {kernel}")
+
 work, entries = sys.argv[1], sys.argv[2:]
 records = json.load(open(os.path.join(work, "eval", "results.json")))
 header = open(os.path.join(work, "eval", "results.md")).read().split("\n")
@@ -51,12 +64,13 @@ for entry in entries:
             "ktx2_format": fmt,
             "png": f"{name}/frame0000.png ... frame{t - 1:04}.png",
             "png_layout": "8-bit, grey (d = 1) or RGB with blue 0 (d = 2); a value is (q + 0.5) / 256",
-            "ktx2_layout": "2-D array texture, one layer per frame; a value is q / 255",
+            "ktx2_layout": "2-D array texture, one layer per frame; a value is fract(q / 255) (255 reads 1.0, which wraps to 0.0)",
+            "ktx2_bytes": os.path.getsize(os.path.join("masks", f"{name}.ktx2")),
             "width": w,
             "height": h,
             "frames": t,
             "dims": dims,
-            "display": "standard_fhd (37.84 pixels per degree), 60 fps, TAA alpha 0.1",
+            "display": viewing(flags),
             "command": f"fsot optimize --backend cpu {flags} --out {name}.ktx2 --ktx2-format {fmt} --png {name} --png-bits 8",
             "objective_x_white": float(ratio.group(1)) if ratio else None,
             "seconds_to_make": float(wall.group(1)) if wall else None,
@@ -67,6 +81,7 @@ for entry in entries:
 manifest = {
     "licence": "CC0-1.0: the masks are dedicated to the public domain; use them for anything, with no attribution required",
     "made_by": "scripts/make-masks.sh",
+    "checksums": "SHA256SUMS (sha256sum -c SHA256SUMS in masks/)",
     "made_on": made_by,
     "eval_command": eval_command,
     "eval_note": "fsot eval --quick: pRelMSE as a ratio to white noise (lower is better), ColorVideoVDP JOD (10: no visible difference), per display and scene, with TAA and without",

@@ -83,7 +83,19 @@ fn the_manifest_describes_every_shipped_mask_within_16_mb() {
         assert_eq!(entry["ktx2_format"], format.as_str());
         let command = entry["command"].as_str().unwrap();
         assert!(command.contains(&flags.join(" ")), "{name}: {command}");
-        bytes += std::fs::metadata(shipped.join(format!("{name}.ktx2"))).unwrap().len();
+        // The viewing it names is the one its flags made it for.
+        let display = entry["display"].as_str().unwrap();
+        let alpha = flags.iter().position(|f| f == "--alpha").map_or("0.1", |i| flags[i + 1].as_str());
+        let taa = flags.windows(2).any(|w| w == ["--kernel", "perceptual-taa"]);
+        let viewing = if taa {
+            format!("TAA alpha {alpha}")
+        } else {
+            format!("no TAA: the eye's integration over frames as a blend of weight {alpha}")
+        };
+        assert!(display.contains(&viewing), "{name}: {display} (made with {flags:?})");
+        let ktx2 = std::fs::metadata(shipped.join(format!("{name}.ktx2"))).unwrap().len();
+        assert_eq!(entry["ktx2_bytes"].as_u64(), Some(ktx2), "{name}");
+        bytes += ktx2;
         let frames = entry["frames"].as_u64().unwrap() as usize;
         assert_eq!(std::fs::read_dir(shipped.join(name)).unwrap().count(), frames, "{name}: PNG slices");
         for e in std::fs::read_dir(shipped.join(name)).unwrap() {
@@ -105,4 +117,31 @@ fn the_manifest_describes_every_shipped_mask_within_16_mb() {
         }
     }
     assert!(bytes <= 16_000_000, "masks/ holds {bytes} bytes");
+}
+
+#[test]
+fn sha256sums_lists_every_shipped_mask_file_with_its_checksum() {
+    let shipped = root().join("masks");
+    let sums = std::fs::read_to_string(shipped.join("SHA256SUMS")).unwrap();
+    let mut listed: Vec<String> = sums.lines().map(|l| l.split_once("  ").unwrap().1.to_string()).collect();
+    listed.sort();
+    let mut files = Vec::new();
+    for e in std::fs::read_dir(&shipped).unwrap() {
+        let e = e.unwrap();
+        let name = e.file_name().into_string().unwrap();
+        if e.file_type().unwrap().is_dir() {
+            for s in std::fs::read_dir(e.path()).unwrap() {
+                files.push(format!("{name}/{}", s.unwrap().file_name().into_string().unwrap()));
+            }
+        } else if name.ends_with(".ktx2") {
+            files.push(name);
+        }
+    }
+    files.sort();
+    assert_eq!(listed, files, "SHA256SUMS against the files in masks/");
+    // coreutils' sha256sum, an implementation independent of fsot, checks each.
+    match Command::new("sha256sum").args(["-c", "--quiet", "SHA256SUMS"]).current_dir(&shipped).output() {
+        Ok(out) => assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout)),
+        Err(e) => panic!("sha256sum (coreutils) is needed to check the checksums: {e}"),
+    }
 }
