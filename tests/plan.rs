@@ -523,7 +523,7 @@ fn an_invisible_decision_of_more_than_four_dimensions_reads_white_masks_a_render
 }
 
 #[test]
-fn a_plan_that_fails_before_its_first_mask_keeps_the_folder_s_plan_json_and_a_linked_one_is_replaced_through_the_link(
+fn a_plan_that_fails_or_stops_before_its_first_mask_keeps_the_folder_s_plan_json_and_a_linked_one_is_replaced_through_the_link(
 ) {
     let text = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                 [[group]]\nname = \"a\"\ndims = 1\n[[group]]\nname = \"b\"\ndims = 2\n";
@@ -536,6 +536,24 @@ fn a_plan_that_fails_before_its_first_mask_keeps_the_folder_s_plan_json_and_a_li
     assert!(plan.execute(dir.path(), &options, 10, false, &CancelFlag::new(), &mut |_| {}).is_err());
     assert_eq!(std::fs::read(dir.path().join("plan.json")).unwrap(), b"an earlier plan");
     assert!(!dir.path().join("a.exr").exists(), "no mask written");
+    // Stopped before its first mask is written: the folder as it was.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("plan.json"), b"an earlier plan").unwrap();
+    std::fs::write(dir.path().join("a.exr"), b"an earlier mask").unwrap();
+    let cancel = CancelFlag::new();
+    let outcome = plan
+        .execute(dir.path(), &options, 10, false, &cancel, &mut |e| {
+            if let PlanEvent::Run {
+                event: fsot::optimize::run::Event::Progress { iteration: 5, .. }, ..
+            } = e
+            {
+                cancel.cancel()
+            }
+        })
+        .unwrap();
+    assert!(matches!(outcome, Outcome::Cancelled { .. }), "{outcome:?}");
+    assert_eq!(std::fs::read(dir.path().join("plan.json")).unwrap(), b"an earlier plan");
+    assert_eq!(std::fs::read(dir.path().join("a.exr")).unwrap(), b"an earlier mask");
     #[cfg(unix)]
     {
         let dir = tempfile::tempdir().unwrap();

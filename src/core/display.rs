@@ -33,11 +33,11 @@ pub fn pixels_per_degree(resolution: [u32; 2], diagonal_inches: f64, distance_m:
     }
     if !(diagonal_inches.is_finite() && diagonal_inches > 0.0 && diagonal_inches <= 1000.0) {
         return Err(Error::invalid(format!(
-            "a display diagonal must be in (0, 1000] inches, got {diagonal_inches}"
+            "a display diagonal must be in (0, 1000] inches, got {diagonal_inches:?}"
         )));
     }
     if !(distance_m.is_finite() && distance_m > 0.0 && distance_m <= 100.0) {
-        return Err(Error::invalid(format!("a viewing distance must be in (0, 100] m, got {distance_m}")));
+        return Err(Error::invalid(format!("a viewing distance must be in (0, 100] m, got {distance_m:?}")));
     }
     let (w, h) = (w as f64, h as f64);
     let pitch = diagonal_inches * 0.0254 / w.hypot(h);
@@ -64,7 +64,7 @@ pub fn check_ppd(ppd: f64) -> Result<f64> {
         Ok((ppd * 100.0).round() / 100.0)
     } else {
         Err(Error::invalid(format!(
-            "pixels per degree must be in [{}, {}], got {ppd}",
+            "pixels per degree must be in [{}, {}], got {ppd:?}",
             PPD_RANGE.start(),
             PPD_RANGE.end()
         )))

@@ -160,24 +160,24 @@ impl KernelSpec {
     /// Builds a spec from a kernel name and its parameters, validating each.
     pub fn from_name(name: &str, sigma: f64, sigma_t: Option<f64>, alpha: f64, fps: f64) -> Result<Self> {
         if !SIGMA_RANGE.contains(&sigma) {
-            return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma}")));
+            return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma:?}")));
         }
         let check_alpha = || -> Result<()> {
             if !ALPHA_RANGE.contains(&alpha) {
                 return Err(Error::invalid(format!(
-                    "alpha (TAA blend weight) must be in [0.0001, 1], got {alpha}"
+                    "alpha (TAA blend weight) must be in [0.0001, 1], got {alpha:?}"
                 )));
             }
             Ok(())
         };
         let check_fps = || -> Result<()> {
             if !FPS_RANGE.contains(&fps) {
-                return Err(Error::invalid(format!("fps must be in [8, 1000], got {fps}")));
+                return Err(Error::invalid(format!("fps must be in [8, 1000], got {fps:?}")));
             }
             Ok(())
         };
         if let Some(sigma_t) = sigma_t.filter(|s| !SIGMA_RANGE.contains(s)) {
-            return Err(Error::invalid(format!("temporal sigma must be in [0.01, 64] frames, got {sigma_t}")));
+            return Err(Error::invalid(format!("temporal sigma must be in [0.01, 64] frames, got {sigma_t:?}")));
         }
         let temporal = match name {
             "spatial" => Temporal::Spatial,
@@ -211,7 +211,7 @@ impl KernelSpec {
     pub fn check(&self) -> Result<()> {
         match self.spatial {
             Spatial::Gaussian { sigma } if !SIGMA_RANGE.contains(&sigma) => {
-                return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma}")))
+                return Err(Error::invalid(format!("sigma must be in [0.01, 64] pixels, got {sigma:?}")))
             }
             Spatial::Gaussian { .. } => {}
             Spatial::Display { ppd } => {
@@ -234,7 +234,7 @@ impl KernelSpec {
             )));
         }
         if !(1e-12..=0.5).contains(&self.tolerance) {
-            return Err(Error::invalid(format!("tolerance must be in [1e-12, 0.5], got {}", self.tolerance)));
+            return Err(Error::invalid(format!("tolerance must be in [1e-12, 0.5], got {:?}", self.tolerance)));
         }
         Ok(())
     }

@@ -148,10 +148,14 @@ pub fn commit_all(outputs: Vec<(AtomicFile, Vec<u8>)>) -> Result<()> {
     staged.into_iter().try_for_each(Staged::commit)
 }
 
-/// Whether two paths name one file: the same text, or the same file name in one
-/// folder (links to folders resolved).
+/// Whether two paths name one file: the same text, or the same file once links
+/// are followed (a link at the file itself, as a write through it replaces what
+/// it leads to, and links to folders), or the same file name in one folder.
 pub fn same_file(a: &Path, b: &Path) -> bool {
     let resolved = |p: &Path| {
+        if let Ok(file) = fs::canonicalize(p) {
+            return Some(file);
+        }
         let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
         Some(fs::canonicalize(dir).ok()?.join(p.file_name()?))
     };
@@ -235,6 +239,20 @@ mod tests {
         fs::set_permissions(&p, fs::Permissions::from_mode(0o600)).unwrap();
         AtomicFile::create(&p).unwrap().commit(b"new").unwrap();
         assert_eq!(fs::metadata(&p).unwrap().permissions().mode() & 0o777, 0o600);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_link_and_the_file_it_leads_to_are_one_file() {
+        let dir = scratch("same");
+        let (real, link, other) = (dir.join("state.ckpt"), dir.join("m.exr"), dir.join("other.exr"));
+        fs::write(&real, b"state").unwrap();
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        assert!(same_file(&link, &real) && same_file(&real, &link));
+        assert!(same_file(&dir.join("./m.exr"), &link), "one folder, one name");
+        assert!(!same_file(&link, &other) && !same_file(&real, &other));
+        assert!(same_file(&other, &dir.join("other.exr")), "a file yet to be made");
         fs::remove_dir_all(&dir).unwrap();
     }
 

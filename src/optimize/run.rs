@@ -182,6 +182,12 @@ pub enum Outcome {
     },
 }
 
+/// A checkpoint's state checked against the run it would resume: an error
+/// naming the file where it is not one this run reaches.
+fn resumable(state: &RunState, path: &Path, tile: &Tile, settings: &Settings) -> Result<()> {
+    state.check(tile, settings).map_err(|e| Error::bad_file(path, format!("cannot resume: {e}")))
+}
+
 /// A flag the caller sets to stop a run between iterations (a renderer wires its
 /// own; the command line sets it on Ctrl-C and SIGTERM).
 #[derive(Clone, Debug, Default)]
@@ -280,13 +286,13 @@ impl Run {
         check_axis_share(settings.axis_share)?;
         if let Until::Objective(x) = settings.until {
             if !(x.is_finite() && x > 0.0) {
-                return Err(Error::invalid(format!("an objective to stop at must be finite and above 0, got {x}")));
+                return Err(Error::invalid(format!("an objective to stop at must be finite and above 0, got {x:?}")));
             }
         }
         match settings.until {
             Until::Seconds(s) if !(s.is_finite() && s > 0.0 && s <= MAX_BUDGET_SECONDS) => {
                 return Err(Error::invalid(format!(
-                    "a time budget must be more than 0 and at most {MAX_BUDGET_SECONDS} seconds, got {s}"
+                    "a time budget must be more than 0 and at most {MAX_BUDGET_SECONDS} seconds, got {s:?}"
                 )))
             }
             Until::Seconds(_) if options.checkpoint.is_some() => {
@@ -326,6 +332,9 @@ impl Run {
         let starting_backend = Instant::now();
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
         if let Some(state) = &saved {
+            if let Some(c) = &options.checkpoint {
+                resumable(state, &c.path, &tile, &settings)?;
+            }
             backend.restore(state)?;
         }
         let set_up = SetUp {
@@ -725,6 +734,9 @@ impl Run {
         let saved =
             checkpoint.as_ref().map(|p| checkpoint::read(p, &self.fingerprint, &self.tile)).transpose()?;
         if let Some(state) = &saved {
+            if let Some(path) = &checkpoint {
+                resumable(state, path, &self.tile, &self.settings)?;
+            }
             cpu.restore(state)?;
         }
         self.plateau = schedule(&self.settings, saved.as_ref());
@@ -1027,7 +1039,34 @@ pub fn optimize(tile: Tile, settings: Settings, init: Option<&Mask>) -> Result<M
 
 #[cfg(test)]
 mod tests {
-    use super::{paced_iterations, STEP_SECONDS};
+    use super::*;
+
+    #[test]
+    fn a_checkpoint_no_run_reaches_is_refused_naming_its_file() {
+        let dir = std::env::temp_dir().join(format!("fsot-resumable-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("past.ckpt");
+        let tile = Tile::new(4, 4, 2, 1, 1).unwrap();
+        let settings = Settings::new(KernelSpec::from_name("taa", 2.1, None, 0.1, 60.0).unwrap(), 1).iterations(10);
+        let n = tile.values();
+        // A file whose checksum and fingerprint hold, at an iteration past the run's end.
+        let state = RunState {
+            iteration: u32::MAX,
+            samples: vec![0.5; n],
+            first: vec![0.0; n],
+            second: Vec::new(),
+            plateau: None,
+        };
+        checkpoint::write(&path, &checkpoint::fingerprint(&tile, &settings), &state).unwrap();
+        let options = RunOptions {
+            backend: BackendChoice::Cpu,
+            checkpoint: Some(Checkpointing { path: path.clone(), every: 1, resume: true }),
+            ..Default::default()
+        };
+        let e = Run::start(tile, settings, None, options).err().expect("refused").to_string();
+        assert!(e.contains("past.ckpt") && e.contains("iteration 4294967295 of a run of 10"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn a_step_takes_one_iteration_until_the_pace_is_known_then_about_step_seconds_worth() {

@@ -357,7 +357,7 @@ pub fn check_axis_share(share: f64) -> Result<()> {
     if (0.0..=1.0).contains(&share) {
         Ok(())
     } else {
-        Err(Error::invalid(format!("the axis share must be between 0 and 1, got {share}")))
+        Err(Error::invalid(format!("the axis share must be between 0 and 1, got {share:?}")))
     }
 }
 

@@ -224,7 +224,7 @@ impl FastSpec {
         self.temporal.validate()?;
         match self.combine {
             Combine::Sum { spatial_weight } if !(0.0..=1.0).contains(&spatial_weight) => Err(Error::invalid(format!(
-                "a sum's spatial weight must be in [0, 1], got {spatial_weight}"
+                "a sum's spatial weight must be in [0, 1], got {spatial_weight:?}"
             ))),
             _ => Ok(()),
         }

@@ -295,7 +295,7 @@ pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<c
 fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {
     for (name, s) in [("sigma", sigma_xy), ("temporal sigma", sigma_t)] {
         if !crate::core::kernel::SIGMA_RANGE.contains(&s) {
-            return Err(Error::invalid(format!("STBN {name} must be in [0.01, 64], got {s}")));
+            return Err(Error::invalid(format!("STBN {name} must be in [0.01, 64], got {s:?}")));
         }
     }
     Ok(())

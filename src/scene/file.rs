@@ -232,14 +232,14 @@ impl Scene {
     pub fn check(&self) -> Result<()> {
         let d = &self.display;
         if !FPS_RANGE.contains(&d.fps) {
-            return Err(Error::invalid(format!("fps must be in [8, 1000], got {}", d.fps)));
+            return Err(Error::invalid(format!("fps must be in [8, 1000], got {:?}", d.fps)));
         }
         if let Some(a) = d.taa_alpha.filter(|a| !ALPHA_RANGE.contains(a)) {
-            return Err(Error::invalid(format!("taa_alpha must be in [0.0001, 1], got {a}")));
+            return Err(Error::invalid(format!("taa_alpha must be in [0.0001, 1], got {a:?}")));
         }
         match d.spatial {
             Spatial::Gaussian { sigma } if !SCENE_SIGMA_RANGE.contains(&sigma) => {
-                return Err(Error::invalid(format!("sigma must be in [0.01, 8] pixels, got {sigma}")))
+                return Err(Error::invalid(format!("sigma must be in [0.01, 8] pixels, got {sigma:?}")))
             }
             Spatial::Gaussian { .. } => {}
             Spatial::Display { ppd } => {
@@ -250,7 +250,7 @@ impl Scene {
             Tile::new(w, h, t, 1, 1)?;
         }
         if let Some(b) = self.budget.filter(|b| !crate::optimize::settings::BUDGET_SECONDS.contains(b)) {
-            return Err(Error::invalid(format!("budget must be a millisecond to a day, got {b} s")));
+            return Err(Error::invalid(format!("budget must be a millisecond to a day, got {b:?} s")));
         }
         if self.groups.is_empty() {
             return Err(Error::invalid("no group: a scene needs at least one sampling decision"));
@@ -300,14 +300,14 @@ fn check_display(
 ) -> std::result::Result<Display, String> {
     let fps = match &d.fps {
         Some(f) if !FPS_RANGE.contains(f.get_ref()) => {
-            return Err(at(f.span(), format!("fps must be in [8, 1000], got {}", f.get_ref())))
+            return Err(at(f.span(), format!("fps must be in [8, 1000], got {:?}", f.get_ref())))
         }
         Some(f) => *f.get_ref(),
         None => 60.0,
     };
     let taa_alpha = match &d.taa_alpha {
         Some(a) if !ALPHA_RANGE.contains(a.get_ref()) => {
-            return Err(at(a.span(), format!("taa_alpha must be in [0.0001, 1], got {}", a.get_ref())))
+            return Err(at(a.span(), format!("taa_alpha must be in [0.0001, 1], got {:?}", a.get_ref())))
         }
         Some(a) => Some(*a.get_ref()),
         None => None,
@@ -352,7 +352,7 @@ fn viewing(
     if let Some(s) = &d.sigma {
         let sigma = *s.get_ref();
         if !SCENE_SIGMA_RANGE.contains(&sigma) {
-            return Err(at(s.span(), format!("sigma must be in [0.01, 8] pixels, got {sigma}")));
+            return Err(at(s.span(), format!("sigma must be in [0.01, 8] pixels, got {sigma:?}")));
         }
         return Ok((Spatial::Gaussian { sigma }, format!("the eye as a Gaussian of sigma {sigma} pixels")));
     }

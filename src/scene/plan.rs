@@ -315,7 +315,7 @@ impl CostModel {
         match self.seconds_per_point.is_finite() && self.seconds_per_point >= 0.0 {
             true => Ok(()),
             false => Err(Error::invalid(format!(
-                "a cost model's seconds per point must be finite and not negative, got {}",
+                "a cost model's seconds per point must be finite and not negative, got {:?}",
                 self.seconds_per_point
             ))),
         }
@@ -659,7 +659,7 @@ impl Plan {
             return Err(Error::invalid(format!("the plan makes {}, which no group reads", m.file)));
         }
         if let Some(b) = self.budget.filter(|b| !BUDGET_SECONDS.contains(b)) {
-            return Err(Error::invalid(format!("a plan's budget must be a millisecond to a day, got {b} s")));
+            return Err(Error::invalid(format!("a plan's budget must be a millisecond to a day, got {b:?} s")));
         }
         Ok(())
     }
@@ -813,10 +813,12 @@ impl Plan {
             }
         };
         // A plan.json of an earlier plan would describe the masks this one
-        // replaces: it goes before the first of them (through a link, the file
-        // the link leads to, which this plan's replaces once every mask is made).
-        remove_earlier(&dir.join("plan.json"))?;
+        // replaces: it goes just before the first of them is written (through a
+        // link, the file the link leads to, which this plan's replaces once every
+        // mask is made). A run stopped before then leaves the folder as it was.
+        let mut earlier = Earlier { path: dir.join("plan.json"), gone: false };
         for (index, tile, out) in whites {
+            earlier.remove()?;
             let mut mask = Mask::white(tile, self.masks[index].seed);
             mask.set_meta("version", env!("CARGO_PKG_VERSION"));
             crate::io::exr::write(&mask, out)?;
@@ -839,7 +841,8 @@ impl Plan {
                     runs.push(run);
                 }
                 first += batch.len();
-                let outcome = self.run_batch(&mut runs, batch, &mut outs, &mut made, cancel, on)?;
+                let outcome =
+                    self.run_batch(&mut runs, batch, &mut outs, &mut made, &mut earlier, cancel, on)?;
                 if let Outcome::Cancelled { .. } = outcome {
                     return Ok(outcome);
                 }
@@ -911,6 +914,7 @@ impl Plan {
         batch: &[usize],
         outs: &mut [Option<AtomicFile>],
         made: &mut [Option<Made>],
+        earlier: &mut Earlier,
         cancel: &CancelFlag,
         on: &mut dyn FnMut(PlanEvent),
     ) -> Result<Outcome> {
@@ -933,7 +937,10 @@ impl Plan {
                 let (iterations, seconds) = (run.iteration(), run.seconds());
                 // Written before its checkpoint goes: a failed write leaves the
                 // checkpoint to resume from.
-                run.finish_in_place_with(|mask| crate::io::exr::write(mask, out))?;
+                run.finish_in_place_with(|mask| {
+                    earlier.remove()?;
+                    crate::io::exr::write(mask, out)
+                })?;
                 (*on.borrow_mut())(PlanEvent::Done { index, file, iterations, seconds });
                 made[index] = Some(Made { file: file.clone(), iterations, seconds });
                 Ok(())
@@ -987,14 +994,26 @@ fn budget_shares(seconds: f64, tiles: &[Option<Tile>]) -> Vec<f64> {
     work.iter().map(|w| if all > 0.0 { seconds * w / all } else { 0.0 }).collect()
 }
 
-/// Removes `path`, or the file it links to; nothing to remove is fine.
-fn remove_earlier(path: &Path) -> Result<()> {
-    let target = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
-    match std::fs::remove_file(&target) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            Err(Error::io(format!("removing the earlier {}", path.display()), e))
+/// An earlier plan's `plan.json`, removed once, before the first mask of this
+/// plan replaces one it describes.
+struct Earlier {
+    path: PathBuf,
+    gone: bool,
+}
+
+impl Earlier {
+    /// Removes the file, or the file it links to; nothing to remove is fine.
+    fn remove(&mut self) -> Result<()> {
+        if std::mem::replace(&mut self.gone, true) {
+            return Ok(());
         }
-        _ => Ok(()),
+        let target = std::fs::canonicalize(&self.path).unwrap_or_else(|_| self.path.clone());
+        match std::fs::remove_file(&target) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                Err(Error::io(format!("removing the earlier {}", self.path.display()), e))
+            }
+            _ => Ok(()),
+        }
     }
 }
 

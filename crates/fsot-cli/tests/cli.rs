@@ -115,6 +115,20 @@ fn a_budgeted_run_reports_the_objective_of_its_animated_start_not_of_white_noise
     assert!(start < 0.7 * white, "start {start}, white noise {white}: {out}");
 }
 
+#[cfg(unix)]
+#[test]
+fn an_output_that_links_to_the_checkpoint_is_refused_and_the_checkpoint_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("st.ckpt"), b"a run's state").unwrap();
+    std::os::unix::fs::symlink("st.ckpt", dir.path().join("lk.exr")).unwrap();
+    let o = fsot(
+        &["optimize", "--size", "4x4x2", "--iterations", "3", "--checkpoint", "st.ckpt", "--out", "lk.exr"],
+        dir.path(),
+    );
+    assert!(!o.status.success() && stderr(&o).contains("is also an output"), "{}", stderr(&o));
+    assert_eq!(std::fs::read(dir.path().join("st.ckpt")).unwrap(), b"a run's state");
+}
+
 #[test]
 fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
     let dir = tempfile::tempdir().unwrap();
@@ -170,6 +184,8 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--budget", "1s", "--checkpoint", "c.ckpt"], "takes no checkpoints"),
         (&["--start", "coarse"], "a coarse start divides a time budget"),
         (&["--start", "coarse", "--budget", "1s"], "even and at least 32"),
+        (&["--png", "existing.exr"], "--png existing.exr is also the output existing.exr"),
+        (&["--also", "m.ktx2", "--png", "./m.ktx2"], "is also the output m.ktx2"),
     ];
     for (extra, expect) in cases {
         // Small defaults, each replaced when the case gives that flag itself.
@@ -645,6 +661,14 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
         let r = ktx2::Reader::new(&bytes[..]).unwrap();
         assert_eq!(r.header().format, Some(ktx2::Format::R8G8_UNORM), "{f}");
     }
+    // A KTX2 output that cannot be written is refused before the work.
+    std::fs::create_dir_all(dir.path().join("kd/pick.ktx2")).unwrap();
+    let o = fsot(
+        &["optimize", "--scene", "s.toml", "--out", "kd", "--backend", "cpu", "--ktx2-format", "auto"],
+        dir.path(),
+    );
+    assert!(!o.status.success() && stderr(&o).contains("kd/pick.ktx2 is a directory"), "{}", stderr(&o));
+    assert!(!dir.path().join("kd/pick.exr").exists() && !dir.path().join("kd/plan.json").exists());
 
     std::fs::write(dir.path().join("bad.toml"), "[[group]]\nname = \"a\"\ndims = 2\nsppp = 1\n").unwrap();
     let cases: &[(&[&str], &str)] = &[

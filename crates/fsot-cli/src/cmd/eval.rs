@@ -18,7 +18,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     };
     for &s in &sigmas {
         if !(0.01..=8.0).contains(&s) {
-            return Err(Error::invalid(format!("--sigma must be in [0.01, 8], got {s}")));
+            return Err(Error::invalid(format!("--sigma must be in [0.01, 8], got {s:?}")));
         }
     }
     let scenes: Vec<_> = if args.scenes.is_empty() {

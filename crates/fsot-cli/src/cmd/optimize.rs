@@ -38,7 +38,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         return Err(Error::invalid("--iterations must be at least 1"));
     }
     if let Some(share) = args.axis_share.filter(|s| !(0.0..=1.0).contains(s)) {
-        return Err(Error::invalid(format!("--axis-share must be between 0 and 1, got {share}")));
+        return Err(Error::invalid(format!("--axis-share must be between 0 and 1, got {share:?}")));
     }
     // Check the output's kind and reserve it before the long work: a bad path or
     // a format that cannot hold d fails now.
@@ -61,6 +61,13 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     fsot::io::atomic::distinct(std::iter::once(&out).chain(also.iter().map(|(_, file)| file)))?;
     if let Some(dir) = &args.png {
+        if let Some(file) = std::iter::once(&args.out).chain(&args.also).find(|o| same_file(o, dir)) {
+            return Err(Error::invalid(format!(
+                "--png {} is also the output {}: give the slices a folder of their own",
+                dir.display(),
+                file.display()
+            )));
+        }
         check_png_folder(dir, &tile)?;
     }
     if args.method != Method::Fsot {

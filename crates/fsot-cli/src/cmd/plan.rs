@@ -137,6 +137,19 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         .iter()
         .map(|m| args.ktx2_format.as_deref().map(|f| fsot::io::ktx2::format_for(m.dims, Some(f))).transpose())
         .collect::<Result<_>>()?;
+    // And each KTX2 output reserved where the folder exists already (a folder or
+    // a device in its place is refused here, not after the work); in a new
+    // folder nothing can be in the way.
+    let ktx2_path = |m: &fsot::scene::plan::PlannedMask| args.out.join(&m.file).with_extension("ktx2");
+    let mut ktx2_out: Vec<Option<AtomicFile>> = plan
+        .masks
+        .iter()
+        .zip(&ktx2)
+        .map(|(m, f)| match (f, args.out.is_dir()) {
+            (Some(_), true) => AtomicFile::create(&ktx2_path(m)).map(Some),
+            _ => Ok(None),
+        })
+        .collect::<Result<_>>()?;
     let estimated: u64 = plan.masks.iter().map(|m| m.estimated_iterations as u64).sum();
     let bar = ProgressBar::new(estimated.max(1));
     bar.set_style(
@@ -181,11 +194,14 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         }
         return Err(Error::Interrupted);
     }
-    for (m, format) in plan.masks.iter().zip(&ktx2) {
+    for ((m, format), reserved) in plan.masks.iter().zip(&ktx2).zip(&mut ktx2_out) {
         if let Some(format) = format {
             let mask = fsot::io::exr::read(&args.out.join(&m.file))?;
-            let path = args.out.join(&m.file).with_extension("ktx2");
-            fsot::io::ktx2::write(&mask, *format, AtomicFile::create(&path)?)?;
+            let out = match reserved.take() {
+                Some(out) => out,
+                None => AtomicFile::create(&ktx2_path(m))?,
+            };
+            fsot::io::ktx2::write(&mask, *format, out)?;
         }
     }
     let also = if args.ktx2_format.is_some() { " (each also as KTX2)" } else { "" };
