@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Installs what fsot needs on Debian 12: the Rust toolchain (if missing), the
-# Vulkan loader, lavapipe, the validation layer and shaderc's libraries.
+# Installs what fsot needs on Debian 12: the Vulkan loader, lavapipe, the
+# validation layer and shaderc's libraries (Rust itself must be there).
 set -euo pipefail
 packages=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-tools vulkan-validationlayers
           libshaderc-dev glslang-dev spirv-tools glslang-tools glslc pkg-config)

@@ -369,7 +369,8 @@ impl RadixSort {
     }
 
     /// A sort in the device's shape whose lanes path reads its input as
-    /// storage, as where a texel view could not hold the capacity (for tests).
+    /// storage, as where a texel view could not hold the capacity: the sort
+    /// `bind_pairs` takes, to sort a host's buffers.
     pub fn with_storage_reads(ctx: &Context, capacity: u32, count: SortCount) -> Result<Self> {
         let shape = SortShape::for_device(ctx, capacity.max(1))?;
         Self::build(ctx, capacity, count, shape, false)
