@@ -7,9 +7,10 @@
 # Usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]
 #   (VK_DRIVER_FILES picks the device; lavapipe by default)
 set -euo pipefail
-old=${1:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}
-new=${2:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}
-scene=${3:-bench/results/plan-scene.toml}
+old=$(realpath "${1:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}")
+new=$(realpath "${2:?usage: bench/plan-together.sh OLD_FSOT NEW_FSOT [SCENE]}")
+scene=$(realpath "${3:-$(dirname "$0")/results/plan-scene.toml}")
+cd "$(dirname "$0")/.."
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)

@@ -22,7 +22,7 @@ head="commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff
   echo "---|---|---|---|---|---|---|---|---|---|---"
   for method in fast stbn; do
     for backend in cpu vulkan; do
-      log=$(FSOT_VALIDATION=1 $f optimize --method $method --dims 2 --backend $backend --size "$size" --seed 1 \
+      log=$(FSOT_VALIDATION=1 "$f" optimize --method $method --dims 2 --backend $backend --size "$size" --seed 1 \
         --passes 32 --out "$work/m.exr" 2>&1)
       device=$(echo "$log" | grep -m1 '^backend:' | sed 's/^backend: //')
       time=$(echo "$log" | grep -o 'method [A-Za-z]*, [0-9.]* s' | awk '{print $3}')

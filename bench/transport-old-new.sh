@@ -7,15 +7,15 @@
 # 32x32x16, d = 2, taa, seed 7, 192 iterations. Medians at the end.
 # Usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE   (lavapipe unless VK_DRIVER_FILES says otherwise)
 set -euo pipefail
+old=$(realpath "${1:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}")
+new=$(realpath "${2:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}")
+out=$(realpath -m "${3:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}")
 cd "$(dirname "$0")/.."
-old=${1:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}
-new=${2:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}
-out=${3:?usage: bench/transport-old-new.sh OLD_BIN NEW_BIN OUT_FILE}
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-head="old $($old --version | head -1) ($old), new $($new --version | head -1) ($new), commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+head="old $("$old" --version | head -1) ($old), new $("$new" --version | head -1) ($new), commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# bench/transport-old-new.sh: $head"
   for mode in float deterministic; do

@@ -16,14 +16,14 @@ trap 'rm -rf "$work"' EXIT
 f=target/release/fsot
 head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
-  echo "# bench/vulkan-dims.sh: $head${OLD_BIN:+; vulkan-old: $OLD_BIN ($($OLD_BIN --version | head -1))}"
+  echo "# bench/vulkan-dims.sh: $head${OLD_BIN:+; vulkan-old: $OLD_BIN ($("$OLD_BIN" --version | head -1))}"
   echo "d | tile | iterations | backend | device | time | objective | x white"
   echo "---|---|---|---|---|---|---|---"
   for case in 3:32x32x16:300 4:32x32x16:300 8:16x16x8:100; do
     IFS=: read -r d size its <<< "$case"
     for backend in cpu ${OLD_BIN:+vulkan-old} vulkan; do
       exe=$f; [ $backend = vulkan-old ] && exe=$OLD_BIN
-      log=$(FSOT_VALIDATION=1 $exe optimize --backend ${backend%-*} --dims "$d" --size "$size" --kernel perceptual-taa \
+      log=$(FSOT_VALIDATION=1 "$exe" optimize --backend ${backend%-*} --dims "$d" --size "$size" --kernel perceptual-taa \
         --seed 7 --iterations "$its" --out "$work/m.exr" 2>&1)
       device=$(echo "$log" | grep -m1 '^backend:' | sed 's/^backend: //; s/ (.*//' || true)
       time=$(echo "$log" | grep -o 'iterations in [0-9.]* s' | awk '{print $3}')

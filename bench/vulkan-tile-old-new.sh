@@ -25,8 +25,14 @@ run() { # BIN NAME: one run; prints its seconds and profile line
   "$new" optimize --backend vulkan --size "$size" --kernel "$kernel" --iterations 1 --profile --out "$work/w.exr" 2>&1 | grep "transport:" | sed 's/^/# new: /'
   "$old" optimize --backend vulkan --size "$size" --kernel "$kernel" --iterations 1 --profile --out "$work/w.exr" 2>&1 | grep "transport:" | sed 's/^/# old: /'
   for round in 1 2 3; do
-    echo "round $round, old: $(run "$old" old)"
-    echo "round $round, new: $(run "$new" new)"
+    for b in old new; do
+      bin=$old; [ $b = new ] && bin=$new
+      r=$(run "$bin" $b)
+      [ -n "$r" ] || { echo "round $round: the $b binary's run failed" >&2; exit 1; }
+      echo "round $round, $b: $r"
+    done
   done
-  echo "masks: $("$compare" "$work/old.exr" "$work/new.exr" || true)"
+  # The comparison's verdict is the record, same or not; a comparison that cannot run fails.
+  same=$("$compare" "$work/old.exr" "$work/new.exr") || [ -n "$same" ] || exit 1
+  echo "masks: $same"
 } | tee "$out"

@@ -24,10 +24,12 @@ runs=(
 )
 failed=0
 for i in "${!runs[@]}"; do
-  # shellcheck disable=SC2086
-  "$old" optimize ${runs[$i]} --out "$work/old-$i.exr" >/dev/null 2>&1
-  # shellcheck disable=SC2086
-  "$new" optimize ${runs[$i]} --out "$work/new-$i.exr" >/dev/null 2>&1
+  for b in old new; do
+    bin=$old; [ $b = new ] && bin=$new
+    # shellcheck disable=SC2086
+    "$bin" optimize ${runs[$i]} --out "$work/$b-$i.exr" >"$work/log" 2>&1 ||
+      { echo "the $b binary ($bin) failed: optimize ${runs[$i]}: $(tail -1 "$work/log")" >&2; exit 1; }
+  done
   if verdict=$("$compare" "$work/old-$i.exr" "$work/new-$i.exr"); then :; else failed=$((failed + 1)); fi
   echo "${runs[$i]}: $verdict"
 done

@@ -48,7 +48,8 @@ if [ "$DRY_RUN" != 1 ]; then
 fi
 export XDG_RUNTIME_DIR=${XDG_RUNTIME_DIR:-/tmp}
 # Tests find the repository (tests/data, scenes) where it was built.
-[ -e /work/main ] || { mkdir -p /work && ln -s "$PWD" /work/main; }
+ROOT=$(cat .gl/root 2>/dev/null || echo /work/main)
+[ -e "$ROOT" ] || { mkdir -p "$(dirname "$ROOT")" && ln -s "$PWD" "$ROOT"; }
 
 # A step's limit: STEP_TIMEOUT, and no later than 90 s past the budget (the run's
 # wall-clock limit leaves a little more for packing the results).
@@ -147,7 +148,7 @@ optimize() {
   if want tests; then
     echo; echo "### GPU tests on this device, validation layer on"
     # Tests that run the command line look for it where it was built.
-    if [ "$DRY_RUN" != 1 ]; then mkdir -p /work/main/target/release && cp $B/fsot /work/main/target/release/fsot; fi
+    if [ "$DRY_RUN" != 1 ]; then mkdir -p "$ROOT/target/release" && cp "$B/fsot" "$ROOT/target/release/fsot"; fi
     # Tests of a CPU implementation's paths cannot run on a GPU: allowed skips.
     # A binary's failed tests run again one by one, each in a process of its own,
     # to tell a test that fails alone from one failed by what ran before it.

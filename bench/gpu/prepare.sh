@@ -18,18 +18,21 @@ cd "$(dirname "$0")/../.."
 export PATH="$HOME/.cargo/bin:$PATH"
 
 if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then ../shared/gpu/fetch-vulkan-loader.sh; fi
-if ! ls .gl/vulkan-validationlayers_*.deb >/dev/null 2>&1; then
+# amd64 package lists of their own, for the downloads below (made where missing).
+apt_amd64=(-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64)
+if ! ls /tmp/amd64/*_Packages* >/dev/null 2>&1; then
   mkdir -p /tmp/amd64/partial
-  (cd .gl && apt-get -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64 \
-    download vulkan-validationlayers 2>&1 | grep -v 'unsandboxed' || true)
+  apt-get "${apt_amd64[@]}" update -qq 2>&1 | grep -v 'unsandboxed' || true
+fi
+if ! ls .gl/vulkan-validationlayers_*.deb >/dev/null 2>&1; then
+  (cd .gl && apt-get "${apt_amd64[@]}" download vulkan-validationlayers 2>&1 | grep -v 'unsandboxed' || true)
 fi
 ls .gl/vulkan-validationlayers_*.deb >/dev/null
 # The NVIDIA ICD (libGLX_nvidia) needs libglvnd's dispatch libraries: without them
 # the loader finds no driver there.
 if ! ls .gl/libglvnd0_*.deb >/dev/null 2>&1; then
-  mkdir -p /tmp/amd64/partial
-  (cd .gl && apt-get -oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64 \
-    download libglvnd0 libegl1 libgl1 libglx0 libgles2 libopengl0 2>&1 | grep -v 'unsandboxed' || true)
+  (cd .gl && apt-get "${apt_amd64[@]}" download libglvnd0 libegl1 libgl1 libglx0 libgles2 libopengl0 2>&1 \
+    | grep -v 'unsandboxed' || true)
 fi
 ls .gl/libglvnd0_*.deb >/dev/null
 
@@ -52,12 +55,14 @@ cargo test --release --no-run --message-format=json "${args[@]}" 2>/dev/null |
 for t in "${tests[@]}"; do [ -x ".gl/t/deps/$t" ] || { echo "prepare: test binary $t is missing" >&2; exit 1; }; done
 strip .gl/bin/* .gl/t/deps/* .gl/t/examples/*
 echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl tests examples || echo -dirty)" > .gl/commit
+# Where the test binaries were built: they look for the repository there.
+pwd > .gl/root
 # Packed by xz (the binaries share most of their code, which xz's window finds:
 # about a third of gzip's size); the run unpacks, by python3's tarfile where
 # the machine has no xz.
 rm -f .gl/bin.tar.gz
-tar -cJf .gl/bin.tar.xz -C .gl bin t commit
-rm -rf .gl/bin .gl/t .gl/commit
+tar -cJf .gl/bin.tar.xz -C .gl bin t commit root
+rm -rf .gl/bin .gl/t .gl/commit .gl/root
 
 tracked=$(git ls-files -z --cached --others --exclude-standard | xargs -0 stat -c %s 2>/dev/null | awk '{s += $1} END {print s}')
 carried=$(du -sb .gl | cut -f1)
