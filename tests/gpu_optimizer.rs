@@ -761,6 +761,9 @@ fn a_device_without_f64_takes_float_pairs_and_classes_past_the_loop_budget_get_a
         let err = forced(&ctx, Tile::new(16, 16, 8, 4, 8).unwrap(), "taa", TransportKind::Workgroup).err();
         let err = err.expect("d = 8 with large classes on a CPU implementation");
         assert!(err.contains("loop budget") && err.contains("CPU backend"), "{err}");
+    } else {
+        // Reported as a skip of that check (a failure unless skips are allowed).
+        let _skipped = common::skip("the loop budget's refusal is a CPU implementation's");
     }
     common::assert_no_validation_messages(&ctx);
 }

@@ -51,7 +51,6 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
             unsafe { make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {}) }
                 .unwrap()
                 .expect("not cancelled");
-        assert!(ctx.validation_messages().is_empty()); // fsot's own sink is empty on a wrapped device
         mask
     }; // fsot's context is gone: the renderer's device, queue and image live on
     let got = u16s(&host.read_image(&image, 4));

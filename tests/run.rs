@@ -384,7 +384,8 @@ fn budget_run(backend: BackendChoice, budget: f64) -> (f64, u32, f64, Mask) {
     assert!(set_up.start > 0.0, "an animated start takes time: {set_up:?}");
     assert!(set_up.backend > 0.0, "{set_up:?}");
     let parts = set_up.start + set_up.backend;
-    assert!(parts <= whole && parts >= whole - 0.05, "{set_up:?} of {whole} s in Run::start");
+    // Nothing of note untimed (a margin for a busy machine's scheduling).
+    assert!(parts <= whole && parts >= whole - 0.25, "{set_up:?} of {whole} s in Run::start");
     let mut slowest = 0.0f64;
     let mut last = (begun, 0u32);
     run.run(&CancelFlag::new(), &mut |e| {

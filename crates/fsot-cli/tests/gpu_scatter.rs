@@ -17,11 +17,12 @@ fn the_benchmarked_scatter_sums_like_f64() {
         // Fixed point: one rounding to 2^-40 per contribution, at most a few dozen
         // per accumulator.
         assert!(b.fixed_error < 64.0 * 0.5 / (1u64 << 40) as f64, "{n}: {}", b.fixed_error);
+        // Float atomics are measured exactly where the device has them.
+        assert_eq!(b.float_error.is_some(), ctx.info().float_atomic_add, "{n}");
         if let Some(e) = b.float_error {
             // Float: sums of values below 2^-10 carry errors near 2^-33 each add.
             assert!(e < 1e-8, "{n}: {e}");
         }
-        assert!(b.fixed_seconds > 0.0 && b.cpu_seconds > 0.0);
     }
     common::assert_no_validation_messages(&ctx);
 }

@@ -62,9 +62,8 @@ fn the_look_back_path_sorts_stably_by_any_number_of_low_bits_with_either_count()
     }
     drop(sort);
     // The sort benchmark times this path on GPUs; its run checks the result
-    // against the CPU's and its timestamps cover the five dispatches.
+    // against the CPU's (an error otherwise) in five dispatches.
     let b = fsot_cli::bench::bench_sort(&ctx, 70_000, 1, SortPath::LookBack).unwrap();
     assert_eq!(b.dispatches, 5);
-    assert!(b.gpu_seconds > 0.0 && b.stages_ms[2] > 0.0, "{:?}", b.stages_ms);
     common::assert_no_validation_messages(&ctx);
 }

@@ -287,8 +287,15 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let shot = Shot { image: 6, frames: 2 };
         let a = references(Scene::SoftShadow, shot, 16, Some(dir.path())).unwrap();
+        let files: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().path()).collect();
+        assert_eq!(files.len(), 1);
+        let fresh = references(Scene::SoftShadow, shot, 16, None).unwrap();
+        assert_eq!(a, fresh, "the cached run's figures are a fresh run's");
+        // Known values in the cache file come back: the second run reads it.
+        let known: Vec<f32> = (0..6 * 6 * 2).map(|i| i as f32 / 128.0).collect();
+        std::fs::write(&files[0], known.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
         let b = references(Scene::SoftShadow, shot, 16, Some(dir.path())).unwrap();
-        assert_eq!(a, b);
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        let read: Vec<f32> = b.iter().flatten().map(|&v| v as f32).collect();
+        assert_eq!(read, known);
     }
 }
