@@ -47,11 +47,9 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
     let made = {
         let ctx = host.fsot();
         // SAFETY: the host's resources, made as their targets state, used by nothing else.
-        let mask =
-            unsafe { make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {}) }
-                .unwrap()
-                .expect("not cancelled");
-        mask
+        unsafe { make_into_image(&ctx, tile, settings, &image.target, &CancelFlag::new(), &mut |_| {}) }
+            .unwrap()
+            .expect("not cancelled")
     }; // fsot's context is gone: the renderer's device, queue and image live on
     let got = u16s(&host.read_image(&image, 4));
     // Exactly the returned mask, quantised to round(v 65535), frame by frame, row by row.
