@@ -182,10 +182,12 @@ pub enum Outcome {
     },
 }
 
-/// A checkpoint's state checked against the run it would resume: an error
-/// naming the file where it is not one this run reaches.
-fn resumable(state: &RunState, path: &Path, tile: &Tile, settings: &Settings) -> Result<()> {
-    state.check(tile, settings).map_err(|e| Error::bad_file(path, format!("cannot resume: {e}")))
+/// The state a checkpoint of this very run holds, checked against the run it
+/// would resume: an error naming the file where it is not one this run reaches.
+fn read_saved(path: &Path, fingerprint: &str, tile: &Tile, settings: &Settings) -> Result<RunState> {
+    let state = checkpoint::read(path, fingerprint, tile)?;
+    state.check(tile, settings).map_err(|e| Error::bad_file(path, format!("cannot resume: {e}")))?;
+    Ok(state)
 }
 
 /// A flag the caller sets to stop a run between iterations (a renderer wires its
@@ -306,7 +308,7 @@ impl Run {
             return Err(Error::invalid("a coarse start divides a time budget: it takes one (--budget)"));
         }
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
-        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile)?;
+        let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile, &settings)?;
         let left = match settings.until {
             Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
             _ => None,
@@ -332,9 +334,6 @@ impl Run {
         let starting_backend = Instant::now();
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
         if let Some(state) = &saved {
-            if let Some(c) = &options.checkpoint {
-                resumable(state, &c.path, &tile, &settings)?;
-            }
             backend.restore(state)?;
         }
         let set_up = SetUp {
@@ -731,12 +730,11 @@ impl Run {
         let at = self.iteration();
         let mut cpu = CpuRun::new(self.tile, self.settings, self.init.as_ref())?;
         let checkpoint = self.options.checkpoint.as_ref().map(|c| c.path.clone()).filter(|p| p.exists());
-        let saved =
-            checkpoint.as_ref().map(|p| checkpoint::read(p, &self.fingerprint, &self.tile)).transpose()?;
+        let saved = checkpoint
+            .as_ref()
+            .map(|p| read_saved(p, &self.fingerprint, &self.tile, &self.settings))
+            .transpose()?;
         if let Some(state) = &saved {
-            if let Some(path) = &checkpoint {
-                resumable(state, path, &self.tile, &self.settings)?;
-            }
             cpu.restore(state)?;
         }
         self.plateau = schedule(&self.settings, saved.as_ref());
@@ -886,7 +884,12 @@ fn schedule(settings: &Settings, saved: Option<&RunState>) -> Option<(Plateau, P
 /// The checkpoint rules: with `resume`, the file must hold a checkpoint of this
 /// very run; without, an existing file is left alone (an error); and the path
 /// must be writable before the work starts.
-fn saved_state(c: Option<&Checkpointing>, fingerprint: &str, tile: &Tile) -> Result<Option<RunState>> {
+fn saved_state(
+    c: Option<&Checkpointing>,
+    fingerprint: &str,
+    tile: &Tile,
+    settings: &Settings,
+) -> Result<Option<RunState>> {
     let Some(c) = c else { return Ok(None) };
     if c.every == 0 {
         return Err(Error::invalid("checkpoints must be at least 1 iteration apart"));
@@ -898,7 +901,7 @@ fn saved_state(c: Option<&Checkpointing>, fingerprint: &str, tile: &Tile) -> Res
         )));
     }
     let saved = match c.resume {
-        true => Some(checkpoint::read(&c.path, fingerprint, tile)?),
+        true => Some(read_saved(&c.path, fingerprint, tile, settings)?),
         false if c.path.exists() => return Err(Error::CheckpointExists(c.path.clone())),
         false => None,
     };

@@ -748,7 +748,7 @@ fn planned_records(
                     continue;
                 }
                 let judged = [!with_taa, with_taa];
-                let planned: Vec<PlannedMasks> = (1..=size.planned_masks.clamp(1, size.seeds) as u64)
+                let planned: Vec<PlannedMasks> = (1..=size.planned_masks as u64)
                     .map(|seed| planned_masks(scene, viewing, with_taa, share, size, cache, seed))
                     .collect::<Result<_>>()?;
                 any_shares |= planned[0].shares;
