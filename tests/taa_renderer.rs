@@ -50,7 +50,6 @@ fn the_example_renders_with_fsots_mask_well_under_white_noise_with_validation_si
     let (mask, white) = (doc["prelmse_mask"].as_f64().unwrap(), doc["prelmse_white"].as_f64().unwrap());
     // At this size and 150 iterations a mask must leave at most 0.6 x white noise's error.
     assert!(mask > 0.0 && mask <= 0.6 * white, "fsot {mask}, white {white}");
-    assert!(doc["seconds"].as_f64().unwrap() > 0.0);
     assert_eq!(std::fs::read_dir(out.join("frames")).unwrap().count(), 52);
     let preview = std::fs::read(out.join("preview.png")).unwrap();
     assert!(preview.windows(4).any(|w| w == b"acTL"), "an animated PNG");

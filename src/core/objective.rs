@@ -53,8 +53,13 @@ impl Mask {
     /// ```
     /// use fsot::{KernelSpec, Mask, Tile};
     /// let kernel = KernelSpec::named("taa")?;
-    /// let white = Mask::white(Tile::new(8, 8, 4, 1, 1)?, 3).score(kernel)?;
+    /// let tile = Tile::new(8, 8, 4, 1, 1)?;
+    /// let white = Mask::white(tile, 3).score(kernel)?;
     /// assert!((0.5..2.0).contains(&white.ratio()));
+    /// // Every pixel the same sample: far worse than white noise.
+    /// let mut flat = Mask::white(tile, 3);
+    /// flat.samples.fill(0.5);
+    /// assert!(flat.score(kernel)?.ratio() > 2.0);
     /// # Ok::<(), fsot::Error>(())
     /// ```
     pub fn score(&self, kernel: KernelSpec) -> Result<Score> {

@@ -58,6 +58,14 @@ fn with_auto_a_lost_device_hands_over_to_the_cpu_from_the_last_checkpoint() {
     assert!(o.status.success(), "{t}");
     assert!(t.contains("warning: the GPU failed at iteration"), "{t}");
     assert!(t.contains("continuing from its checkpoint"), "{t}");
+    // From the last checkpoint before the failure (one every 20 iterations;
+    // a failure while saving one continues from the one before).
+    let number_after = |key: &str| -> u32 {
+        let rest = &t[t.find(key).unwrap_or_else(|| panic!("{key} in {t}")) + key.len()..];
+        rest[..rest.find(|c: char| !c.is_ascii_digit()).unwrap()].parse().unwrap()
+    };
+    let (at, from) = (number_after("failed at iteration "), number_after("(iteration "));
+    assert!(from > 0 && from % 20 == 0 && from <= at && at - from <= 20, "failed at {at}, from {from}: {t}");
     assert!(t.contains("120 iterations") && t.contains("(cpu)"), "{t}");
     let mask = fsot::io::exr::read(&dir.path().join("mask.exr")).unwrap();
     assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));

@@ -595,14 +595,8 @@ mod tests {
 
     #[test]
     fn every_invocation_stays_under_the_loop_budget() {
-        // The largest local class on one subgroup of 8 (lavapipe), and many
-        // slices per workgroup only when classes are small.
+        // The largest local class on one subgroup of 8 (lavapipe).
         assert!(TransportShape::slice_iterations(LOCAL_MAX, 8) < LOOP_BUDGET);
-        for max_class in [2u32, 100, 500, 1360, 2048, 100_000] {
-            let worst = TransportShape::slice_iterations(max_class.min(LOCAL_MAX), 8);
-            let spg = 16u32.min((LOOP_BUDGET / worst).max(1));
-            assert!(spg * worst <= LOOP_BUDGET, "{max_class}: {spg} x {worst}");
-        }
         // Per lane, one invocation sorts a whole class: clear, count, prefix and
         // place (one loop over n each), then either the insertion (a listing
         // pass of n, a list of at most n, and at most 4n moves,

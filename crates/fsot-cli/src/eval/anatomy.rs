@@ -185,6 +185,22 @@ mod tests {
         let mean_square = grid.iter().map(|v| v * v).sum::<f64>() / (n * n) as f64;
         let parseval = p.iter().sum::<f64>() / (n * n * n * n) as f64;
         assert!((parseval - mean_square).abs() < 1e-12 * mean_square.max(1.0), "{parseval} {mean_square}");
+        // Every bin of white noise (uniform, variance 1/12) reads 1/12: the
+        // mean over 64 grids within 4 standard errors of those grids.
+        let grids: Vec<Vec<f64>> = (0..64)
+            .map(|_| {
+                let grid: Vec<f64> = (0..n * n).map(|_| rng.next_f64() - 0.5).collect();
+                let p = dft_power_2d(&grid, n);
+                let radial = (0..n * n).map(|i| (frequency(i % n, n).hypot(frequency(i / n, n)), p[i]));
+                bin(radial, &SPATIAL_EDGES).iter().map(|b| b / (n * n) as f64).collect()
+            })
+            .collect();
+        for b in 0..SPATIAL_EDGES.len() - 1 {
+            let values: Vec<f64> = grids.iter().map(|g| g[b]).collect();
+            let mean = values.iter().sum::<f64>() / 64.0;
+            let sd = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 63.0).sqrt();
+            assert!((mean - 1.0 / 12.0).abs() < 4.0 * sd / 8.0, "bin {b}: {mean} +- {}", sd / 8.0);
+        }
         // A wave at 5 cycles along y (0.208 cycles per pixel): all its power in bin 3.
         let wave: Vec<f64> =
             (0..n * n).map(|i| (std::f64::consts::TAU * 5.0 * (i / n) as f64 / n as f64).cos()).collect();
