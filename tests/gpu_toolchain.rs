@@ -32,6 +32,7 @@ fn a_compute_shader_draws_the_same_random_stream_as_the_cpu() {
         images: &[],
         uniforms: &[],
         texels: &binding::TEXELS,
+        full_subgroups: false,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     // SAFETY: `out` is declared before the pipeline: it outlives every dispatch.

@@ -168,6 +168,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
         images: &[1],
         uniforms: &[2],
         texels: &[],
+        full_subgroups: false,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     // SAFETY: the view, the sampler, `out` and the renderer's own uniform buffer

@@ -347,3 +347,106 @@ fn the_cpu_passes_read_through_texel_views_and_no_other_pass_does() {
         assert_eq!(used, want, "{shader}");
     }
 }
+
+/// Bytes of workgroup (shared) memory a shader declares with these
+/// specialization constants: its Workgroup variables' sizes, the array lengths
+/// evaluated from the module's constants and spec constant operations (scalars
+/// of 32 bits or less, booleans, take 4 bytes).
+fn shared_bytes(spirv: &[u8], spec: &[u32]) -> u64 {
+    let module = load_bytes(spirv).unwrap();
+    let mut spec_ids = HashMap::new();
+    for i in &module.annotations {
+        if let (Op::Decorate, [target, Operand::Decoration(Decoration::SpecId), id]) =
+            (i.class.opcode, &i.operands[..])
+        {
+            spec_ids.insert(word(target), word(id) as usize);
+        }
+    }
+    let (mut value, mut parts, mut size) = (HashMap::new(), HashMap::new(), HashMap::new());
+    let mut pointee = HashMap::new();
+    let mut shared = 0u64;
+    for i in &module.types_global_values {
+        let id = i.result_id.unwrap_or(0);
+        let ops = &i.operands;
+        match i.class.opcode {
+            Op::TypeInt | Op::TypeFloat => {
+                size.insert(id, u64::from(word(&ops[0]).max(32) / 8));
+            }
+            Op::TypeBool => {
+                size.insert(id, 4);
+            }
+            Op::TypeVector => {
+                size.insert(id, size[&word(&ops[0])] * u64::from(word(&ops[1])));
+            }
+            // (Sized where the element is: not the blocks around runtime arrays.)
+            Op::TypeArray => {
+                if let Some(element) = size.get(&word(&ops[0])) {
+                    size.insert(id, element * value[&word(&ops[1])]);
+                }
+            }
+            Op::TypeStruct => {
+                if let Some(members) = ops.iter().map(|m| size.get(&word(m))).sum::<Option<u64>>() {
+                    size.insert(id, members);
+                }
+            }
+            Op::TypePointer => {
+                pointee.insert(id, word(&ops[1]));
+            }
+            Op::Constant => {
+                value.insert(id, u64::from(word(&ops[0])));
+            }
+            Op::SpecConstant => {
+                let default = u64::from(word(&ops[0]));
+                let given = spec_ids.get(&id).and_then(|k| spec.get(*k)).map(|&v| u64::from(v));
+                value.insert(id, given.unwrap_or(default));
+            }
+            Op::SpecConstantComposite => {
+                parts.insert(id, ops.iter().map(|c| value[&word(c)]).collect::<Vec<u64>>());
+            }
+            Op::SpecConstantOp => {
+                let Operand::LiteralSpecConstantOpInteger(op) = ops[0] else { panic!("{ops:?}") };
+                let arg = |k: usize| value[&word(&ops[k])];
+                let v = match op {
+                    Op::IMul => arg(1) * arg(2),
+                    Op::IAdd => arg(1) + arg(2),
+                    Op::ISub => arg(1) - arg(2),
+                    Op::UDiv => arg(1) / arg(2),
+                    Op::CompositeExtract => parts[&word(&ops[1])][word(&ops[2]) as usize],
+                    // Not an array length: any value.
+                    _ => 0,
+                };
+                value.insert(id, v);
+            }
+            Op::Variable if ops[0] == Operand::StorageClass(StorageClass::Workgroup) => {
+                shared += size[&pointee[&i.result_type.unwrap()]];
+            }
+            _ => {}
+        }
+    }
+    shared
+}
+
+#[test]
+fn the_sort_shapes_count_the_shared_memory_their_passes_declare() {
+    // Every pass of a block shape with the constants the sort gives it: the
+    // largest declares exactly what `SortShape::fits` counts, so a device
+    // with a byte less refuses the shape.
+    for (workgroup, items, subgroup) in
+        [(64u32, 32u32, 8u32), (32, 64, 4), (256, 8, 32), (256, 16, 64), (32, 32, 4)]
+    {
+        let shape = sort::SortShape::fits(workgroup, items, subgroup, 1024, u32::MAX).unwrap();
+        let spec = [shape.workgroup, shape.items, shape.subgroups, shape.block];
+        let (name, most) = fsot::vk::shaders::ALL
+            .iter()
+            .filter(|(name, _)| !name.contains("lane") && !name.contains("args"))
+            .map(|(name, spirv)| (*name, shared_bytes(spirv, &spec)))
+            .max_by_key(|s| s.1)
+            .unwrap();
+        let most = u32::try_from(most).unwrap();
+        assert!(sort::SortShape::fits(workgroup, items, subgroup, 1024, most).is_some(), "{name}: {most}");
+        assert!(
+            sort::SortShape::fits(workgroup, items, subgroup, 1024, most - 1).is_none(),
+            "{name}: {most}"
+        );
+    }
+}

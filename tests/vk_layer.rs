@@ -166,6 +166,7 @@ fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_
         images: &[],
         uniforms: &[],
         texels: &[0, 1],
+        full_subgroups: false,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
     // SAFETY: the views and buffers are declared before the pipeline: they
@@ -185,6 +186,56 @@ fn a_texel_view_reads_a_buffer_as_its_storage_holds_it_and_a_binding_of_another_
     let got: Vec<[f32; 2]> = out.download(count).unwrap();
     for (j, g) in got.iter().enumerate() {
         assert_eq!(*g, [floats[j], words[j] as f32], "texel {j}");
+    }
+    common::assert_no_validation_messages(&ctx);
+}
+
+/// Each invocation writes how many invocations of its subgroup are active, and
+/// the subgroup size the shader sees.
+const SUBGROUP_PROBE: &str = r#"#version 450
+#extension GL_KHR_shader_subgroup_ballot : require
+layout(local_size_x_id = 0) in;
+layout(std430, set = 0, binding = 0) writeonly buffer Out { uvec2 got[]; };
+void main() {
+    got[gl_GlobalInvocationID.x] = uvec2(subgroupBallotBitCount(subgroupBallot(true)), gl_SubgroupSize);
+}
+"#;
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn a_pass_that_relies_on_full_subgroups_gets_them() {
+    let ctx = common::gpu_context();
+    let spirv = common::compile_glsl(SUBGROUP_PROBE);
+    use fsot::vk::{Buffer, ComputeDesc, ComputePipeline, Location};
+    let size = ctx.info().subgroup_size;
+    // Whole subgroups: a workgroup of 64 invocations, or of one subgroup where
+    // a subgroup is larger.
+    let workgroup = size.max(64);
+    let groups = 5u32;
+    let count = (workgroup * groups) as usize;
+    let out = Buffer::new(&ctx, count as u64 * 8, Location::Device, "out").unwrap();
+    let desc = ComputeDesc {
+        spirv: &spirv,
+        bindings: 1,
+        push_bytes: 0,
+        spec: &[workgroup],
+        sets: 1,
+        images: &[],
+        uniforms: &[],
+        texels: &[],
+        full_subgroups: true,
+    };
+    let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
+    // SAFETY: the buffer is declared before the pipeline: it outlives every dispatch.
+    unsafe { pipeline.bind(0, &[(0, &out)]).unwrap() };
+    ctx.submit(|cmd| {
+        pipeline.dispatch(cmd, 0, [groups, 1, 1], &[]);
+        fsot::vk::commands::barrier(cmd);
+    })
+    .unwrap();
+    let got: Vec<[u32; 2]> = out.download(count).unwrap();
+    for (i, g) in got.iter().enumerate() {
+        assert_eq!(*g, [size, size], "invocation {i}: active lanes and gl_SubgroupSize");
     }
     common::assert_no_validation_messages(&ctx);
 }

@@ -33,10 +33,10 @@ pub struct ContextOptions {
 
 /// A device made by a host application (a renderer) for fsot to work on. fsot
 /// never destroys these handles; the host keeps them alive while the Context
-/// lives. `int64_atomics`, `float_atomic_add` and `float64` say which of those
-/// features the host enabled on the device (the Vulkan optimizer needs the first;
-/// the others are optional: d >= 3 keeps its targets in float64 where it is
-/// enabled, else in pairs of float32).
+/// lives. `int64_atomics`, `float_atomic_add`, `float64` and `full_subgroups`
+/// say which of those features the host enabled on the device (the Vulkan
+/// optimizer needs the first; the others are optional: d >= 3 keeps its
+/// targets in float64 where it is enabled, else in pairs of float32).
 #[derive(Clone)]
 pub struct ExternalDevice {
     /// The loader the host's instance was made with.
@@ -58,6 +58,13 @@ pub struct ExternalDevice {
     pub float_atomic_add: bool,
     /// shaderFloat64 was enabled on the device.
     pub float64: bool,
+    /// VK_EXT_subgroup_size_control was enabled on the device with its
+    /// computeFullSubgroups feature: fsot's passes that rely on full subgroups
+    /// then ask for them. Without it they rely on the driver filling every
+    /// subgroup of a workgroup whose size is a multiple of the subgroup size,
+    /// which Intel's Linux driver does not do (it runs such a shader in smaller
+    /// subgroups unless asked): enable it on such a device.
+    pub full_subgroups: bool,
     /// The lock the host takes around its own submissions to this queue; fsot
     /// takes it around each of its submissions. None: the host does not submit to
     /// this queue while fsot works on it (fsot then locks its own).
@@ -101,6 +108,8 @@ impl Context {
             .queue_priorities(&priorities)];
         let mut float_atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomic_add(info.float_atomic_add);
+        let mut full_subgroups =
+            vk::PhysicalDeviceSubgroupSizeControlFeaturesEXT::default().compute_full_subgroups(true);
         let mut extensions: Vec<*const i8> = Vec::new();
         let features = vk::PhysicalDeviceFeatures::default()
             .shader_int64(info.int64_atomics)
@@ -114,6 +123,10 @@ impl Context {
         if info.float_atomic_add {
             extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
             create = create.push_next(&mut float_atomics);
+        }
+        if info.full_subgroups {
+            extensions.push(ash::ext::subgroup_size_control::NAME.as_ptr());
+            create = create.push_next(&mut full_subgroups);
         }
         let create = create.enabled_extension_names(&extensions);
         // SAFETY: the create info and everything it points to live until the call returns.
@@ -129,6 +142,7 @@ impl Context {
             int64_atomics: info.int64_atomics,
             float_atomic_add: info.float_atomic_add,
             float64: info.float64,
+            full_subgroups: info.full_subgroups,
             queue_lock: None,
         };
         Self::build(external, info, Some(instance), messages)
@@ -146,7 +160,8 @@ impl Context {
     /// # Safety
     /// fsot cannot check these of a device it did not make:
     /// - `device` was made from `physical_device` of `instance`, with each
-    ///   feature whose flag is set (both features for `int64_atomics`), and with
+    ///   feature whose flag is set (both features for `int64_atomics`; the
+    ///   extension and its feature for `full_subgroups`), and with
     ///   the queue `queue_index` of `queue_family` where the physical device has
     ///   that queue (checked above);
     /// - `instance` was made with an `apiVersion` of at least `API_VERSION`
@@ -191,6 +206,7 @@ impl Context {
         info.int64_atomics &= external.int64_atomics;
         info.float_atomic_add &= external.float_atomic_add;
         info.float64 &= external.float64;
+        info.full_subgroups &= external.full_subgroups;
         Self::build(external, info, None, Box::new(Mutex::new(Vec::new())))
     }
 
@@ -270,6 +286,7 @@ impl Context {
             int64_atomics: s.info.int64_atomics,
             float_atomic_add: s.info.float_atomic_add,
             float64: s.info.float64,
+            full_subgroups: s.info.full_subgroups,
             queue_lock: Some(s.queue_lock.clone()),
         }
     }

@@ -20,7 +20,8 @@ pub struct DeviceInfo {
     pub max_storage_buffer_range: u64,
     /// Texels one texel-buffer view may hold (maxTexelBufferElements).
     pub max_texel_buffer_elements: u64,
-    /// maxComputeWorkGroupInvocations.
+    /// The largest 1-D workgroup: maxComputeWorkGroupInvocations, or
+    /// maxComputeWorkGroupSize's x where that is less.
     pub max_workgroup_invocations: u32,
     /// maxComputeSharedMemorySize, in bytes.
     pub max_shared_memory: u32,
@@ -39,6 +40,11 @@ pub struct DeviceInfo {
     pub subgroup_arithmetic: bool,
     /// shaderFloat64: 64-bit floats in shaders.
     pub float64: bool,
+    /// computeFullSubgroups (VK_EXT_subgroup_size_control): a pipeline can ask
+    /// that every subgroup of its workgroups be full (`ComputeDesc::full_subgroups`).
+    /// Without it a driver may run a workgroup in smaller subgroups than
+    /// `subgroup_size` (Intel's Linux driver does, for shaders that do not ask).
+    pub full_subgroups: bool,
 }
 
 impl DeviceInfo {
@@ -131,6 +137,15 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         // SAFETY: the extension's feature struct is only chained where the device has it.
         unsafe { instance.get_physical_device_features2(pd, &mut features2) };
     }
+    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeaturesEXT::default();
+    let has_size_control = extensions.iter().any(|e| {
+        e.extension_name_as_c_str().map(|n| n == ash::ext::subgroup_size_control::NAME).unwrap_or(false)
+    });
+    if has_size_control {
+        let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut size_control);
+        // SAFETY: as above.
+        unsafe { instance.get_physical_device_features2(pd, &mut query) };
+    }
     let text =
         |c: Result<&std::ffi::CStr, _>| c.map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let driver_name = text(driver.driver_name_as_c_str());
@@ -142,7 +157,10 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         subgroup_size: subgroup.subgroup_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         max_texel_buffer_elements: props.limits.max_texel_buffer_elements as u64,
-        max_workgroup_invocations: props.limits.max_compute_work_group_invocations,
+        max_workgroup_invocations: props
+            .limits
+            .max_compute_work_group_invocations
+            .min(props.limits.max_compute_work_group_size[0]),
         max_shared_memory: props.limits.max_compute_shared_memory_size,
         timestamp_period_ns: props.limits.timestamp_period,
         float_atomic_add: has_atomic_ext && atomics.shader_buffer_float32_atomic_add == vk::TRUE,
@@ -154,6 +172,7 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         subgroup_arithmetic: subgroup.supported_stages.contains(vk::ShaderStageFlags::COMPUTE)
             && subgroup.supported_operations.contains(vk::SubgroupFeatureFlags::ARITHMETIC),
         float64,
+        full_subgroups: has_size_control && size_control.compute_full_subgroups == vk::TRUE,
     }
 }
 

@@ -33,6 +33,12 @@ pub struct ComputeDesc<'a> {
     /// Descriptor sets to allocate, each bound to its own buffers and chosen at
     /// dispatch (e.g. the ping-pong passes of a sort).
     pub sets: u32,
+    /// The pass relies on every subgroup being full (`gl_SubgroupSize`
+    /// invocations, the workgroup `gl_NumSubgroups` whole subgroups). Where the
+    /// device can promise it (`DeviceInfo::full_subgroups`) and the workgroup's
+    /// size (specialization constant 0) is a multiple of the subgroup size, the
+    /// pipeline asks for it.
+    pub full_subgroups: bool,
 }
 
 /// A compute pipeline with its layout and descriptor sets (`ComputeDesc`).
@@ -119,7 +125,15 @@ impl ComputePipeline {
             .collect();
         let spec_info =
             vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(desc.spec));
+        let info = ctx.info();
+        let whole = |x: &u32| info.subgroup_size > 0 && x % info.subgroup_size == 0;
+        let flags = if desc.full_subgroups && info.full_subgroups && desc.spec.first().is_some_and(whole) {
+            vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS_EXT
+        } else {
+            vk::PipelineShaderStageCreateFlags::empty()
+        };
         let stage = vk::PipelineShaderStageCreateInfo::default()
+            .flags(flags)
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main")

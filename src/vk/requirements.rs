@@ -36,6 +36,10 @@ impl Requirement {
             "subgroupSupportedOperations: ARITHMETIC" => info.subgroup_arithmetic,
             "shaderFloat64" => info.float64,
             "shaderBufferFloat32AtomicAdd" => info.float_atomic_add,
+            "computeFullSubgroups" => info.full_subgroups,
+            "maxComputeWorkGroupInvocations, maxComputeWorkGroupSize[0]: 256" => {
+                info.max_workgroup_invocations >= 256
+            }
             _ => false,
         }
     }
@@ -84,6 +88,13 @@ pub fn requirements() -> &'static [Requirement] {
             used_for: "the radix sort's and the transport's prefix sums within a subgroup",
         },
         Requirement {
+            name: "maxComputeWorkGroupInvocations, maxComputeWorkGroupSize[0]: 256",
+            enabled_in: "VkPhysicalDeviceLimits (a limit: nothing to enable)",
+            extension: None,
+            required: true,
+            used_for: "the update's, the gathers' and the second transport pass's workgroups of 256",
+        },
+        Requirement {
             name: "subgroupSupportedOperations: VOTE",
             enabled_in: PROPERTY,
             extension: None,
@@ -103,6 +114,13 @@ pub fn requirements() -> &'static [Requirement] {
             extension: Some(ash::ext::shader_atomic_float::NAME),
             required: false,
             used_for: "faster scatter by float atomics (runs not bit-reproducible; off with `deterministic`)",
+        },
+        Requirement {
+            name: "computeFullSubgroups",
+            enabled_in: "VkPhysicalDeviceSubgroupSizeControlFeaturesEXT",
+            extension: Some(ash::ext::subgroup_size_control::NAME),
+            required: false,
+            used_for: "full subgroups for the passes that rank and sum subgroup by subgroup (the transport, the radix sort's scatter); without it they rely on the driver filling them, which Intel's Linux driver does not",
         },
     ]
 }
@@ -124,7 +142,7 @@ mod tests {
             subgroup_size: 32,
             max_storage_buffer_range: 1 << 30,
             max_texel_buffer_elements: 1 << 27,
-            max_workgroup_invocations: 1024,
+            max_workgroup_invocations: if on { 1024 } else { 128 },
             max_shared_memory: 49152,
             timestamp_period_ns: 1.0,
             float_atomic_add: on,
@@ -133,6 +151,7 @@ mod tests {
             subgroup_vote: on,
             subgroup_arithmetic: on,
             float64: on,
+            full_subgroups: on,
         }
     }
 
@@ -154,8 +173,14 @@ mod tests {
         let mut no_atomics = device(true);
         no_atomics.int64_atomics = false;
         assert_eq!(missing(&no_atomics).map(|r| r.name), Some("shaderInt64"));
+        let small = DeviceInfo { max_workgroup_invocations: 255, ..device(true) };
+        assert_eq!(
+            missing(&small).map(|r| r.name),
+            Some("maxComputeWorkGroupInvocations, maxComputeWorkGroupSize[0]: 256")
+        );
         let mut bare = device(true);
-        (bare.float64, bare.float_atomic_add, bare.subgroup_vote) = (false, false, false);
+        (bare.float64, bare.float_atomic_add, bare.subgroup_vote, bare.full_subgroups) =
+            (false, false, false, false);
         assert_eq!(missing(&bare), None);
         let required: Vec<&str> = requirements().iter().filter(|r| r.required).map(|r| r.name).collect();
         assert_eq!(
@@ -164,7 +189,8 @@ mod tests {
                 "shaderInt64",
                 "shaderBufferInt64Atomics",
                 "subgroupSupportedOperations: BALLOT",
-                "subgroupSupportedOperations: ARITHMETIC"
+                "subgroupSupportedOperations: ARITHMETIC",
+                "maxComputeWorkGroupInvocations, maxComputeWorkGroupSize[0]: 256"
             ]
         );
     }

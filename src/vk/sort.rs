@@ -207,8 +207,9 @@ impl SortShape {
     /// `workgroup` invocations of `items` pairs each, if a device of these limits
     /// runs it: whole subgroups (the ranking walks a block subgroup by
     /// subgroup), items a positive multiple of the scatter's 8 keys per round,
-    /// the workgroup within the device's, and the scatter's shared memory (digit
-    /// counters per subgroup, four digit tables, the staged block) within its.
+    /// the workgroup within the device's, and the shared memory of its largest
+    /// pass, the small sort (digit counters per subgroup, five digit tables, the
+    /// staged block), within its.
     pub fn fits(
         workgroup: u32,
         items: u32,
@@ -219,7 +220,7 @@ impl SortShape {
         let subgroup = subgroup.max(1);
         let subgroups = workgroup / subgroup;
         let block = workgroup.checked_mul(items)?;
-        let shared = subgroups as u64 * 256 * 4 + 4 * 256 * 4 + block as u64 * 8;
+        let shared = subgroups as u64 * 256 * 4 + 5 * 256 * 4 + block as u64 * 8;
         let ok = workgroup > 0
             && workgroup % subgroup == 0
             && items > 0
@@ -434,7 +435,8 @@ impl RadixSort {
         let spec = [shape.workgroup, shape.items, shape.subgroups, shape.block];
         let lane_group = info.subgroup_size.clamp(1, LANE_RUN);
         let lane_spec = [lane_group, LANE_RUN / lane_group, 1, LANE_RUN];
-        let pass_with = |spirv: &[u8], spec: &[u32]| {
+        // `full_subgroups` for the passes that rank a block subgroup by subgroup.
+        let pass_with = |spirv: &[u8], spec: &[u32], full_subgroups: bool| {
             ComputePipeline::new(
                 ctx,
                 &ComputeDesc {
@@ -446,19 +448,21 @@ impl RadixSort {
                     images: &[],
                     uniforms: &[],
                     texels: &binding::TEXELS,
+                    full_subgroups,
                 },
             )
         };
-        let pass = |spirv: &[u8]| pass_with(spirv, &spec);
+        let pass = |spirv: &[u8]| pass_with(spirv, &spec, false);
+        let ranking = |spirv: &[u8]| pass_with(spirv, &spec, true);
         let (histogram, scan_reduce, scan_apply, scatter, histogram_tail, single) = (
             pass(shaders::RADIX_HISTOGRAM)?,
             pass(shaders::SCAN_REDUCE)?,
             pass(shaders::SCAN_APPLY)?,
-            pass(shaders::RADIX_SCATTER)?,
+            ranking(shaders::RADIX_SCATTER)?,
             pass(shaders::RADIX_HISTOGRAM_TAIL)?,
-            pass(shaders::RADIX_SMALL)?,
+            ranking(shaders::RADIX_SMALL)?,
         );
-        let (digits, onesweep) = (pass(shaders::RADIX_DIGITS)?, pass(shaders::RADIX_ONESWEEP)?);
+        let (digits, onesweep) = (pass(shaders::RADIX_DIGITS)?, ranking(shaders::RADIX_ONESWEEP)?);
         let count_buffer: &Buffer = match (count, &host_count) {
             (SortCount::Device(DeviceCount(c)), _) => c,
             (SortCount::Host, Some(own)) => own,
@@ -480,6 +484,7 @@ impl RadixSort {
                     images: &[],
                     uniforms: &[],
                     texels: &binding::TEXELS,
+                    full_subgroups: false,
                 };
                 let pipeline = ComputePipeline::new(ctx, &desc)?;
                 // SAFETY: the sort holds the argument buffer with the pipeline and
@@ -502,10 +507,10 @@ impl RadixSort {
         };
         let lanes = LanePasses {
             workgroup: lane_group,
-            histogram: pass_with(lane_histogram, &lane_spec)?,
-            scan_reduce: pass_with(shaders::SCAN_REDUCE, &lane_spec)?,
-            scan_apply: pass_with(shaders::SCAN_APPLY, &lane_spec)?,
-            scatter: pass_with(lane_scatter, &lane_spec)?,
+            histogram: pass_with(lane_histogram, &lane_spec, false)?,
+            scan_reduce: pass_with(shaders::SCAN_REDUCE, &lane_spec, false)?,
+            scan_apply: pass_with(shaders::SCAN_APPLY, &lane_spec, false)?,
+            scatter: pass_with(lane_scatter, &lane_spec, false)?,
             args: args_pass(LANE_RUN, lane_group, "sort-lane-indirect-args")?,
         };
         for s in 0..2 {
@@ -974,10 +979,10 @@ mod tests {
 
     #[test]
     fn a_chosen_sort_shape_fits_only_where_the_device_runs_it() {
-        // 32 x 64 at 4 lanes: 8 subgroups' counters (8 KiB), four digit tables
-        // (4 KiB), 2048 staged pairs (16 KiB): 28 KiB.
-        assert!(SortShape::fits(32, 64, 4, 1024, 28 * 1024).is_some());
-        assert!(SortShape::fits(32, 64, 4, 1024, 28 * 1024 - 1).is_none());
+        // 32 x 64 at 4 lanes: 8 subgroups' counters (8 KiB), five digit tables
+        // (5 KiB), 2048 staged pairs (16 KiB): 29 KiB.
+        assert!(SortShape::fits(32, 64, 4, 1024, 29 * 1024).is_some());
+        assert!(SortShape::fits(32, 64, 4, 1024, 29 * 1024 - 1).is_none());
         assert!(SortShape::fits(32, 12, 8, 1024, 32768).is_none(), "not a multiple of 8 items");
         assert!(SortShape::fits(32, 0, 8, 1024, 32768).is_none());
         assert!(SortShape::fits(0, 8, 8, 1024, 32768).is_none());

@@ -135,6 +135,7 @@ impl Host {
             int64_atomics: self.int64_atomics,
             float_atomic_add: false,
             float64: false,
+            full_subgroups: false,
             queue_lock: Some(self.lock.clone()),
         }
     }

@@ -48,12 +48,15 @@ pub struct LargePipelines {
     pub transport: ComputePipeline,
 }
 
+/// A pass of the run's family; `full_subgroups` for a pass that relies on
+/// full subgroups (`ComputeDesc::full_subgroups`).
 fn pipeline(
     ctx: &Context,
     spirv: &[u8],
     push_bytes: usize,
     spec: &[u32],
     sets: u32,
+    full_subgroups: bool,
 ) -> Result<ComputePipeline> {
     let desc = ComputeDesc {
         spirv,
@@ -64,6 +67,7 @@ fn pipeline(
         images: &[],
         uniforms: &[],
         texels: &binding::TEXELS,
+        full_subgroups,
     };
     Ok(ComputePipeline::new(ctx, &desc)?)
 }
@@ -148,13 +152,15 @@ impl RunPipelines {
             shape.defer_groups,
             shape.subgroup_classes as u32,
         ];
-        let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?;
+        // The workgroup transport sums and ranks a class subgroup by subgroup.
+        let grouped = !shape.per_lane;
+        let transport = bound(pipeline(ctx, transport_spv, tpush, &spec, 1, grouped)?, 0, None)?;
         let deferred = match shape.defer_max {
             0 => None,
             max => {
                 // (No class of the second pass fits a subgroup.)
                 let spec = [shape.defer_workgroup, 1, 0, max, 0, 1, shape.defer_groups, 0];
-                Some(bound(pipeline(ctx, transport_spv, tpush, &spec, 1)?, 0, None)?)
+                Some(bound(pipeline(ctx, transport_spv, tpush, &spec, 1, grouped)?, 0, None)?)
             }
         };
         let update_spv = match (texels.is_some(), float_acc) {
@@ -164,10 +170,10 @@ impl RunPipelines {
             (true, true) => shaders::UPDATE_TEXELS_FLOAT,
         };
         let update =
-            bound(pipeline(ctx, update_spv, std::mem::size_of::<UpdatePush>(), &[256], 1)?, 0, None)?;
+            bound(pipeline(ctx, update_spv, std::mem::size_of::<UpdatePush>(), &[256], 1, false)?, 0, None)?;
         let large = match sort {
             Some(_) => {
-                let gather = pipeline(ctx, shaders::LARGE_GATHER, 0, &[256], 2)?;
+                let gather = pipeline(ctx, shaders::LARGE_GATHER, 0, &[256], 2, false)?;
                 let gather = bound(gather, GATHER_BY_SEGMENT, Some(&buffers.large_seg))?;
                 let gather = bound(gather, GATHER_BY_PROJECTION, Some(&buffers.large_pkey))?;
                 let spv = match (targets, float_acc) {
@@ -180,8 +186,8 @@ impl RunPipelines {
                 };
                 // The same invocations whatever the device: a class may hold
                 // taps x spp samples, and each invocation loops over n / WG.
-                let transport = bound(pipeline(ctx, spv, tpush, &[LARGE_WORKGROUP], 1)?, 0, None)?;
-                let args = bound(pipeline(ctx, shaders::LARGE_ARGS, 0, &[], 1)?, 0, None)?;
+                let transport = bound(pipeline(ctx, spv, tpush, &[LARGE_WORKGROUP], 1, false)?, 0, None)?;
+                let args = bound(pipeline(ctx, shaders::LARGE_ARGS, 0, &[], 1, false)?, 0, None)?;
                 Some(LargePipelines { args, gather, transport })
             }
             None => None,
@@ -189,8 +195,8 @@ impl RunPipelines {
         let plateau = super::rule::pipeline(ctx)?.map(|p| bound(p, 0, None)).transpose()?;
         let order = match shape.per_lane {
             true => Some([
-                bound(pipeline(ctx, shaders::SLICE_ORDER_COUNT, tpush, &[], 1)?, 0, None)?,
-                bound(pipeline(ctx, shaders::SLICE_ORDER_PLACE, tpush, &[], 1)?, 0, None)?,
+                bound(pipeline(ctx, shaders::SLICE_ORDER_COUNT, tpush, &[], 1, false)?, 0, None)?,
+                bound(pipeline(ctx, shaders::SLICE_ORDER_PLACE, tpush, &[], 1, false)?, 0, None)?,
             ]),
             false => None,
         };

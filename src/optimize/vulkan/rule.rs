@@ -60,6 +60,7 @@ pub fn pipeline(ctx: &Context) -> Result<Option<ComputePipeline>> {
         images: &[],
         uniforms: &[],
         texels: &binding::TEXELS,
+        full_subgroups: false,
     };
     Ok(Some(ComputePipeline::new(ctx, &desc)?))
 }

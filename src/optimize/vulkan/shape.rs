@@ -515,6 +515,7 @@ mod tests {
             subgroup_vote: true,
             subgroup_arithmetic: true,
             float64: true,
+            full_subgroups: true,
         }
     }
 

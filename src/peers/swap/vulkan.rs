@@ -264,6 +264,7 @@ impl Passes {
                     images: &[],
                     uniforms: &[],
                     texels: &[],
+                    full_subgroups: false,
                     push_bytes: std::mem::size_of::<SwapPush>() as u32,
                     spec: &[workgroup, dims],
                     sets: 1,

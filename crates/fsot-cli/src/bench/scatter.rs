@@ -134,6 +134,7 @@ fn gpu_mode(ctx: &Context, input: &DeviceInput, repeats: u32, float: bool) -> Re
         images: &[],
         uniforms: &[],
         texels: &binding::TEXELS,
+        full_subgroups: false,
     };
     let pipeline = ComputePipeline::new(ctx, &desc)?;
     // SAFETY: the buffers outlive the pipeline, dropped at the end of this
