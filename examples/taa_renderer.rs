@@ -1,9 +1,10 @@
 //! A renderer that uses fsot the way a Vulkan renderer would: headless compute
-//! on fsot's `vk` layer, two passes of its own (`examples/shaders/`): the
+//! on fsot's `vk` layer (its pipelines and barriers need fsot's `internals`
+//! feature, which this crate's examples have), two passes of its own (`examples/shaders/`): the
 //! soft-shadow scene of `fsot eval` at 1 sample per pixel per frame, its light
 //! sample read through `glsl/include/fsot.glsl`, then TAA with alpha 0.1. The
 //! mask is made on the same device and written into the renderer's image
-//! (`fsot::render::device::make_into_image`), or loaded with `--mask` (a mask file or
+//! (`fsot::make_into_image`), or loaded with `--mask` (a mask file or
 //! a plan folder). The same frames are rendered with a white-noise mask through
 //! the same include, and a reference with 256 jittered samples per pixel; the
 //! pRelMSE after TAA of both against the reference's is `fsot eval`'s (eye

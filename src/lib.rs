@@ -200,12 +200,15 @@ pub use crate::core::kernel::{KernelSpec, Spatial, Temporal};
 pub use crate::core::mask::Mask;
 pub use crate::core::objective::Score;
 pub use crate::core::step_rule::{Plateau, StepRule};
-pub use crate::core::tile::Tile;
+pub use crate::core::tile::{Tile, MAX_DIMS, MAX_SPP};
 pub use error::{Error, Result};
 pub use io::ktx2::Format as TexelFormat;
 pub use optimize::backend::{BackendChoice, BackendKind, Profile, Report};
 pub use optimize::run::{optimize, CancelFlag, Checkpointing, Event, Outcome, Run, RunOptions, SetUp};
-pub use optimize::settings::{Settings, Start, Until};
+pub use optimize::settings::{
+    Settings, Start, Until, COARSE_BUDGET_SHARE, DEFAULT_HITS, DEFAULT_ITERATIONS, SPATIAL_BUDGET_SHARE,
+    SPATIAL_ITERATIONS,
+};
 pub use render::sampler::{SamplerPart, SamplerPlan};
 pub use scene::file::{Display as SceneDisplay, Group as SceneGroup, Reading, Scene};
 pub use scene::plan::{

@@ -66,6 +66,19 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
         equal += (g as i64 == level) as usize;
     }
     assert!(equal * 100 >= got.len() * 95, "{equal} of {} levels equal", got.len());
+    // Cancelled (here before it starts, an animated start to make): no mask
+    // and no iteration.
+    let cancel = CancelFlag::new();
+    cancel.cancel();
+    let mut animated = settings;
+    animated.start = fsot::Start::Animated;
+    let ctx = host.fsot();
+    let mut events = 0;
+    // SAFETY: as above.
+    let none = unsafe { make_into_image(&ctx, tile, animated, &image.target, &cancel, &mut |_| events += 1) }
+        .unwrap();
+    drop(ctx);
+    assert!(none.is_none() && events == 0, "{events} events");
     host.free_image(image);
     host.assert_silent();
 }

@@ -305,7 +305,7 @@ impl Run {
             _ => {}
         }
         if settings.start == Start::Coarse && !matches!(settings.until, Until::Seconds(_)) {
-            return Err(Error::invalid("a coarse start divides a time budget: it takes one (--budget)"));
+            return Err(Error::invalid("a coarse start divides a time budget: it takes one (`Until::Seconds`, --budget)"));
         }
         let fingerprint = checkpoint::fingerprint(&tile, &settings);
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile, &settings)?;
@@ -628,8 +628,11 @@ impl Run {
     /// steps on its own.
     /// `on(r, event)` hears run r; `done(r, run)` is called once as run r ends
     /// (to write its mask while the others go on). Stops between steps when
-    /// `cancel` is set, saving every unfinished run; a GPU that fails hands each
-    /// of its runs over to the CPU path as `advance` does.
+    /// `cancel` is set, saving every unfinished run (each to its own
+    /// checkpoint; the `Outcome::Cancelled` names the last run's checkpoint and
+    /// the first unfinished run's iteration: read each run's own with
+    /// `Run::iteration`); a GPU that fails hands each of its runs over to the
+    /// CPU path as `advance` does.
     pub fn run_together(
         runs: &mut [Run],
         cancel: &CancelFlag,

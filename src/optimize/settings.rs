@@ -12,6 +12,8 @@ use crate::error::{Error, Result};
 /// Default number of times each sample is in a slice's class per iteration; sets
 /// the default slices per iteration.
 pub const DEFAULT_HITS: f64 = 16.0;
+/// Iterations of a run by default (`Settings::new`), and the cap under a time
+/// budget unless set higher.
 pub const DEFAULT_ITERATIONS: u32 = 1000;
 
 /// A cap on the iterations of a run that stops by a rule.
@@ -81,7 +83,8 @@ pub enum Start {
     /// tile refined for the rest. A quarter takes a quarter of the time per
     /// iteration, so a budget too short for the whole tile to converge goes
     /// further; the copies keep the quarter's structure (rotated apart, not
-    /// made anew), which the refinement barely changes.
+    /// made anew), which the refinement barely changes. The tile's width and
+    /// height must be even and at least 32 (an error otherwise).
     Coarse,
     /// `Animated` under a time budget (`Until::Seconds`), where the short run
     /// gains most from it, `White` otherwise: the default.
@@ -117,7 +120,10 @@ pub enum Until {
     /// schedule over the time left after set-up (from half the step when
     /// the run starts from a mask, as the animated start does), and no
     /// iteration starts that the pace so far says would end past the budget,
-    /// so a run ends past it by at most about one iteration. `iterations`
+    /// so a run ends past it by at most about one iteration. The set-up
+    /// counts but is not bounded: a budget shorter than the set-up (the
+    /// start, the backend's pipelines and upload) ends past it by the set-up's
+    /// time, with no iteration (`Run::set_up` says what it took). `iterations`
     /// caps it. How far it gets depends on the machine, so it is not
     /// reproducible bit for bit.
     Seconds(f64),

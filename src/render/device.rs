@@ -185,7 +185,10 @@ pub unsafe fn make_into_image(
 ) -> Result<Option<Mask>> {
     tile.check()?;
     check_image(ctx, image, &tile, 1, tile.dims)?;
-    let mut run = Run::start(tile, settings, None, device_options(ctx))?;
+    let mut run = match Run::start(tile, settings, None, device_options(ctx, cancel)) {
+        Err(Error::Interrupted) => return Ok(None),
+        run => run?,
+    };
     if let Outcome::Cancelled { .. } = run.run(cancel, on)? {
         return Ok(None);
     }
@@ -233,8 +236,11 @@ pub unsafe fn make_plan_into_image(
         if let Some(Some(end)) = ends.next() {
             settings.until = Until::Seconds(end);
         }
-        let options = RunOptions { budget_from: Some(origin), ..device_options(ctx) };
-        let mut run = Run::start(tile, settings, None, options)?;
+        let options = RunOptions { budget_from: Some(origin), ..device_options(ctx, cancel) };
+        let mut run = match Run::start(tile, settings, None, options) {
+            Err(Error::Interrupted) => return Ok(None),
+            run => run?,
+        };
         on(PlanEvent::Start { index, file: &m.file, iteration: 0 });
         let start = std::time::Instant::now();
         if let Outcome::Cancelled { .. } =
@@ -252,11 +258,13 @@ pub unsafe fn make_plan_into_image(
     Ok(Some(sampler))
 }
 
-/// A Vulkan run on the context's device in the deterministic mode.
-fn device_options(ctx: &Context) -> RunOptions {
+/// A Vulkan run on the context's device in the deterministic mode, whose
+/// start `cancel` also cuts short.
+fn device_options(ctx: &Context, cancel: &CancelFlag) -> RunOptions {
     RunOptions {
         backend: BackendChoice::Vulkan,
         context: Some(ctx.clone()),
+        cancel_start: Some(cancel.clone()),
         vulkan: VulkanOptions { deterministic: true, ..VulkanOptions::default() },
         ..RunOptions::default()
     }

@@ -319,8 +319,16 @@ impl Drop for Shared {
         // SAFETY: the last reference is gone: no buffer, pipeline or submission
         // uses the device; the device is idle before anything is destroyed.
         unsafe {
-            let _ = self.device.device_wait_idle(); // best effort: a lost device is torn down anyway
-                                                    // A panic in a recording poisons the lock; the pool and fence go all the same.
+            // Best effort: a lost device is torn down anyway. A host's device:
+            // only fsot's queue, under the queue lock (the host may be using its
+            // other queues, which vkDeviceWaitIdle would need to itself).
+            if self.owned.is_some() {
+                let _ = self.device.device_wait_idle();
+            } else {
+                let _lock = self.queue_lock.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+                let _ = self.device.queue_wait_idle(self.queue);
+            }
+            // A panic in a recording poisons the lock; the pool and fence go all the same.
             let commands = self.commands.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
             commands.destroy(&self.device);
             drop(commands);

@@ -14,6 +14,8 @@ pub struct DeviceInfo {
     pub driver: String,
     /// Discrete, integrated, CPU, ...
     pub device_type: vk::PhysicalDeviceType,
+    /// The PCI vendor id (0x10DE NVIDIA, 0x1002 AMD, 0x8086 Intel, ...).
+    pub vendor_id: u32,
     /// Invocations per subgroup.
     pub subgroup_size: u32,
     /// Bytes one storage-buffer binding may hold (maxStorageBufferRange).
@@ -51,6 +53,14 @@ impl DeviceInfo {
     /// A CPU implementation of Vulkan (lavapipe, SwiftShader).
     pub fn is_cpu(&self) -> bool {
         self.device_type == vk::PhysicalDeviceType::CPU
+    }
+
+    /// A GPU known to keep a started workgroup running while another waits on
+    /// it (NVIDIA's and AMD's), which a workgroup spinning on another's result
+    /// (the radix sort's look-back path) needs; Vulkan does not promise it,
+    /// and Apple's and mobile GPUs are known not to keep it.
+    pub fn keeps_workgroups_running(&self) -> bool {
+        !self.is_cpu() && matches!(self.vendor_id, 0x10DE | 0x1002)
     }
 }
 
@@ -154,6 +164,7 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
         name: text(props.device_name_as_c_str()),
         driver: format!("{driver_name} {driver_info}").trim().to_string(),
         device_type: props.device_type,
+        vendor_id: props.vendor_id,
         subgroup_size: subgroup.subgroup_size,
         max_storage_buffer_range: props.limits.max_storage_buffer_range as u64,
         max_texel_buffer_elements: props.limits.max_texel_buffer_elements as u64,

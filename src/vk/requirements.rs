@@ -139,6 +139,7 @@ mod tests {
             name: "a device".into(),
             driver: String::new(),
             device_type: ash::vk::PhysicalDeviceType::DISCRETE_GPU,
+            vendor_id: 0x10DE,
             subgroup_size: 32,
             max_storage_buffer_range: 1 << 30,
             max_texel_buffer_elements: 1 << 27,

@@ -1,7 +1,9 @@
 //! Choosing a radix sort's path at run time. The decoupled look-back path
 //! (`SortPath::LookBack`) needs a device on which a started workgroup goes on
-//! running while another waits on it: GPUs do, CPU implementations with several
-//! threads (lavapipe) do not promise it. Where it may run, whether it beats the
+//! running while another waits on it, which Vulkan does not promise: NVIDIA's
+//! and AMD's GPUs do (`DeviceInfo::keeps_workgroups_running`); Apple's and
+//! mobile GPUs and CPU implementations with several threads (lavapipe) do not
+//! promise it, and are never given it. Where it may run, whether it beats the
 //! block passes depends on the device and the size, so the two are timed on the
 //! device itself, with timestamp queries, on pairs of the size to be sorted,
 //! and the faster is kept. Both sort stably: the choice changes how long a sort
@@ -78,12 +80,12 @@ impl PathChoice {
 
 /// The path for sorts of about `n` pairs by their low `bits` bits on `ctx`'s
 /// device: the faster of the look-back path and the block passes, timed here
-/// (`time_sort_paths`), on devices that are not CPU implementations and have
+/// (`time_sort_paths`), on GPUs that keep started workgroups running and have
 /// timestamps; `SortPath::Auto`, untimed, elsewhere (the lanes path on a CPU
 /// implementation).
 pub fn choose_sort_path(ctx: &Context, n: u32, bits: u32) -> Result<PathChoice> {
     let info = ctx.info();
-    if info.is_cpu() || info.timestamp_period_ns <= 0.0 {
+    if !info.keeps_workgroups_running() || info.timestamp_period_ns <= 0.0 {
         return Ok(PathChoice { path: SortPath::Auto, times: None });
     }
     let times = time_sort_paths(ctx, n, bits)?;

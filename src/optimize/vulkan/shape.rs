@@ -503,6 +503,7 @@ mod tests {
             name: "llvmpipe".into(),
             driver: String::new(),
             device_type: ash::vk::PhysicalDeviceType::CPU,
+            vendor_id: 0x10005,
             subgroup_size: 8,
             max_storage_buffer_range: 1 << 27,
             max_texel_buffer_elements: 1 << 27,

@@ -62,9 +62,9 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
                 16 => None,
                 _ => Some(SortPath::Blocks),
             };
-            // The decoupled look-back path, on GPUs only (a CPU implementation
-            // need not let a workgroup run while another waits on it).
-            let look_back = (!ctx.info().is_cpu()).then_some(SortPath::LookBack);
+            // The decoupled look-back path, only on GPUs known to let a
+            // workgroup run while another waits on it.
+            let look_back = ctx.info().keeps_workgroups_running().then_some(SortPath::LookBack);
             for path in other.into_iter().chain(look_back) {
                 let o = fsot_cli::bench::bench_sort(&ctx, n, repeats, path)?;
                 println!(
