@@ -161,6 +161,10 @@ impl<'a> SortCount<'a> {
     }
 }
 
+/// Workgroups of one dispatch in x that every device runs (the least
+/// maxComputeWorkGroupCount Vulkan allows).
+const MAX_GROUPS: u64 = 65_535;
+
 /// Launch shape chosen from the device's limits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SortShape {
@@ -235,6 +239,12 @@ impl SortShape {
     pub fn scan_capacity(&self) -> u64 {
         let block = self.block as u64;
         (block * block / 256) * block
+    }
+
+    /// The most pairs one sort of this shape can take on any device: its
+    /// scan's, and 65535 blocks (one dispatch's workgroups in x on every device).
+    pub fn capacity(&self) -> u64 {
+        self.scan_capacity().min(MAX_GROUPS * self.block as u64)
     }
 }
 
@@ -344,15 +354,17 @@ impl RadixSort {
     }
 
     /// Largest capacity: the scan's two levels cover block x block / 256 blocks,
-    /// and each key buffer must fit one binding.
+    /// a dispatch takes at most 65535 blocks (every device's
+    /// maxComputeWorkGroupCount reaches that), and each key buffer must fit one
+    /// binding.
     pub fn max_capacity(ctx: &Context) -> u32 {
-        let by_scan = SortShape::for_device(ctx, u32::MAX).map(|s| s.scan_capacity()).unwrap_or(1 << 24);
-        Self::capacity_limit(ctx, by_scan)
+        let by_shape = SortShape::for_device(ctx, u32::MAX).map(|s| s.capacity()).unwrap_or(1 << 24);
+        Self::capacity_limit(ctx, by_shape)
     }
 
-    fn capacity_limit(ctx: &Context, by_scan: u64) -> u32 {
+    fn capacity_limit(ctx: &Context, by_shape: u64) -> u32 {
         let by_binding = ctx.info().max_storage_buffer_range / 4;
-        by_scan.min(by_binding).min(u32::MAX as u64) as u32
+        by_shape.min(by_binding).min(u32::MAX as u64) as u32
     }
 
     /// A sort for up to `capacity` pairs, in the device's shape (`SortShape::for_device`).
@@ -398,10 +410,10 @@ impl RadixSort {
                 info.name
             )));
         }
-        let max = Self::capacity_limit(ctx, shape.scan_capacity());
+        let max = Self::capacity_limit(ctx, shape.capacity());
         if capacity > max {
             return Err(Error::invalid(format!(
-                "cannot sort {capacity} pairs on {}: at most {max} (binding or scan limit)",
+                "cannot sort {capacity} pairs on {}: at most {max} (binding, scan or dispatch limit)",
                 ctx.info().name
             )));
         }
@@ -988,6 +1000,11 @@ mod tests {
         assert!(SortShape::fits(0, 8, 8, 1024, 32768).is_none());
         assert!(SortShape::fits(32, 32, 64, 1024, 49152).is_none(), "not whole subgroups");
         assert!(SortShape::fits(512, 8, 32, 256, 49152).is_none(), "past the device's workgroup");
+        // A dispatch of 65535 blocks at most: 4096-pair blocks then cover a
+        // block less than their scan's 2^28 pairs.
+        let large = SortShape::fits(256, 16, 32, 1024, 49152).unwrap();
+        assert_eq!((large.scan_capacity(), large.capacity()), (1 << 28, 65_535 * 4096));
+        assert_eq!(SortShape::fits(64, 32, 8, 1024, 32768).unwrap().capacity(), 1 << 25);
         // The scan's two levels: 2048-pair blocks cover 32M pairs, 1024-pair 4M.
         assert_eq!(SortShape::fits(64, 32, 8, 1024, 32768).unwrap().scan_capacity(), 1 << 25);
         assert_eq!(SortShape::fits(32, 32, 4, 1024, 32768).unwrap().scan_capacity(), 1 << 22);
