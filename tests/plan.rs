@@ -56,6 +56,13 @@ fn the_taa_history_that_matters_sets_the_frames() {
     assert_eq!(t("animated = false"), (128, 128, 16));
     let given = Scene::parse(&format!("[tile]\nsize = \"16x8x4\"\n{ONE}"), "t").unwrap();
     assert_eq!(tile_size(&given).0, (16, 8, 4));
+    // A mask of 64 spp of 2 values: 128 frames at most, a tile that holds them.
+    let wide = scene("taa_alpha = 0.01", "[[group]]\nname = \"a\"\ndims = 2\nspp = 64\n");
+    let ((w, h, frames), why) = tile_size(&wide);
+    assert_eq!((w, h, frames), (128, 128, 128), "{why}");
+    assert!(why.contains("at most 128"), "{why}");
+    assert!(Tile::new(w, h, frames, 64, 2).is_ok());
+    assert!(Plan::new(&wide, &model()).is_ok());
 }
 
 #[test]
@@ -184,6 +191,13 @@ fn a_scene_may_ask_for_a_scalar_mask_per_dimension_read_at_offsets_of_one_mask()
         plan.groups.iter().flat_map(|g| g.parts.iter().map(|p| (p.first, p.dims, p.offset))).collect();
     let tile = [128, 128, 64];
     assert_eq!(reads, [(0, 1, [0; 3]), (1, 1, share_offset(1, tile)), (0, 1, share_offset(2, tile))]);
+    // plan.json: each group's iterations count the one mask it reads once; a
+    // group that owns none spent no seconds on it (0, not -0).
+    let made = [fsot::scene::plan::Made { file: "light-0.exr".into(), iterations: 100, seconds: 2.0 }];
+    let doc: serde_json::Value = serde_json::from_str(&plan.document(&made).unwrap()).unwrap();
+    let group = |k: usize| (doc["groups"][k]["iterations"].as_u64(), doc["groups"][k]["seconds"].as_f64());
+    assert_eq!((group(0), group(1)), ((Some(100), Some(2.0)), (Some(100), Some(0.0))));
+    assert!(doc["groups"][1]["seconds"].as_f64().unwrap().is_sign_positive());
     // The default: masks of pairs.
     let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
     assert_eq!(plan.reading, "vector");

@@ -64,7 +64,8 @@ FsotSampler fsot_start(uvec2 pixel, uint frame, uint sample_index) {
 }
 
 // Roberts' R4 sequence, 1 / phi^k with phi the positive root of x^5 = x + 1, in
-// 0.32 fixed point: loop * FSOT_R4 wraps to exactly fract(loop / phi^k).
+// 0.32 fixed point (rounded): loop * FSOT_R4 wraps to fract(loop / phi^k)
+// within loop * 2^-33.
 const uvec4 FSOT_R4 = uvec4(3679390609u, 3152041523u, 2700274806u, 2313257605u);
 
 // A 32-bit integer hash (PCG output permutation) for the white-noise fallback.

@@ -367,6 +367,8 @@ impl SamplerPlan {
         for (j, o) in out.iter_mut().enumerate() {
             let stored = texel.get(j).copied().unwrap_or(0.0);
             let v = match format.bits() {
+                // A channel the format lacks reads as Vulkan fills it: 0, alpha 1.
+                _ if j >= format.channels() => (j == 3) as u32 as f32,
                 32 => stored,
                 b => {
                     let top = ((1u64 << b) - 1) as f32;

@@ -116,7 +116,9 @@ pub struct Part {
     pub offset: [u32; 3],
     /// Toroidal (Cranley-Patterson) shift per dimension.
     pub shift: Vec<f32>,
-    /// The group whose mask this part reads, when it is not its own.
+    /// The group whose mask this part reads, when an earlier part owns it (a
+    /// part of another group, or of its own: a decision of several pieces of
+    /// one size reads one mask at several offsets).
     pub shares: Option<String>,
     /// The kernel the mask it reads is optimized for (None: white noise).
     pub kernel: Option<String>,
@@ -264,6 +266,24 @@ pub fn tile_size(scene: &Scene) -> ((usize, usize, usize), String) {
             let t = frames.clamp(1, MAX_PLANNED_FRAMES).next_power_of_two();
             (t, format!("no TAA: the eye's temporal response spans about a quarter second, {frames} frames, rounded up to {t}"))
         }
+    };
+    // Every mask within the values a tile holds: a mask has at most four
+    // dimensions (a texel's), a visible group's at most two.
+    let widest = scene
+        .groups
+        .iter()
+        .map(|g| g.spp * g.dims.min(if g.visible { 2 } else { 4 }))
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let fits = crate::core::tile::MAX_VALUES / (DEFAULT_SIZE * DEFAULT_SIZE * widest);
+    let (t, why) = match t > fits {
+        // A power of two at most `fits` (which is at least 64: 64 spp x 4 dims).
+        true => {
+            let most = 1usize << fits.ilog2();
+            (most, format!("{why}; at most {most}, so that a mask of {widest} values a pixel fits a tile"))
+        }
+        false => (t, why),
     };
     let wh = format!("{DEFAULT_SIZE} x {DEFAULT_SIZE} (default: the published masks' size, no repeat across a 128-pixel view)");
     ((DEFAULT_SIZE, DEFAULT_SIZE, t), format!("{wh}; T {why}"))
@@ -957,7 +977,10 @@ impl Plan {
             .iter()
             .map(|g| {
                 let first = &g.parts[0];
-                let read: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                // Each mask it reads once, however many of its parts read it.
+                let mut read: Vec<&Made> = g.parts.iter().filter_map(|p| took(&p.mask)).collect();
+                read.sort_by(|a, b| a.file.cmp(&b.file));
+                read.dedup_by(|a, b| a.file == b.file);
                 // What making it took counts once, for the group that owns the mask.
                 let own: Vec<&Made> =
                     g.parts.iter().filter(|p| p.shares.is_none()).filter_map(|p| took(&p.mask)).collect();
@@ -972,7 +995,7 @@ impl Plan {
                     parts: &g.parts,
                     kernel: first.kernel.as_deref().filter(|_| optimized),
                     iterations: optimized.then(|| read.iter().map(|m| m.iterations).sum()),
-                    seconds: optimized.then(|| own.iter().map(|m| m.seconds).sum()),
+                    seconds: optimized.then(|| own.iter().fold(0.0, |a, m| a + m.seconds)),
                     skipped: g.skipped.as_deref(),
                 }
             })
