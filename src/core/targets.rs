@@ -337,16 +337,15 @@ mod tests {
     }
 
     #[test]
-    fn rank_targets_are_sorted_and_average_to_the_mean() {
+    fn rank_targets_are_sorted() {
+        // (Their mean is the distribution's by construction: the upper half
+        // mirrors the lower. tests/targets.rs checks the values themselves.)
         for theta in [vec![0.3, -0.9, 0.2], vec![1.0, 1e-9], vec![0.5; 8]] {
             let p = ProjectedUniform::new(&theta);
-            let mean: f64 = theta.iter().sum::<f64>() / 2.0;
             for n in [1, 2, 3, 10, 257] {
                 let mut out = vec![0.0; n];
                 p.rank_targets(n, &mut out);
                 assert!(out.windows(2).all(|w| w[0] <= w[1]), "{theta:?} {n}");
-                let avg = out.iter().sum::<f64>() / n as f64;
-                assert!((avg - mean).abs() < 1e-9, "{theta:?} n={n}: {avg} vs {mean}");
             }
         }
     }
