@@ -86,7 +86,7 @@ fn fast_and_vector_stbn_masks_beat_white_noise_under_taa() {
     let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, &SwapDevice::Cpu, |_, _| {}).unwrap();
     let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
     eprintln!("FAST / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.10, "{ratio}"); // measured 0.085; 15% margin
+    assert!(ratio < 0.17, "{ratio}"); // measured 0.146 (the published filters); 15% margin
     let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
     let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, &SwapDevice::Cpu, |_, _| {}).unwrap().0;
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);

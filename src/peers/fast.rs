@@ -23,15 +23,21 @@ use crate::peers::swap::{PairEnergy, Schedule, SwapDevice, SwapReport, ValueTerm
 pub enum Filter {
     /// The identity (no filtering along this axis).
     None,
-    /// exp(-k^2 / (2 sigma^2)).
+    /// A Gaussian of standard deviation sigma integrated over each pixel,
+    /// 0.5 (erf((k + 0.5) / (sigma sqrt 2)) - erf((k - 0.5) / (sigma sqrt 2))),
+    /// out to the taps that hold 99.5% of it, as the published generator makes it.
     Gaussian { sigma: f64 },
     /// n equal taps.
     Box { n: u32 },
     /// Binomial coefficients C(n, k), k = 0..n.
     Binomial { n: u32 },
-    /// Exponential moving average, causal: weight ((1 - alpha)(1 - beta))^k for
-    /// the frame k back, where beta is the chance per frame that the history is
-    /// thrown away (a reset); the TAA case.
+    /// Exponential moving average, causal, over a history of m frames: weight
+    /// alpha (1 - alpha)^k for the frame k back, the oldest frame of the
+    /// history (1 - alpha)^(m - 1) (the blend starts from it). The history's
+    /// length is random: beta is the chance per frame that it is thrown away
+    /// (m geometric, truncated to the tile's frames), and the loss takes the
+    /// autocorrelation's mean over m, as the published generator does (its
+    /// "exponential"); the TAA case.
     Ema { alpha: f64, beta: f64 },
 }
 
@@ -117,8 +123,16 @@ impl Filter {
         match *self {
             Filter::None => vec![(0, 1.0)],
             Filter::Gaussian { sigma } => {
-                let r = (4.0 * sigma).ceil() as i64;
-                (-r..=r).map(|k| (k, (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())).collect()
+                let scale = std::f64::consts::FRAC_1_SQRT_2 / sigma;
+                let tap = |k: i64| 0.5 * (erf(scale * (k as f64 + 0.5)) - erf(scale * (k as f64 - 0.5)));
+                // Taps 0, +-1, ... until they hold 99.5% of the Gaussian.
+                let mut r = 0i64;
+                let mut total = tap(0);
+                while total < GAUSSIAN_ENERGY {
+                    r += 1;
+                    total += 2.0 * tap(r);
+                }
+                (-r..=r).map(|k| (k, tap(k))).collect()
             }
             Filter::Box { n } => (0..n as i64).map(|k| (k - (n as i64 - 1) / 2, 1.0)).collect(),
             Filter::Binomial { n } => {
@@ -131,22 +145,41 @@ impl Filter {
                     })
                     .collect()
             }
-            Filter::Ema { alpha, beta } => {
-                let ratio = (1.0 - alpha) * (1.0 - beta);
-                let mut taps = vec![(0i64, 1.0)];
-                let mut w = ratio;
-                while w > 1e-9 && taps.len() < 100_000 {
-                    taps.push((-(taps.len() as i64), w));
-                    w *= ratio;
-                }
-                taps
-            }
+            // Its autocorrelation is a mean over histories (`autocorrelation`).
+            Filter::Ema { .. } => unreachable!("an EMA's taps depend on its history"),
         }
+    }
+
+    /// The taps of an EMA over a history of `m` frames, newest first.
+    fn ema_history(alpha: f64, m: usize) -> Vec<f64> {
+        (0..m).map(|i| (1.0 - alpha).powi(i as i32) * if i + 1 < m { alpha } else { 1.0 }).collect()
     }
 
     /// Circular autocorrelation of the filter folded onto a wrapping axis of
     /// length n: `A[tau] = sum_j F[j] F[(j + tau) mod n]`, normalised to sum 1.
     pub fn autocorrelation(&self, n: usize) -> Vec<f64> {
+        if let Filter::Ema { alpha, beta } = *self {
+            // The mean over histories of m = 1..n frames, m geometric in beta
+            // (uniform at beta 0), of each history's autocorrelation, wrapped.
+            let keep = 1.0 - beta;
+            let mut a = vec![0.0f64; n];
+            for m in 1..=n {
+                let weight = match beta > 0.0 {
+                    true => beta * keep.powi(m as i32 - 1) / (1.0 - keep.powi(n as i32)),
+                    false => 1.0 / n as f64,
+                };
+                let f = Self::ema_history(alpha, m);
+                for lag in 0..m {
+                    let c: f64 = (0..m - lag).map(|i| f[i] * f[i + lag]).sum();
+                    a[lag % n] += weight * c;
+                    if lag > 0 {
+                        a[(n - lag % n) % n] += weight * c;
+                    }
+                }
+            }
+            let total: f64 = a.iter().sum();
+            return a.iter().map(|v| v / total).collect();
+        }
         let mut folded = vec![0.0f64; n];
         for (k, w) in self.taps() {
             folded[k.rem_euclid(n as i64) as usize] += w;
@@ -211,6 +244,33 @@ impl Default for FastSpec {
             combine: Combine::Product,
         }
     }
+}
+
+/// The share of a Gaussian its taps hold (the published generator's cut).
+const GAUSSIAN_ENERGY: f64 = 0.995;
+
+/// erf(x) to about 1e-15: its Taylor series below 3, the continued fraction
+/// of erfc above.
+fn erf(x: f64) -> f64 {
+    let (sign, x) = if x < 0.0 { (-1.0, -x) } else { (1.0, x) };
+    let value = if x < 3.0 {
+        // 2/sqrt(pi) sum (-1)^k x^(2k+1) / (k! (2k+1)).
+        let (mut term, mut sum, mut k) = (x, x, 0.0);
+        while term.abs() > 1e-17 * sum.abs() {
+            k += 1.0;
+            term *= -x * x / k;
+            sum += term / (2.0 * k + 1.0);
+        }
+        std::f64::consts::FRAC_2_SQRT_PI * sum
+    } else {
+        // erfc(x) = exp(-x^2) / sqrt(pi) / (x + (1/2) / (x + 1 / (x + (3/2) / (x + ...)))).
+        let mut fraction = x;
+        for k in (1..=60).rev() {
+            fraction = x + (k as f64 / 2.0) / fraction;
+        }
+        1.0 - (-x * x).exp() / (std::f64::consts::PI.sqrt() * fraction)
+    };
+    sign * value
 }
 
 /// Autocorrelation weights below this share of the largest are dropped.
@@ -401,21 +461,65 @@ mod tests {
         for (lag, want) in [(0, 6.0), (1, 4.0), (2, 1.0), (7, 4.0), (6, 1.0), (4, 0.0)] {
             assert!((b[lag] - want / 16.0).abs() < 1e-12, "lag {lag}");
         }
-        // EMA with ratio r on a wrapping axis of n frames: the folded filter is
-        // geometric with ratio r over one period, scaled; its autocorrelation
-        // against a direct double sum over the unfolded taps.
-        let (alpha, beta, n) = (0.3, 0.2, 5usize);
-        let r: f64 = 0.7 * 0.8;
+        // EMA: each history's taps from the blend itself (h = x at the
+        // history's first frame, then h = alpha x + (1 - alpha) h), the
+        // response to a unit frame k back; the autocorrelation of every pair
+        // of frames, wrapped, weighted by P(m) = beta (1 - beta)^(m - 1) over
+        // m = 1..n, normalised.
+        let (alpha, beta, n) = (0.3f64, 0.2f64, 5usize);
         let e = Filter::Ema { alpha, beta }.autocorrelation(n);
         let mut direct = vec![0.0; n];
-        for i in 0..200i64 {
-            for j in 0..200i64 {
-                direct[(j - i).rem_euclid(n as i64) as usize] += r.powi(i as i32) * r.powi(j as i32);
+        for m in 1..=n {
+            let taps: Vec<f64> = (0..m)
+                .map(|k| {
+                    let mut h = if k + 1 == m { 1.0 } else { 0.0 };
+                    for frame in (0..m - 1).rev() {
+                        h = alpha * if frame == k { 1.0 } else { 0.0 } + (1.0 - alpha) * h;
+                    }
+                    h
+                })
+                .collect();
+            let p = beta * (1.0 - beta).powi(m as i32 - 1);
+            for i in 0..m {
+                for j in 0..m {
+                    direct[(j as i64 - i as i64).rem_euclid(n as i64) as usize] += p * taps[i] * taps[j];
+                }
             }
         }
         let total: f64 = direct.iter().sum();
         for lag in 0..n {
-            assert!((e[lag] - direct[lag] / total).abs() < 1e-9, "lag {lag}");
+            assert!((e[lag] - direct[lag] / total).abs() < 1e-12, "lag {lag}: {} vs {}", e[lag], direct[lag] / total);
+        }
+        // The published TAA setting (alpha = beta = 0.1) on 16 frames: lags 1,
+        // 2, 4 and 8 at 0.124, 0.100, 0.067 and 0.044 of lag 0 (the published
+        // generator's formula evaluated on its own).
+        let a = Filter::Ema { alpha: 0.1, beta: 0.1 }.autocorrelation(16);
+        for (lag, want) in [(1, 0.124), (2, 0.100), (4, 0.067), (8, 0.044)] {
+            assert!((a[lag] / a[0] - want).abs() < 5e-4, "lag {lag}: {}", a[lag] / a[0]);
+        }
+    }
+
+    #[test]
+    fn erf_matches_its_tables_and_a_gaussians_taps_hold_what_the_cut_keeps() {
+        // Abramowitz and Stegun, table 7.1, and erf(3), erf(4) to 16 digits.
+        for (x, want) in [
+            (0.1, 0.112_462_916_018_284_9),
+            (0.5, 0.520_499_877_813_046_5),
+            (1.0, 0.842_700_792_949_714_9),
+            (2.0, 0.995_322_265_018_952_7),
+            (3.0, 0.999_977_909_503_001_4),
+            (4.0, 0.999_999_984_582_742_1),
+        ] {
+            assert!((erf(x) - want).abs() < 2e-15, "erf({x}) = {}", erf(x));
+            assert!((erf(-x) + want).abs() < 2e-15);
+        }
+        // Pixel-integrated taps hold at least 99.5% of the Gaussian, and would
+        // not without their outermost pair.
+        for sigma in [0.3, 1.3435, 2.0, 6.0] {
+            let taps = Filter::Gaussian { sigma }.taps();
+            let total: f64 = taps.iter().map(|t| t.1).sum();
+            let outer = 2.0 * taps[0].1;
+            assert!(total >= 0.995 && total - outer < 0.995, "sigma {sigma}: {total}, {outer}");
         }
     }
 

@@ -148,8 +148,10 @@ pub fn run_robustness(
                             render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement))
                         }
                         None => {
-                            let planned =
-                                planned_masks(scene, viewing, true, true, size, cache, seed as u64 + 1)?;
+                            // The main tables' mask for this seed (seed k reads
+                            // mask k mod `planned_masks`, made from seed 1 + that).
+                            let mask_seed = (seed as u64 % u64::from(size.planned_masks.max(1))) + 1;
+                            let planned = planned_masks(scene, viewing, true, true, size, cache, mask_seed)?;
                             render(scene, size.shot, &MaskSampler::planned(&planned.reads(), placement))
                         }
                     };

@@ -245,34 +245,26 @@ fn records_of(
 /// when made before with the same parameters.
 pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed: u64) -> Result<Mask> {
     let t = size.tile;
-    let name = format!(
-        "mask-{method}-s{sigma}-{}x{}x{}-d{}-i{}-p{}-seed{seed}.exr",
-        t.width, t.height, t.frames, t.dims, size.iterations, size.passes
-    );
-    let path = cache.join(name);
-    if let Ok(mask) = fsot::io::exr::read(&path) {
-        if mask.tile == t {
-            return Ok(mask);
-        }
-    }
     let fsot = |kernel: &str| -> Result<Method> {
         let mut s = Settings::new(KernelSpec::from_name(kernel, sigma, None, TAA_ALPHA, 60.0)?, seed);
         s.iterations = size.iterations;
         Ok(Method::Fsot(s))
     };
-    let method = match method {
+    let made_by = match method {
         "white" => Method::White,
         "fsot-spatial" => fsot("spatial")?,
         "ours-gaussian" => fsot("gaussian")?,
         "ours-taa" => fsot("taa")?,
         "ours-perceptual" => fsot("perceptual")?,
         "ours-perceptual-taa" => fsot("perceptual-taa")?,
-        // STBN's energy exp(-r^2 / (2 s^2)) is the judge's exp(-r^2 / sigma^2)
-        // at s = sigma / sqrt 2: the column's Gaussian, as for FAST below (its
-        // temporal sigma stays its paper's 1.9 frames); vector masks by annealing.
-        "stbn" => Method::Stbn { sigma: sigma / std::f64::consts::SQRT_2, sigma_t: 1.9, passes: size.passes },
-        // FAST's Gaussian exp(-r^2 / (2 s^2)) matches the eye's exp(-r^2 /
-        // sigma^2) at s = sigma / sqrt 2 (1.3435 for 1.9, as published).
+        // STBN's energy weighs pairs of pixels, as the judge's filter
+        // exp(-r^2 / sigma^2) convolved with itself does: exp(-r^2 / (2 sigma^2)),
+        // STBN's exp(-r^2 / (2 s^2)) at s = sigma (its temporal sigma stays its
+        // paper's 1.9 frames); vector masks by annealing.
+        "stbn" => Method::Stbn { sigma, sigma_t: 1.9, passes: size.passes },
+        // FAST's Gaussian exp(-r^2 / (2 s^2)) is a filter, matching the eye's
+        // exp(-r^2 / sigma^2) at s = sigma / sqrt 2 (1.3435 for 1.9, as published;
+        // FAST then weighs pairs by its autocorrelation).
         "fast" => Method::Fast {
             spec: FastSpec {
                 spatial: Filter::Gaussian { sigma: sigma / std::f64::consts::SQRT_2 },
@@ -282,7 +274,24 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed
         },
         other => return Err(Error::invalid(format!("unknown method `{other}`"))),
     };
-    let mask = make(&method, t, seed, None, &SwapDevice::Cpu, &mut |_, _| {})?.mask;
+    // Named by what the mask is made for: the swap peers by their energy (the
+    // pixels' weights and the published FAST filters).
+    let energy = match made_by {
+        Method::Stbn { sigma, sigma_t, .. } => format!("-pairs{sigma}x{sigma_t}"),
+        Method::Fast { .. } => "-published-filters".to_string(),
+        _ => String::new(),
+    };
+    let name = format!(
+        "mask-{method}{energy}-s{sigma}-{}x{}x{}-d{}-i{}-p{}-seed{seed}.exr",
+        t.width, t.height, t.frames, t.dims, size.iterations, size.passes
+    );
+    let path = cache.join(name);
+    if let Ok(mask) = fsot::io::exr::read(&path) {
+        if mask.tile == t {
+            return Ok(mask);
+        }
+    }
+    let mask = make(&made_by, t, seed, None, &SwapDevice::Cpu, &mut |_, _| {})?.mask;
     fsot::io::atomic::make_folder(cache)?;
     fsot::io::exr::write(&mask, AtomicFile::create(&path)?)?;
     Ok(mask)
