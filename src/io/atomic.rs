@@ -10,6 +10,9 @@ use crate::error::{Error, Result};
 
 /// Makes a folder (and its parents) for outputs, with a clear error.
 pub fn make_folder(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::invalid(format!("{} is a file, not a folder", dir.display())));
+    }
     fs::create_dir_all(dir).map_err(|e| Error::io(format!("cannot make the folder {}", dir.display()), e))
 }
 

@@ -11,13 +11,19 @@ use crate::error::{Error, Result};
 use crate::io::ktx2::quantize;
 
 /// A C identifier from a file stem: letters, digits and `_`, not starting with
-/// a digit.
+/// a digit, and none the language or the header's includes reserve (keywords,
+/// names starting with `_`, the `_t` typedefs, `NULL`): those take a `mask_`
+/// prefix.
 pub fn identifier(stem: &str) -> Result<String> {
     let mut id: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
     if id.is_empty() {
         return Err(Error::invalid("a C header needs a file name to name its array"));
     }
-    if id.starts_with(|c: char| c.is_ascii_digit()) || C_KEYWORDS.contains(&id.as_str()) {
+    let reserved = id.starts_with(|c: char| c.is_ascii_digit() || c == '_')
+        || id.ends_with("_t")
+        || C_KEYWORDS.contains(&id.as_str())
+        || ["NULL", "offsetof", "errno"].contains(&id.as_str());
+    if reserved {
         id.insert_str(0, "mask_");
     }
     Ok(id)
@@ -98,6 +104,13 @@ mod tests {
         // C++'s too: a header may be compiled as C++.
         assert_eq!(identifier("private").unwrap(), "mask_private");
         assert_eq!(identifier("and").unwrap(), "mask_and");
+        // Reserved by the language or by <stdint.h> and <stddef.h>.
+        for (stem, id) in
+            [("_Bool", "mask__Bool"), ("_x", "mask__x"), ("uint16_t", "mask_uint16_t"), ("size_t", "mask_size_t")]
+        {
+            assert_eq!(identifier(stem).unwrap(), id);
+        }
+        assert_eq!(identifier("NULL").unwrap(), "mask_NULL");
         assert_eq!(identifier("integer").unwrap(), "integer");
         assert!(identifier("").is_err());
     }

@@ -185,6 +185,10 @@ pub fn void_and_cluster(tile: &Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> 
     check_sigmas(sigma_xy, sigma_t)?;
     let n = tile.pixels();
     let kernel = Energy::new(tile, sigma_xy, sigma_t);
+    let alone = kernel.spatial.iter().all(|&(x, y, _)| x == 0 && y == 0) && kernel.temporal.iter().all(|&(t, _)| t == 0);
+    if alone && n > 1 {
+        return Err(weighs_nothing(tile, sigma_xy, sigma_t));
+    }
     // Initial pattern: a tenth of the pixels (at least one), chosen by the seed.
     let ones = (n / 10).max(1);
     let mut rng = Stream::new(derive(seed_key(seed), 0x57b1));
@@ -245,6 +249,9 @@ pub fn stbn_vector(
 ) -> Result<(Vec<f32>, SwapReport)> {
     check_sigmas(sigma_xy, sigma_t)?;
     let energy = PairEnergy::new(tile, &stbn_offsets(sigma_xy, sigma_t), ValueTerm::Gaussian { sigma: 1.0 })?;
+    if energy.offsets().is_empty() && tile.pixels() > 1 {
+        return Err(weighs_nothing(&tile, sigma_xy, sigma_t));
+    }
     let mut values = stratified_values(&tile, seed, 0x57b2);
     let schedule = Schedule { passes, start_temperature: ANNEALING.0, greedy_share: ANNEALING.1 };
     let report = device.search(&energy, &mut values, schedule, derive(seed_key(seed), 0x57b3), on_pass)?;
@@ -290,6 +297,16 @@ pub fn stbn_mask(tile: Tile, sigma_xy: f64, sigma_t: f64, seed: u64) -> Result<c
         return Err(Error::invalid("stbn_mask makes scalar masks; use stbn_mask_with for vectors"));
     }
     stbn_mask_with(tile, sigma_xy, sigma_t, 0, seed, &SwapDevice::Cpu, |_, _| {}).map(|(m, _)| m)
+}
+
+/// The error for an energy that weighs no pair of distinct pixels: no search
+/// would move anything.
+fn weighs_nothing(tile: &Tile, sigma_xy: f64, sigma_t: f64) -> Error {
+    Error::invalid(format!(
+        "STBN of sigma {sigma_xy} and temporal sigma {sigma_t} weighs no pair of pixels on a {} tile: \
+         Gaussians narrower than a pixel",
+        tile.describe()
+    ))
 }
 
 fn check_sigmas(sigma_xy: f64, sigma_t: f64) -> Result<()> {

@@ -763,7 +763,9 @@ impl Plan {
     /// (`Run::run_together`): on Vulkan, on one device, a batch of each in one
     /// submission; on the CPU, one after the other. Each checkpoints to
     /// `dir/.NAME.ckpt` (every `every` iterations and when cancelled); with
-    /// `resume`, masks already written are kept and checkpoints are continued.
+    /// `resume`, masks already written are kept (and their checkpoints
+    /// removed) and checkpoints are continued; a plan under a budget takes no
+    /// checkpoints and refuses `resume`.
     /// Under a budget (`Plan::budget`, counted from `options.budget_from` or
     /// from this call) the runs take no checkpoints: on one device they all end
     /// at the budget's end; on the CPU each starts as the one before it ends
@@ -781,6 +783,12 @@ impl Plan {
         self.check()?;
         if every == 0 {
             return Err(Error::invalid("checkpoints every 0 iterations: give at least 1"));
+        }
+        if resume && self.budget.is_some() {
+            return Err(Error::invalid(
+                "a plan under a time budget takes no checkpoints, so there is nothing to resume: \
+                 its masks are made again within the budget",
+            ));
         }
         let origin = options.budget_from.unwrap_or_else(Instant::now);
         crate::io::atomic::make_folder(dir)?;
@@ -801,7 +809,15 @@ impl Plan {
                 continue;
             }
             if resume {
-                if let Some(done) = already_made(&path, &tile, &self.settings(m), self.budget.is_some()) {
+                if let Some(done) = already_made(&path, &tile, &self.settings(m)) {
+                    // Made in full: a checkpoint left beside it (of a later run
+                    // of the same settings, stopped) has nothing to add.
+                    let checkpoint = checkpoint_path(dir, &m.file);
+                    if checkpoint.is_file() {
+                        std::fs::remove_file(&checkpoint).map_err(|e| {
+                            Error::invalid(format!("cannot remove {}: {e}", checkpoint.display()))
+                        })?;
+                    }
                     made[index] = Some(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
                     continue;
                 }
@@ -835,15 +851,10 @@ impl Plan {
         // A plan.json of an earlier plan would describe the masks this one
         // replaces: it goes just before the first of them is written (through a
         // link, the file the link leads to, which this plan's replaces once every
-        // mask is made). A run stopped before then leaves the folder as it was.
+        // mask is made). A run stopped before then leaves the folder as it was;
+        // so does one that fails as its runs start (a checkpoint that exists or
+        // does not fit): the white masks are written last.
         let mut earlier = Earlier { path: dir.join("plan.json"), gone: false };
-        for (index, tile, out) in whites {
-            earlier.remove()?;
-            let mut mask = Mask::white(tile, self.masks[index].seed);
-            mask.set_meta("version", env!("CARGO_PKG_VERSION"));
-            crate::io::exr::write(&mask, out)?;
-            made[index] = Some(Made { file: self.masks[index].file.clone(), iterations: 0, seconds: 0.0 });
-        }
         if let Some((options, together, ends)) = runs {
             // Side by side, or (under a budget, on the CPU) one after the other,
             // each started as the one before it ends.
@@ -867,6 +878,13 @@ impl Plan {
                     return Ok(outcome);
                 }
             }
+        }
+        for (index, tile, out) in whites {
+            earlier.remove()?;
+            let mut mask = Mask::white(tile, self.masks[index].seed);
+            mask.set_meta("version", env!("CARGO_PKG_VERSION"));
+            crate::io::exr::write(&mask, out)?;
+            made[index] = Some(Made { file: self.masks[index].file.clone(), iterations: 0, seconds: 0.0 });
         }
         let made: Vec<Made> = made.into_iter().flatten().collect();
         plan_file.commit(self.document(&made)?.as_bytes())?;
@@ -1042,11 +1060,11 @@ impl Earlier {
 
 /// The iterations of a mask already written by this very plan (same tile, seed
 /// and kernel), if there is one at `path`.
-fn already_made(path: &Path, tile: &Tile, settings: &Settings, budgeted: bool) -> Option<u32> {
+fn already_made(path: &Path, tile: &Tile, settings: &Settings) -> Option<u32> {
     let mask = crate::io::exr::read(path).ok()?;
     let animated = settings.start.animates(settings.until, tile);
     let same = mask.tile == *tile
-        && mask.meta("budget_seconds").is_some() == budgeted
+        && mask.meta("budget_seconds").is_none()
         && mask.meta("seed") == Some(settings.seed.to_string().as_str())
         && mask.meta("kernel") == Some(settings.kernel.describe().as_str())
         && (mask.meta("start") == Some("animated")) == animated
@@ -1085,11 +1103,14 @@ mod tests {
             crate::io::exr::write(&mask, AtomicFile::create(&path).unwrap()).unwrap();
         };
         write(&plan);
-        assert_eq!(already_made(&path, &tile, &plan, false), Some(7));
-        // Made to a plan of another kind: under a budget, or not.
-        assert_eq!(already_made(&path, &tile, &plan, true), None);
+        assert_eq!(already_made(&path, &tile, &plan), Some(7));
         write(&plan.axis_share(0.85));
-        assert_eq!(already_made(&path, &tile, &plan, false), None);
-        assert_eq!(already_made(&path, &tile, &plan.axis_share(0.85), false), Some(7));
+        assert_eq!(already_made(&path, &tile, &plan), None);
+        assert_eq!(already_made(&path, &tile, &plan.axis_share(0.85)), Some(7));
+        // Made under a budget: not what a run without one makes.
+        let mut budgeted = run_mask(&tile, &plan, 7, 16, Mask::white(tile, 1).samples);
+        budgeted.set_meta("budget_seconds", "1");
+        crate::io::exr::write(&budgeted, AtomicFile::create(&path).unwrap()).unwrap();
+        assert_eq!(already_made(&path, &tile, &plan), None);
     }
 }

@@ -27,7 +27,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             use fsot_cli::bench::scaling::{format_line, measure, peak_resident_bytes};
             let (w, h, t) = Tile::parse_size(&size)?;
             let (slices, seconds) = measure(Tile::new(w, h, t, spp, dims)?, iterations)?;
-            println!("{}", format_line(slices, seconds, peak_resident_bytes().unwrap_or(0)));
+            outln!("{}", format_line(slices, seconds, peak_resident_bytes().unwrap_or(0)))?;
             Ok(())
         }
         Some(
@@ -39,7 +39,7 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
         Some(BenchSuite::Sort(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
             let b = fsot_cli::bench::bench_sort(&ctx, n, repeats, SortPath::Auto)?;
-            println!(
+            outln!(
                 "sort {} pairs (32-bit keys + 32-bit payloads): vulkan {:.3} ms = {:.3} G pairs/s on {}; cpu {:.3} ms = {:.3} G pairs/s ({} threads, rayon stable sort)",
                 b.n,
                 b.gpu_seconds * 1e3,
@@ -48,9 +48,9 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
                 b.cpu_seconds * 1e3,
                 b.cpu_pairs_per_second() * 1e-9,
                 b.cpu_threads
-            );
-            println!("  {}", bandwidth_line(&b));
-            println!("  passes: {} ({} dispatches)", b.passes, b.dispatches);
+            )?;
+            outln!("  {}", bandwidth_line(&b))?;
+            outln!("  passes: {} ({} dispatches)", b.passes, b.dispatches)?;
             // The other paths on the same pairs, for comparison: on a CPU
             // implementation (the lanes path by default) the workgroups' blocks;
             // elsewhere the other small-sort path.
@@ -67,28 +67,30 @@ pub(crate) fn bench_command(args: BenchArgs) -> Result<()> {
             let look_back = ctx.info().keeps_workgroups_running().then_some(SortPath::LookBack);
             for path in other.into_iter().chain(look_back) {
                 let o = fsot_cli::bench::bench_sort(&ctx, n, repeats, path)?;
-                println!(
+                outln!(
                     "  {} on the same pairs ({} dispatches): {:.3} ms = {:.3} G pairs/s",
                     o.passes,
                     o.dispatches,
                     o.gpu_seconds * 1e3,
                     o.gpu_pairs_per_second() * 1e-9
-                );
+                )?;
             }
             let unit = match b.lanes {
                 true => format!("{}-pair runs", fsot::vk::sort::LANE_RUN),
                 false => format!("{}-pair blocks", b.block),
             };
-            println!(
+            outln!(
                 "  one profiled sort ({unit}), 4 passes: histogram {:.3} ms, scan {:.3} ms, scatter {:.3} ms",
-                b.stages_ms[0], b.stages_ms[1], b.stages_ms[2]
-            );
+                b.stages_ms[0],
+                b.stages_ms[1],
+                b.stages_ms[2]
+            )?;
             Ok(())
         }
         Some(BenchSuite::Scatter(KernelBench { n, repeats, device })) => {
             let ctx = super::env::context(device)?;
             let b = fsot_cli::bench::bench_scatter(&ctx, n, repeats)?;
-            println!("{}", scatter_line(&b));
+            outln!("{}", scatter_line(&b))?;
             Ok(())
         }
     }
@@ -159,7 +161,7 @@ pub(crate) fn bench_suites(args: &BenchArgs) -> Result<()> {
         text.push('\n');
         j.commit(text.as_bytes())?;
     }
-    println!("{table}");
+    outln!("{table}")?;
     Ok(())
 }
 

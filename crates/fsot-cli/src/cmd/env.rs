@@ -21,18 +21,29 @@ pub(crate) fn context(flag: Option<String>) -> Result<Context> {
     Ok(Context::new(&ContextOptions { validation: validation(), device: device(flag) })?)
 }
 
+/// A second interrupt sooner than this after the first is the same one again.
+const REPEAT: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// A cancel flag that Ctrl-C (SIGINT) and SIGTERM set: the run stops between
-/// iterations (and saves its checkpoint). A second signal ends the process at
-/// once, exit status 130: outputs are renamed into place whole, so what was
-/// there stays (a signal while one is written may leave its `.tmp` file beside
-/// it). Once per process.
+/// iterations (and saves its checkpoint). A second signal, a second or more
+/// after the first, ends the process at once, exit status 130: outputs are
+/// renamed into place whole, so what was there stays (a signal while one is
+/// written may leave its `.tmp` file beside it). Once per process.
 pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
     let flag = fsot::optimize::run::CancelFlag::new();
     let set = flag.clone();
+    let first = std::sync::OnceLock::new();
     ctrlc::set_handler(move || {
         if set.is_cancelled() {
+            // The same signal sent again to the process group (as `timeout` and
+            // some shells do) within the second is not a second request.
+            if first.get().is_some_and(|t: &std::time::Instant| t.elapsed() < REPEAT) {
+                return;
+            }
+            eprintln!("\nquit at once: what the run did since its last checkpoint is not saved");
             std::process::exit(130);
         }
+        let _ = first.set(std::time::Instant::now());
         set.cancel();
         eprintln!("\ninterrupted: the run stops between iterations (again to quit at once)");
     })

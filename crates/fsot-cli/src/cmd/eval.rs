@@ -228,6 +228,6 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     if let Some(f) = extra {
         f.commit(json.as_bytes())?;
     }
-    println!("{table}");
+    outln!("{table}")?;
     Ok(())
 }

@@ -185,7 +185,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         None => format!("{:.4e} -> ", before.objective),
         Some(from) => format!("(resumed from iteration {from}: the start's not kept) "),
     };
-    println!(
+    outln!(
         "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {before}{:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
@@ -193,16 +193,16 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         kind.name(),
         after.objective,
         after.ratio()
-    );
+    )?;
     if let Until::Seconds(budget) = until {
-        println!(
+        outln!(
             "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s); \
              before the first iteration {:.3} s, of which the start {:.3} s and the backend {:.3} s",
             since_start - budget,
             since_start - seconds,
             set_up.start,
             set_up.backend
-        );
+        )?;
     }
     backend_report(&report)
 }
@@ -280,13 +280,13 @@ fn backend_report(report: &Report) -> Result<()> {
     }
     if let Some(p) = &report.profile {
         let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
-        println!(
+        outln!(
             "profile ({} iterations, per iteration): transport {:.3} ms, large classes {:.3} ms, update {:.3} ms",
             p.iterations,
             per(p.transport_ns),
             per(p.large_ns),
             per(p.update_ns)
-        );
+        )?;
         // The least bytes each pass must move, and the rate its time gives.
         let rate = |bytes: f64, ns: f64| {
             let ms = per(ns);
@@ -296,18 +296,18 @@ fn backend_report(report: &Report) -> Result<()> {
                 format!("{:.2} MB", bytes * 1e-6)
             }
         };
-        println!(
+        outln!(
             "  least bytes per iteration (a model): transport {}; large classes {}; update {}",
             rate(p.transport_bytes, p.transport_ns),
             rate(p.large_bytes, p.large_ns),
             rate(p.update_bytes, p.update_ns)
-        );
+        )?;
     }
     if let (Some(_), Some(transport)) = (&report.profile, &report.transport) {
-        println!("  transport: {transport}");
+        outln!("  transport: {transport}")?;
     }
     if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
-        println!("  large-class sort: {choice}");
+        outln!("  large-class sort: {choice}")?;
     }
     let messages = &report.validation_messages;
     if !messages.is_empty() {
@@ -411,7 +411,7 @@ pub(crate) fn make_baseline(
     let scored = mask.clone();
     let s = unless_interrupted(&cancel, &args.out, move || score(&scored, spec, SCORE_SLICES))?;
     write_outputs(args, &mask, (kind, out), also, &cancel)?;
-    println!(
+    outln!(
         "wrote {}: {}, method {}, {seconds:.1} s; objective under kernel {}: {:.4e} ({:.3} x white noise)",
         args.out.display(),
         tile.describe(),
@@ -419,7 +419,7 @@ pub(crate) fn make_baseline(
         spec.describe(),
         s.objective,
         s.ratio()
-    );
+    )?;
     Ok(())
 }
 
@@ -453,8 +453,29 @@ fn check_png_folder(dir: &std::path::Path, tile: &Tile) -> Result<()> {
         return Err(Error::invalid(format!("--png {} exists and is not a folder", dir.display())));
     }
     if dir.is_dir() {
-        for name in fsot::io::png::names(tile) {
+        let names = fsot::io::png::names(tile);
+        for name in &names {
             AtomicFile::create(&dir.join(name))?;
+        }
+        // Slices of another mask that these would not replace: the folder
+        // would hold a mixed set.
+        let mut stale: Vec<String> = std::fs::read_dir(dir)
+            .map_err(|e| Error::invalid(format!("--png {}: cannot list it: {e}", dir.display())))?
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.starts_with("frame") && n.ends_with(".png") && !names.contains(n))
+            .collect();
+        stale.sort();
+        if let Some(first) = stale.first() {
+            return Err(Error::invalid(format!(
+                "--png {} holds {first}{} of another mask's slices, which this mask's {} would not \
+                 replace: remove them or give another folder",
+                dir.display(),
+                match stale.len() {
+                    1 => String::new(),
+                    n => format!(" and {} more", n - 1),
+                },
+                names.len()
+            )));
         }
         return Ok(());
     }

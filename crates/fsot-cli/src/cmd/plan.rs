@@ -14,9 +14,9 @@ pub(crate) fn plan_command(args: PlanArgs) -> Result<()> {
     let cost = CostModel::calibrate(&options)?;
     let plan = Plan::new(&scene, &cost)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&plan).map_err(|e| Error::invalid(e.to_string()))?);
+        outln!("{}", serde_json::to_string_pretty(&plan).map_err(|e| Error::invalid(e.to_string()))?)?;
     } else {
-        print!("{}", describe(&plan));
+        out!("{}", describe(&plan))?;
     }
     Ok(())
 }
@@ -205,12 +205,12 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         }
     }
     let also = if args.ktx2_format.is_some() { " (each also as KTX2)" } else { "" };
-    println!("wrote {} masks{also} and plan.json into {}", plan.masks.len(), args.out.display());
+    outln!("wrote {} masks{also} and plan.json into {}", plan.masks.len(), args.out.display())?;
     if let Some(budget) = plan.budget {
-        println!(
+        outln!(
             "budget {budget} s: the masks were made {ended:.3} s after the process started ({:+.3} s)",
             ended - budget
-        );
+        )?;
     }
     Ok(())
 }

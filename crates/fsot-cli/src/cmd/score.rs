@@ -48,7 +48,7 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
         }
     };
     let s = score(&mask, spec, args.slices);
-    println!(
+    outln!(
         "{}: {}, kernel {} ({whence}): objective {:.4e} (white noise {:.4e}; ratio {:.4})",
         args.mask.display(),
         mask.tile.describe(),
@@ -56,6 +56,6 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
         s.objective,
         s.white,
         s.ratio()
-    );
+    )?;
     Ok(())
 }

@@ -37,7 +37,7 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     let table = to_markdown(&checks, &machine);
     out.commit(table.as_bytes())?;
     let failed = checks.iter().filter(|c| !c.passed).count();
-    println!("{table}");
+    outln!("{table}")?;
     if failed > 0 {
         return Err(Error::invalid(format!("{failed} of {} stress checks failed", checks.len())));
     }
