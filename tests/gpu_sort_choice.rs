@@ -1,6 +1,6 @@
 //! The radix sort's path chosen at run time (`vk::choose_sort_path`): timed on
-//! the device where the look-back path may run (GPUs), never on a CPU
-//! implementation; and whichever path the optimizer's large-class stage takes,
+//! the device where the look-back path may run (NVIDIA's and AMD's GPUs), never
+//! elsewhere; and whichever path the optimizer's large-class stage takes,
 //! the masks are the same bits (deterministic mode). The look-back path's
 //! workgroups wait on blocks that started before them, which lavapipe with
 //! several threads does not promise to let run, so this binary runs lavapipe

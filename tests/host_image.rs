@@ -66,8 +66,8 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
         equal += (g as i64 == level) as usize;
     }
     assert!(equal * 100 >= got.len() * 95, "{equal} of {} levels equal", got.len());
-    // Cancelled (here before it starts, an animated start to make): no mask
-    // and no iteration.
+    // Cancelled before it starts (an animated start to make, which the flag
+    // also cuts short): no mask and no event.
     let cancel = CancelFlag::new();
     cancel.cancel();
     let mut animated = settings;

@@ -226,6 +226,10 @@ fn a_pass_that_relies_on_full_subgroups_gets_them() {
         full_subgroups: true,
     };
     let pipeline = ComputePipeline::new(&ctx, &desc).unwrap();
+    // Asked for where the device offers it (lavapipe does; the validation
+    // layer checks the request), relied on where the device fills them unasked.
+    assert_eq!(pipeline.full_subgroups(), ctx.info().full_subgroups);
+    assert!(pipeline.full_subgroups() || ctx.info().fills_subgroups());
     // SAFETY: the buffer is declared before the pipeline: it outlives every dispatch.
     unsafe { pipeline.bind(0, &[(0, &out)]).unwrap() };
     ctx.submit(|cmd| {

@@ -15,15 +15,23 @@ use crate::io::ktx2::quantize;
 /// names starting with `_`, the `_t` typedefs, `NULL`): those take a `mask_`
 /// prefix.
 pub fn identifier(stem: &str) -> Result<String> {
-    let mut id: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    let mut id = String::new();
+    for c in stem.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }) {
+        // One `_` for a run of them: C++ reserves `__` anywhere.
+        if !(c == '_' && id.ends_with('_')) {
+            id.push(c);
+        }
+    }
     if id.is_empty() {
         return Err(Error::invalid("a C header needs a file name to name its array"));
     }
-    let reserved = id.starts_with(|c: char| c.is_ascii_digit() || c == '_')
+    let reserved = id.starts_with(|c: char| c.is_ascii_digit())
         || id.ends_with("_t")
         || C_KEYWORDS.contains(&id.as_str())
         || ["NULL", "offsetof", "errno"].contains(&id.as_str());
-    if reserved {
+    if id.starts_with('_') {
+        id.insert_str(0, "mask");
+    } else if reserved {
         id.insert_str(0, "mask_");
     }
     Ok(id)
@@ -105,9 +113,13 @@ mod tests {
         assert_eq!(identifier("private").unwrap(), "mask_private");
         assert_eq!(identifier("and").unwrap(), "mask_and");
         // Reserved by the language or by <stdint.h> and <stddef.h>.
-        for (stem, id) in
-            [("_Bool", "mask__Bool"), ("_x", "mask__x"), ("uint16_t", "mask_uint16_t"), ("size_t", "mask_size_t")]
-        {
+        for (stem, id) in [
+            ("_Bool", "mask_Bool"),
+            ("__x", "mask_x"),
+            ("uint16_t", "mask_uint16_t"),
+            ("size_t", "mask_size_t"),
+            ("a--b", "a_b"),
+        ] {
             assert_eq!(identifier(stem).unwrap(), id);
         }
         assert_eq!(identifier("NULL").unwrap(), "mask_NULL");

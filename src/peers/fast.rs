@@ -150,30 +150,46 @@ impl Filter {
         }
     }
 
-    /// The taps of an EMA over a history of `m` frames, newest first.
-    fn ema_history(alpha: f64, m: usize) -> Vec<f64> {
-        (0..m).map(|i| (1.0 - alpha).powi(i as i32) * if i + 1 < m { alpha } else { 1.0 }).collect()
-    }
+
 
     /// Circular autocorrelation of the filter folded onto a wrapping axis of
     /// length n: `A[tau] = sum_j F[j] F[(j + tau) mod n]`, normalised to sum 1.
     pub fn autocorrelation(&self, n: usize) -> Vec<f64> {
         if let Filter::Ema { alpha, beta } = *self {
             // The mean over histories of m = 1..n frames, m geometric in beta
-            // (uniform at beta 0), of each history's autocorrelation, wrapped.
-            let keep = 1.0 - beta;
+            // (uniform where beta is too small to tell from 0), of each
+            // history's autocorrelation, wrapped. Over a history of m frames,
+            // the pair of frames k and k + lag back (both newer than the
+            // oldest) weighs alpha^2 r^(2k + lag), r = 1 - alpha, summed in
+            // closed form; the oldest frame (weight r^(m - 1)) pairs with the
+            // frame lag newer.
+            let r = 1.0 - alpha;
+            // 1 - (1 - beta)^n, without losing a tiny beta.
+            let reach = -(n as f64 * (-beta).ln_1p()).exp_m1();
             let mut a = vec![0.0f64; n];
             for m in 1..=n {
-                let weight = match beta > 0.0 {
-                    true => beta * keep.powi(m as i32 - 1) / (1.0 - keep.powi(n as i32)),
+                let weight = match reach > 0.0 {
+                    true => beta * (-beta).ln_1p().mul_add(m as f64 - 1.0, 0.0).exp() / reach,
                     false => 1.0 / n as f64,
                 };
-                let f = Self::ema_history(alpha, m);
+                let oldest = r.powi(m as i32 - 1);
                 for lag in 0..m {
-                    let c: f64 = (0..m - lag).map(|i| f[i] * f[i + lag]).sum();
-                    a[lag % n] += weight * c;
+                    // Pairs (k, k + lag) with k + lag < m - 1: a geometric sum.
+                    let pairs = (m - 1 - lag) as i32;
+                    let geometric = match r * r < 1.0 {
+                        true => (1.0 - (r * r).powi(pairs)) / (1.0 - r * r),
+                        false => pairs as f64,
+                    };
+                    let before = alpha * alpha * r.powi(lag as i32) * geometric;
+                    // The pair that ends at the oldest frame.
+                    let last = match lag {
+                        0 => oldest * oldest,
+                        _ => alpha * r.powi(pairs) * oldest,
+                    };
+                    let c = weight * (before + last);
+                    a[lag] += c;
                     if lag > 0 {
-                        a[(n - lag % n) % n] += weight * c;
+                        a[n - lag] += c;
                     }
                 }
             }
@@ -496,6 +512,13 @@ mod tests {
         let a = Filter::Ema { alpha: 0.1, beta: 0.1 }.autocorrelation(16);
         for (lag, want) in [(1, 0.124), (2, 0.100), (4, 0.067), (8, 0.044)] {
             assert!((a[lag] / a[0] - want).abs() < 5e-4, "lag {lag}: {}", a[lag] / a[0]);
+        }
+        // A reset too rare for 1 - beta to tell from 1: every history length
+        // alike, as at beta 0 (not a division by zero).
+        let rare = Filter::Ema { alpha: 0.1, beta: 1e-17 }.autocorrelation(16);
+        let never = Filter::Ema { alpha: 0.1, beta: 0.0 }.autocorrelation(16);
+        for (x, y) in rare.iter().zip(&never) {
+            assert!(x.is_finite() && (x - y).abs() < 1e-12, "{x} vs {y}");
         }
     }
 

@@ -763,9 +763,9 @@ impl Plan {
     /// (`Run::run_together`): on Vulkan, on one device, a batch of each in one
     /// submission; on the CPU, one after the other. Each checkpoints to
     /// `dir/.NAME.ckpt` (every `every` iterations and when cancelled); with
-    /// `resume`, masks already written are kept (and their checkpoints
-    /// removed) and checkpoints are continued; a plan under a budget takes no
-    /// checkpoints and refuses `resume`.
+    /// `resume`, masks already written are kept (and checkpoints left beside
+    /// them removed once the plan is made) and checkpoints are continued; a
+    /// plan under a budget takes no checkpoints and refuses `resume`.
     /// Under a budget (`Plan::budget`, counted from `options.budget_from` or
     /// from this call) the runs take no checkpoints: on one device they all end
     /// at the budget's end; on the CPU each starts as the one before it ends
@@ -799,6 +799,7 @@ impl Plan {
         let mut todo: Vec<usize> = Vec::new();
         let mut whites: Vec<(usize, Tile, AtomicFile)> = Vec::new();
         let mut outs: Vec<Option<AtomicFile>> = Vec::new();
+        let mut stale: Vec<std::path::PathBuf> = Vec::new();
         for (index, m) in self.masks.iter().enumerate() {
             outs.push(None);
             let path = dir.join(&m.file);
@@ -811,13 +812,9 @@ impl Plan {
             if resume {
                 if let Some(done) = already_made(&path, &tile, &self.settings(m)) {
                     // Made in full: a checkpoint left beside it (of a later run
-                    // of the same settings, stopped) has nothing to add.
-                    let checkpoint = checkpoint_path(dir, &m.file);
-                    if checkpoint.is_file() {
-                        std::fs::remove_file(&checkpoint).map_err(|e| {
-                            Error::invalid(format!("cannot remove {}: {e}", checkpoint.display()))
-                        })?;
-                    }
+                    // of the same settings, stopped) has nothing to add; it goes
+                    // once the plan is made.
+                    stale.push(checkpoint_path(dir, &m.file));
                     made[index] = Some(Made { file: m.file.clone(), iterations: done, seconds: 0.0 });
                     continue;
                 }
@@ -888,6 +885,10 @@ impl Plan {
         }
         let made: Vec<Made> = made.into_iter().flatten().collect();
         plan_file.commit(self.document(&made)?.as_bytes())?;
+        for checkpoint in stale.iter().filter(|c| c.is_file()) {
+            std::fs::remove_file(checkpoint)
+                .map_err(|e| Error::invalid(format!("cannot remove {}: {e}", checkpoint.display())))?;
+        }
         Ok(Outcome::Reached)
     }
 

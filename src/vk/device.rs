@@ -62,6 +62,14 @@ impl DeviceInfo {
     pub fn keeps_workgroups_running(&self) -> bool {
         !self.is_cpu() && matches!(self.vendor_id, 0x10DE | 0x1002)
     }
+
+    /// Whether a workgroup whose size is a multiple of `subgroup_size` runs as
+    /// full subgroups of that size unasked: on CPU implementations and NVIDIA's
+    /// and AMD's GPUs (one subgroup size each for these shaders); elsewhere
+    /// only where a pipeline asks (`full_subgroups`).
+    pub fn fills_subgroups(&self) -> bool {
+        self.is_cpu() || matches!(self.vendor_id, 0x10DE | 0x1002)
+    }
 }
 
 /// The device named by `wanted` (an index, or part of its name, any case), else

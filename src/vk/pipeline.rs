@@ -53,10 +53,19 @@ pub struct ComputePipeline {
     pub raw: vk::Pipeline,
     kinds: Vec<vk::DescriptorType>,
     push_bytes: u32,
+    full_subgroups: bool,
 }
 
 impl ComputePipeline {
-    /// The pipeline `desc` describes, with its descriptor sets.
+    /// Whether the pipeline asks the driver for full subgroups
+    /// (`ComputeDesc::full_subgroups` on a device that offers it).
+    pub fn full_subgroups(&self) -> bool {
+        self.full_subgroups
+    }
+
+    /// The pipeline `desc` describes, with its descriptor sets; an error for a
+    /// pass that relies on full subgroups on a device that neither fills them
+    /// unasked nor can be asked (`DeviceInfo::fills_subgroups`).
     pub fn new(ctx: &Context, desc: &ComputeDesc) -> Result<Self> {
         let device = ctx.device();
         let words = ash::util::read_spv(&mut std::io::Cursor::new(desc.spirv))
@@ -87,6 +96,7 @@ impl ComputePipeline {
                 })
                 .collect(),
             push_bytes: desc.push_bytes,
+            full_subgroups: false,
         };
         // Every handle below is destroyed by Drop if a later step fails.
         if let Some(b) =
@@ -127,10 +137,18 @@ impl ComputePipeline {
             vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(desc.spec));
         let info = ctx.info();
         let whole = |x: &u32| info.subgroup_size > 0 && x % info.subgroup_size == 0;
-        let flags = if desc.full_subgroups && info.full_subgroups && desc.spec.first().is_some_and(whole) {
-            vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS_EXT
-        } else {
-            vk::PipelineShaderStageCreateFlags::empty()
+        let asks = desc.full_subgroups && info.full_subgroups && desc.spec.first().is_some_and(whole);
+        if desc.full_subgroups && !asks && !info.fills_subgroups() {
+            return Err(Error::VulkanUnavailable(format!(
+                "{} may run a workgroup in subgroups smaller than its {}, which these passes cannot take: \
+                 enable computeFullSubgroups (VK_EXT_subgroup_size_control) on the device",
+                info.name, info.subgroup_size
+            )));
+        }
+        me.full_subgroups = asks;
+        let flags = match asks {
+            true => vk::PipelineShaderStageCreateFlags::REQUIRE_FULL_SUBGROUPS_EXT,
+            false => vk::PipelineShaderStageCreateFlags::empty(),
         };
         let stage = vk::PipelineShaderStageCreateInfo::default()
             .flags(flags)

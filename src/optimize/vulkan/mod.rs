@@ -97,10 +97,12 @@ pub struct VulkanHooks {
     /// (at most a batch), as where one binding cannot hold a batch's orders.
     pub slice_order_slots: Option<u32>,
     /// The large-class stage's sort path, untimed. None: chosen at run time
-    /// (`vk::choose_sort_path`: on GPUs the faster of the look-back path and
-    /// the block passes, timed on the device at the stage's expected size;
-    /// the block passes on CPU implementations). The look-back path must not
-    /// be set on a CPU implementation that runs several threads.
+    /// (`vk::choose_sort_path`: on NVIDIA's and AMD's GPUs the faster of the
+    /// look-back path and the block passes, timed on the device at the
+    /// stage's expected size; the block passes elsewhere). The look-back path
+    /// must not be set on a device that may not keep a waiting workgroup's
+    /// peers running (`DeviceInfo::keeps_workgroups_running`), such as a CPU
+    /// implementation that runs several threads.
     pub large_sort: Option<SortPath>,
     /// The workgroup transport's second pass, for classes past its limit that
     /// shared memory can still hold: None, on GPUs up to the smallest power of

@@ -45,7 +45,7 @@ pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
         }
         let _ = first.set(std::time::Instant::now());
         set.cancel();
-        eprintln!("\ninterrupted: the run stops between iterations (again to quit at once)");
+        eprintln!("\ninterrupted: the run stops between iterations (again, a second or more later, to quit at once)");
     })
     .map_err(|e| Error::invalid(format!("cannot catch interrupts: {e}")))?;
     Ok(flag)

@@ -185,26 +185,31 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
         None => format!("{:.4e} -> ", before.objective),
         Some(from) => format!("(resumed from iteration {from}: the start's not kept) "),
     };
-    outln!(
-        "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {before}{:.4e} ({:.3} x white noise)",
-        args.out.display(),
-        tile.describe(),
-        spec.describe(),
-        kind.name(),
-        after.objective,
-        after.ratio()
-    )?;
-    if let Until::Seconds(budget) = until {
+    let printed = (|| -> Result<()> {
         outln!(
-            "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s); \
-             before the first iteration {:.3} s, of which the start {:.3} s and the backend {:.3} s",
-            since_start - budget,
-            since_start - seconds,
-            set_up.start,
-            set_up.backend
+            "wrote {}: {}, kernel {}, {iterations} iterations in {seconds:.1} s ({}); objective {before}{:.4e} ({:.3} x white noise)",
+            args.out.display(),
+            tile.describe(),
+            spec.describe(),
+            kind.name(),
+            after.objective,
+            after.ratio()
         )?;
-    }
-    backend_report(&report)
+        if let Until::Seconds(budget) = until {
+            outln!(
+                "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s); \
+                 before the first iteration {:.3} s, of which the start {:.3} s and the backend {:.3} s",
+                since_start - budget,
+                since_start - seconds,
+                set_up.start,
+                set_up.backend
+            )?;
+        }
+        Ok(())
+    })();
+    // The report's warnings and validation errors whether or not standard
+    // output took the lines above; its error first.
+    backend_report(&report).and(printed)
 }
 
 /// `--until`: plateau, objective:X, or none (a fixed count).
@@ -270,7 +275,8 @@ fn iteration_bar(iterations: u32, at: u32) -> ProgressBar {
     bar
 }
 
-/// After a run: skipped large classes, the profile, validation messages.
+/// After a run: skipped large classes, the profile, validation messages (an
+/// error, before one writing the profile gave).
 fn backend_report(report: &Report) -> Result<()> {
     if report.skipped_large_classes > 0 {
         eprintln!(
@@ -278,6 +284,20 @@ fn backend_report(report: &Report) -> Result<()> {
             report.skipped_large_classes
         );
     }
+    let printed = print_profile(report);
+    let messages = &report.validation_messages;
+    if !messages.is_empty() {
+        eprintln!("{} validation messages:", messages.len());
+        for m in messages.iter().take(10) {
+            eprintln!("  {m}");
+        }
+        return Err(Error::invalid("the Vulkan validation layer reported errors"));
+    }
+    printed
+}
+
+/// The run's profile, where one was taken, on standard output.
+fn print_profile(report: &Report) -> Result<()> {
     if let Some(p) = &report.profile {
         let per = |ns: f64| ns / p.iterations.max(1) as f64 * 1e-6;
         outln!(
@@ -308,14 +328,6 @@ fn backend_report(report: &Report) -> Result<()> {
     }
     if let (Some(_), Some(choice)) = (&report.profile, &report.large_sort) {
         outln!("  large-class sort: {choice}")?;
-    }
-    let messages = &report.validation_messages;
-    if !messages.is_empty() {
-        eprintln!("{} validation messages:", messages.len());
-        for m in messages.iter().take(10) {
-            eprintln!("  {m}");
-        }
-        return Err(Error::invalid("the Vulkan validation layer reported errors"));
     }
     Ok(())
 }

@@ -184,7 +184,7 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
         match plan.budget {
             // Runs under a budget take no checkpoints.
             Some(_) => eprintln!(
-                "interrupted at iteration {iteration} of a mask: the masks already made are in {}; the same command with --resume keeps them and makes the rest",
+                "interrupted at iteration {iteration} of a mask: the masks already made are in {}; a plan under a budget takes no checkpoints, so the same command (without --resume) makes them all again within it",
                 args.out.display()
             ),
             None => eprintln!(
