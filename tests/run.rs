@@ -505,3 +505,15 @@ fn a_coarse_start_without_a_budget_or_without_an_even_quarter_of_sixteen_pixels_
         );
     }
 }
+
+#[test]
+fn a_run_from_a_given_mask_records_that_start_not_the_settings_one() {
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let given = Mask::white(tile, 9);
+    let s = settings(3).start(fsot::Start::Animated);
+    let run = Run::start(tile, s, Some(&given), RunOptions::default()).unwrap();
+    let mask = run.finish().unwrap();
+    assert_eq!(mask.meta("start"), Some("a given mask"));
+    let own = Run::start(tile, s, None, RunOptions::default()).unwrap().finish().unwrap();
+    assert_eq!(own.meta("start"), Some("animated"));
+}

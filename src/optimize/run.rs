@@ -227,6 +227,11 @@ pub struct Run {
     tile: Tile,
     settings: Settings,
     init: Option<Mask>,
+    /// The start was a mask the caller gave (`Run::start`'s `init`), not one
+    /// the settings' `start` made.
+    given_start: bool,
+    /// The mask of an ended run, read back from the GPU by `settle`.
+    ended: Option<Mask>,
     options: RunOptions,
     backend: Box<dyn Backend>,
     note: String,
@@ -316,6 +321,7 @@ impl Run {
         let started;
         let mut start_note = None;
         let making_start = Instant::now();
+        let given_start = init.is_some();
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
                 let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
@@ -348,6 +354,8 @@ impl Run {
             tile,
             settings,
             init: init.cloned(),
+            given_start,
+            ended: None,
             options,
             backend,
             note,
@@ -364,7 +372,15 @@ impl Run {
             begun,
             set_up,
         };
-        run.hand_over_rule()?;
+        match run.hand_over_rule() {
+            Ok(()) => {}
+            // The GPU failed taking the rule: the run starts on the CPU path.
+            Err(e) if run.can_fall_back(&e) => {
+                run.fall_back(&e, &mut |_| {})?;
+                run.note = format!("{} (the GPU failed as the run started: {e})", run.note);
+            }
+            Err(e) => return Err(e),
+        }
         Ok(run)
     }
 
@@ -470,24 +486,54 @@ impl Run {
     /// `BackendChoice::Auto` hands over to the CPU path, from the last checkpoint.
     pub fn advance(&mut self, to: u32, cancel: &CancelFlag, on: &mut dyn FnMut(Event)) -> Result<Outcome> {
         let to = to.min(self.settings.iterations);
-        while self.iteration() < to && !self.stopped {
-            if self.out_of_time() {
-                self.stopped = true;
-                break;
+        loop {
+            while self.iteration() < to && !self.stopped {
+                if self.out_of_time() {
+                    self.stopped = true;
+                    break;
+                }
+                if cancel.is_cancelled() {
+                    let saved = self.save()?;
+                    return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
+                }
+                match self.step_once(to, on) {
+                    Ok(()) => {}
+                    // The GPU failed (in an iteration or reading its state back for a
+                    // checkpoint): continue on the CPU path.
+                    Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on)?,
+                    Err(e) => return Err(e),
+                }
             }
-            if cancel.is_cancelled() {
-                let saved = self.save()?;
-                return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
-            }
-            match self.step_once(to, on) {
-                Ok(()) => {}
-                // The GPU failed (in an iteration or reading its state back for a
-                // checkpoint): continue on the CPU path.
-                Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on)?,
-                Err(e) => return Err(e),
+            // Ended: its mask read back now, where a failure can still hand
+            // the run to the CPU path (which then goes on from its checkpoint).
+            if self.settle(on)? {
+                return Ok(Outcome::Reached);
             }
         }
-        Ok(Outcome::Reached)
+    }
+
+    /// For a run that has ended on a GPU it may leave (`BackendChoice::Auto`):
+    /// reads its mask back for `finish`. False when the GPU failed reading it
+    /// and the run went on to the CPU path, from its checkpoint, to run again.
+    fn settle(&mut self, on: &mut dyn FnMut(Event)) -> Result<bool> {
+        if !self.finished() || self.ended.is_some() || self.options.backend != BackendChoice::Auto {
+            return Ok(true);
+        }
+        if self.backend.kind() != crate::optimize::backend::BackendKind::Vulkan {
+            return Ok(true);
+        }
+        match self.backend.mask() {
+            Ok(mask) => {
+                self.ended = Some(mask);
+                Ok(true)
+            }
+            Err(e) if self.can_fall_back(&e) => {
+                self.fall_back(&e, on)?;
+                self.stopped = false;
+                Ok(false)
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// One step of the backend towards `to` (a batch on the GPU, stopping at the
@@ -644,8 +690,8 @@ impl Run {
             for run in runs.iter_mut() {
                 run.stopped |= run.out_of_time();
             }
-            for (r, run) in runs.iter().enumerate() {
-                if run.finished() && !reported[r] {
+            for (r, run) in runs.iter_mut().enumerate() {
+                if run.finished() && !reported[r] && run.settle(&mut |e| on(r, e))? {
                     reported[r] = true;
                     done(r, run)?;
                 }
@@ -693,7 +739,14 @@ impl Run {
 
     /// As `finish_with`, leaving the run in place (for runs held in a slice).
     pub fn finish_in_place_with(&self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
-        let mask = self.backend.mask()?;
+        let mut mask = match &self.ended {
+            Some(mask) => mask.clone(),
+            None => self.backend.mask()?,
+        };
+        // The settings' start did not run: the caller's mask did.
+        if self.given_start {
+            mask.set_meta("start", "a given mask");
+        }
         keep(&mask)?;
         if let (Some(c), true) = (&self.options.checkpoint, self.finished()) {
             if c.path.exists() {
@@ -793,7 +846,13 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
     match result {
         Ok(costs) => {
             for (&r, c) in group.iter().zip(&costs) {
-                runs[r].stepped(c, &mut |e| on(r, e))?;
+                // The GPU may fail reading a run's state back for its
+                // checkpoint: that run goes on on the CPU, as `advance` does.
+                match runs[r].stepped(c, &mut |e| on(r, e)) {
+                    Ok(()) => {}
+                    Err(e) if runs[r].can_fall_back(&e) => runs[r].fall_back(&e, &mut |ev| on(r, ev))?,
+                    Err(e) => return Err(e),
+                }
             }
         }
         Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {
@@ -833,7 +892,9 @@ fn interrupted(options: &RunOptions) -> Result<()> {
 fn animated_start(tile: Tile, settings: &Settings, left: Option<f64>, options: &RunOptions) -> Result<Mask> {
     let flat = Tile::new(tile.width, tile.height, 1, tile.spp, tile.dims)?;
     let until = match left {
-        // A budget already spent leaves the frame its set-up and one iteration.
+        // At least MIN_SPATIAL_SECONDS, however little is left: a frame run
+        // whose set-up takes that long stops before its first iteration (the
+        // frame stays white noise, set in motion).
         Some(left) => Until::Seconds((left * SPATIAL_BUDGET_SHARE).max(MIN_SPATIAL_SECONDS)),
         None => Until::Iterations,
     };

@@ -71,7 +71,9 @@ pub enum Start {
     /// Independent uniform samples drawn from the seed.
     White,
     /// One frame optimized under the kernel's spatial filter alone
-    /// (`SPATIAL_ITERATIONS`, or `SPATIAL_BUDGET_SHARE` of a time budget), then
+    /// (`SPATIAL_ITERATIONS`, and under a time budget at most
+    /// `SPATIAL_BUDGET_SHARE` of it, its step following the clock: where the
+    /// iterations end first, the last step is larger than the schedule's), then
     /// set in motion over the frames by a Kronecker sequence: each pixel's samples
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
@@ -120,7 +122,9 @@ pub enum Until {
     /// schedule over the time left after set-up (from half the step when
     /// the run starts from a mask, as the animated start does), and no
     /// iteration starts that the pace so far says would end past the budget,
-    /// so a run ends past it by at most about one iteration. The set-up
+    /// so a run ends past it by at most about one iteration. The step follows
+    /// the clock alone: a run that `iterations` ends first ends at the step
+    /// the clock had reached (so give a cap the budget cannot reach). The set-up
     /// counts but is not bounded: a budget shorter than the set-up (the
     /// start, the backend's pipelines and upload) ends past it by the set-up's
     /// time, with no iteration (`Run::set_up` says what it took). `iterations`

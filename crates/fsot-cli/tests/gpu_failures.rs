@@ -131,3 +131,49 @@ fn a_swap_search_the_gpu_cannot_finish_starts_again_on_the_cpu_with_auto_and_sto
         std::fs::read(dir.path().join("cpu.exr")).unwrap()
     );
 }
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn with_auto_a_scene_whose_device_is_lost_at_any_submission_finishes_on_the_cpu() {
+    // Two masks stepping together on one device, checkpointing every 5
+    // iterations: the device lost at each of the first submissions, whether
+    // in a step or in a checkpoint's read-back, hands every run to the CPU.
+    let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
+                 [[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"pick\"\ndims = 1\n";
+    let mut fell_back = 0;
+    for n in 1..=16 {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("s.toml"), scene).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_fsot"))
+            .args(["optimize", "--backend", "auto", "--device", "0", "--scene", "s.toml", "--out", "o"])
+            .args(["--checkpoint-every", "5"])
+            .current_dir(dir.path())
+            .env("FSOT_FAULT", format!("device-lost:{n}"))
+            .output()
+            .unwrap();
+        let t = text(&o);
+        assert!(o.status.success(), "device lost at submission {n}: {t}");
+        assert!(dir.path().join("o/plan.json").exists() && !t.contains("panicked"), "{n}: {t}");
+        fell_back += t.contains("the GPU failed") as u32;
+    }
+    assert!(fell_back > 0, "no submission of the first 16 failed a run");
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn with_auto_a_run_whose_device_is_lost_at_any_submission_finishes_on_the_cpu() {
+    // Its upload, its steps, its checkpoints' read-backs and the mask's own:
+    // wherever the device is lost, auto ends on the CPU with the mask written.
+    for n in 1..=20 {
+        let dir = setup();
+        let o = fsot(
+            dir.path(),
+            &[("FSOT_FAULT", &format!("device-lost:{n}"))],
+            &["--backend", "auto", "--device", "0", "--checkpoint", "c.ckpt", "--checkpoint-every", "20"],
+        );
+        let t = text(&o);
+        assert!(o.status.success(), "device lost at submission {n}: {t}");
+        assert!(t.contains("120 iterations") && !t.contains("panicked"), "{n}: {t}");
+        assert!(fsot::io::exr::read(&dir.path().join("mask.exr")).is_ok(), "{n}");
+    }
+}

@@ -172,6 +172,15 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
                 bar.set_position(done.iter().sum());
                 bar.set_message(plan.masks[index].file.clone());
             }
+            PlanEvent::Run { index, event: Event::FellBack { error, at, backend, from, .. } } => {
+                done[index] = from as u64;
+                bar.suspend(|| {
+                    eprintln!(
+                        "warning: the GPU failed at iteration {at} of {}: {error}; continuing on {backend} from iteration {from}",
+                        plan.masks[index].file
+                    )
+                });
+            }
             PlanEvent::Run { .. } => {}
             PlanEvent::Done { file, iterations, seconds, .. } => {
                 bar.suspend(|| eprintln!("{file}: {iterations} iterations in {seconds:.1} s"));
