@@ -38,14 +38,18 @@ latency() {
 # Seconds of a whole run, as the run reports them; fails where it reports none.
 whole() {
   local bin=$1; shift
-  local s
-  s=$("$bin" optimize "$@" --out "$work/m.exr" 2>&1 | grep -o 'iterations in [0-9.]* s' | awk '{print $3}') || true
+  local s printed
+  printed=$("$bin" optimize "$@" --out "$work/m.exr" 2>&1) || {
+    echo "whole: $bin optimize $* failed: $printed" >&2
+    return 1
+  }
+  s=$(echo "$printed" | grep -o 'iterations in [0-9.]* s' | awk '{print $3}') || true
   rm -f "$work"/m.*
   [ -n "$s" ] || { echo "whole: no time reported ($bin optimize $*)" >&2; return 1; }
   echo "$s"
 }
 {
-  echo "# bench/cancel-latency.sh: old $old ($("$old" --version | head -1)), new $new; commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F); SIGINT after $WAIT s"
+  echo "# bench/cancel-latency.sh: old $old ($("$old" --version | head -1)), new $new; commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F); SIGINT after $WAIT s"
   echo "case | build | seconds from SIGINT to exit (each round)"
   echo "---|---|---"
   for case in "--backend vulkan --size 64x64x16 --dims 4 --kernel perceptual-taa" \

@@ -8,9 +8,11 @@ raw files. bench/figures.txt holds one check a line, in either of two forms:
 In the first form the line is split at its first three ` | `, so PATTERN may hold
 `|` (a table row) but FIGURE may not; the second form, used whenever a line holds
 ` ;; `, lets FIGURE hold `|` too. DOC and RAW_FILE are relative to the repository.
-FIGURE must occur in DOC, and RAW_FILE must exist and contain PATTERN; both are
-plain substrings, surrounding spaces stripped. Lines starting with # and empty lines
-are skipped. Prints each check as ok or FAIL; exits 1 if any fails.
+FIGURE must occur in DOC exactly once (so a check cannot pass on a copy of the
+figure elsewhere), and RAW_FILE must exist and contain PATTERN; both are plain
+substrings, surrounding spaces stripped (tabs kept), neither empty. Lines starting
+with # and empty lines are skipped. Prints each check as ok or FAIL; exits 1 if any
+fails.
 
     python3 bench/check-figures.py [LIST]
 """
@@ -24,19 +26,19 @@ for number, line in enumerate(listing.read_text().splitlines(), 1):
     if not line.strip() or line.lstrip().startswith("#"):
         continue
     if " ;; " in line:
-        parts = [p.strip() for p in line.split(" ;; ")]
+        parts = [p.strip(" ") for p in line.split(" ;; ")]
     else:
-        parts = [p.strip() for p in line.split(" | ", 3)]
-    if len(parts) != 4:
-        print(f"FAIL line {number}: expected DOC | FIGURE | RAW_FILE | PATTERN")
+        parts = [p.strip(" ") for p in line.split(" | ", 3)]
+    if len(parts) != 4 or not all(parts):
+        print(f"FAIL line {number}: expected DOC | FIGURE | RAW_FILE | PATTERN, none empty")
         failed += 1
         continue
     doc, figure, raw, pattern = parts
     problems = []
     if not (root / doc).is_file():
         problems.append(f"{doc} missing")
-    elif figure not in (root / doc).read_text():
-        problems.append(f"{figure!r} not in {doc}")
+    elif (count := (root / doc).read_text().count(figure)) != 1:
+        problems.append(f"{figure!r} in {doc} {count} times, not once")
     raw_path = root / raw
     if not raw_path.is_file():
         problems.append(f"{raw} missing")

@@ -9,9 +9,12 @@
 # Usage: [OLD_BIN=path] [BACKEND=cpu|vulkan] bench/cpu-old-new.sh OLD_REV OUT_FILE
 #        (without OLD_BIN, OLD_REV is built in a worktree)
 set -euo pipefail
-cd "$(dirname "$0")/.."
 old_rev=${1:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
 out=${2:?usage: bench/cpu-old-new.sh OLD_REV OUT_FILE}
+# Arguments are paths from where the script was called.
+out=$(realpath -m "$out")
+[ -z "${OLD_BIN:-}" ] || OLD_BIN=$(realpath -m "$OLD_BIN")
+cd "$(dirname "$0")/.."
 work=$(mktemp -d)
 trap 'git worktree remove --force "$work/old" >/dev/null 2>&1 || true; rm -rf "$work"' EXIT
 # OLD_BIN: a binary already built from OLD_REV (saves the build).
@@ -30,7 +33,7 @@ if [ "$backend" = vulkan ]; then
   export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
   export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 fi
-head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# BACKEND=$backend bench/cpu-old-new.sh: $head"
   echo "problem | iterations | old s (median of 3) | new s (median of 3) | old / new | objective old / new | masks"
@@ -51,7 +54,9 @@ head="old $(git rev-parse --short "$old_rev"), new $(git rev-parse --short HEAD)
     done
     o=$(sort -g "$work/old.times" | sed -n 2p)
     n=$(sort -g "$work/new.times" | sed -n 2p)
-    same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr" | head -1 || true)
+    # The verdict is the record, same or not; a comparison that cannot run fails.
+    same=$(target/release/examples/same_samples "$work/old-$size.exr" "$work/new-$size.exr") || [ -n "$same" ] || exit 1
+    same=$(echo "$same" | head -1)
     echo "$size d=$dims $kernel | $its | $o | $n | $(echo "$o / $n" | bc -l | xargs printf %.2f) | $(cat "$work/old.objective") / $(cat "$work/new.objective") | $same"
   done
 } | tee "$out"

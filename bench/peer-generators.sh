@@ -5,18 +5,22 @@
 # passes of the same cost each); beside them fsot's optimizer, 1000 iterations.
 # Usage: bench/peer-generators.sh OUT_FILE
 set -euo pipefail
-cd "$(dirname "$0")/.."
 out=${1:?usage: bench/peer-generators.sh OUT_FILE}
+# Arguments are paths from where the script was called.
+out=$(realpath -m "$out")
+cd "$(dirname "$0")/.."
 cargo build --release --quiet -p fsot-cli
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 {
-  echo "# commit $(git rev-parse --short HEAD), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+  echo "# commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
   for flags in "--method stbn" "--method fast --passes 1" "--method fsot --iterations 1000"; do
     echo "\$ fsot optimize --backend cpu --size 128x128x64 --dims 1 $flags --seed 1"
     # shellcheck disable=SC2086
     /usr/bin/time -f "wall %e s" target/release/fsot optimize --backend cpu --size 128x128x64 --dims 1 \
       $flags --seed 1 --out "$work/m.exr" 2>&1 | grep -v '^optimizing\|^backend'
   done
-} > "$out"
+} > "$work/out"
+# In place only whole: a failed run leaves the file that was there.
+mv "$work/out" "$out"
 cat "$out"

@@ -6,14 +6,17 @@
 # same for both). Medians at the end.
 # Usage: bench/scatter-modes.sh BIN OUT_FILE   (lavapipe unless VK_DRIVER_FILES says otherwise)
 set -euo pipefail
-cd "$(dirname "$0")/.."
 bin=${1:?usage: bench/scatter-modes.sh BIN OUT_FILE}
 out=${2:?usage: bench/scatter-modes.sh BIN OUT_FILE}
+# Arguments are paths from where the script was called.
+bin=$(realpath -m "$bin")
+out=$(realpath -m "$out")
+cd "$(dirname "$0")/.."
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-head="$("$bin" --version | head -1) ($bin), commit $(git rev-parse --short HEAD); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+head="$("$bin" --version | head -1) ($bin), commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty); $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# bench/scatter-modes.sh: $head"
   "$bin" optimize --backend vulkan --size 32x32x16 --dims 2 --kernel taa --seed 7 --iterations 2 --out "$work/m.exr" 2>&1 | grep '^backend'

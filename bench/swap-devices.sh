@@ -6,8 +6,11 @@
 # validation layer on (FSOT_VALIDATION=1: the command fails on any message).
 # Usage: bench/swap-devices.sh OUT_FILE [SIZE]   (VK_DRIVER_FILES picks the device; lavapipe by default)
 set -euo pipefail
-cd "$(dirname "$0")/.."
 out=${1:?usage: bench/swap-devices.sh OUT_FILE [SIZE]}
+# Arguments are paths from where the script was called.
+out=$(realpath -m "$out")
+[ -z "${FSOT:-}" ] || FSOT=$(realpath -m "$FSOT")
+cd "$(dirname "$0")/.."
 size=${2:-64x64x16}
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
@@ -15,7 +18,7 @@ f=${FSOT:-target/release/fsot}
 [ -n "${FSOT:-}" ] || cargo build --release --quiet --bin fsot
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-head="commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet HEAD -- src glsl 2>/dev/null || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+head="commit $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet HEAD 2>/dev/null || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# bench/swap-devices.sh: $head"
   echo "method | tile | passes | backend | device | time | energy start -> end | taken | re-evaluated | dropped | x white"

@@ -6,15 +6,17 @@
 # just before this build's, to compare builds in one sitting.
 # Usage: [OLD_BIN=path] bench/vulkan-dims.sh OUT_FILE   (VK_DRIVER_FILES picks the device; lavapipe by default)
 set -euo pipefail
-cd "$(dirname "$0")/.."
 out=${1:?usage: bench/vulkan-dims.sh OUT_FILE}
+# Arguments are paths from where the script was called.
+out=$(realpath -m "$out")
+cd "$(dirname "$0")/.."
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --quiet --bin fsot
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 f=target/release/fsot
-head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
+head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# bench/vulkan-dims.sh: $head${OLD_BIN:+; vulkan-old: $OLD_BIN ($("$OLD_BIN" --version | head -1))}"
   echo "d | tile | iterations | backend | device | time | objective | x white"

@@ -6,9 +6,13 @@
 # says otherwise.
 # Usage: bench/vulkan-tile-old-new.sh OLD_BIN NEW_BIN OUT_FILE SIZE KERNEL ITERATIONS
 set -euo pipefail
-cd "$(dirname "$0")/.."
 usage="usage: bench/vulkan-tile-old-new.sh OLD_BIN NEW_BIN OUT_FILE SIZE KERNEL ITERATIONS"
 old=${1:?$usage}; new=${2:?$usage}; out=${3:?$usage}; size=${4:?$usage}; kernel=${5:?$usage}; iterations=${6:?$usage}
+# Arguments are paths from where the script was called.
+old=$(realpath -m "$old")
+new=$(realpath -m "$new")
+out=$(realpath -m "$out")
+cd "$(dirname "$0")/.."
 export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(uname -m).json}"
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --quiet --example same_samples

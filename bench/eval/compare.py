@@ -1,3 +1,4 @@
+#!/usr/bin/env python3
 """One method against others in `fsot eval` results.json: per display, TAA
 setting and scene, the method's JOD, pRelMSE (the column's sigma, and the
 display's eye where measured) and FLIP (after TAA, where

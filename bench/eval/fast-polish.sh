@@ -17,8 +17,9 @@ cargo build --release --quiet -p fsot-cli
 fsot="$PWD/target/release/fsot"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-log="$out.log"
-echo "# fsot $(git rev-parse --short HEAD), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)" > "$log"
+# The log is written beside its place and moved there whole at the end.
+log="$work/log"
+echo "# fsot $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)" > "$log"
 run() {
   echo "\$ fsot $*" >> "$log"
   (cd "$work" && "$fsot" "$@") 2>&1 | grep -v '^optimizing' >> "$log"
@@ -34,4 +35,5 @@ for m in A-sigma B-sigma A-fhd B-fhd C-fast4; do masks+=(--mask "$m=$work/$m.exr
 run eval --quick --seeds 10 --scenes light-pick --display standard_fhd --peers "$peers" \
   --methods white,published-stbn,published-fast,A-sigma,B-sigma,A-fhd,B-fhd,C-fast4 \
   "${masks[@]}" --json "$out.json" --out "$work/eval"
-tail -n 40 "$log"
+mv "$log" "$out.log"
+tail -n 40 "$out.log"

@@ -1,3 +1,4 @@
+#!/usr/bin/env python3
 """JOD tables from `fsot eval` results.json files: one table per file, display
 and TAA setting, scenes as rows, methods as columns, mean +- 95% interval (and
 FLIP after TAA where measured).

@@ -16,10 +16,16 @@ fsot=target/release/fsot
 peers=../shared/data/peer-masks
 mkdir -p "$out/masks"
 cargo build --release -q
-# The planner's TAA masks for standard_fhd (scalar and 2-D), from the full run.
-planned() { ls "$full"/cache/planned-"$1"__ppd___37.84_*-d"$2"-spp1-*.exr | head -1; }
-d1=$(planned perceptual_taa 1)
-nd1=$(planned perceptual 1)
+# The planner's scalar masks (made for the eye at 75.4 pixels per degree), with
+# TAA and without, from the full run's cache (named by their kernels).
+planned() { # KERNEL_SLUG DIMS
+  local found
+  found=$(find "$full/cache" -name "planned-$1*-d$2-spp1-*.exr" | sort | head -1)
+  [ -n "$found" ] || { echo "leads.sh: no planned-$1*-d$2 mask in $full/cache" >&2; exit 1; }
+  echo "$found"
+}
+d1=$(planned perceptual_taa__ppd___75.4_ 1)
+nd1=$(planned taa__ppd___75.4__alpha___0.5_ 1)
 make() { # NAME FLAGS...: a 128 x 128 mask, stopped by the plateau rule
   local name=$1; shift
   [ -f "$out/masks/$name.exr" ] && return

@@ -202,3 +202,7 @@ optimize() {
 (cd "$WORK" && find . -type f ! \( -name '*.exr' -size +4M \) -print0 | tar -czf "$WORK.tar.gz" --null -T -)
 split -b 15M "$WORK.tar.gz" "$OUT/results.tar.gz.part-" && rm -f "$WORK.tar.gz"
 ls -la "$OUT"
+# A dry run that found a step failing to start fails.
+if [ "$DRY_RUN" = 1 ] && [ -n "$(awk -F'\t' 'NR > 1 && $1 != "0" && $1 != "124" && $1 != "137" && $1 != "skipped"' "$STEPS")" ]; then
+  exit 1
+fi

@@ -54,7 +54,7 @@ cargo test --release --no-run --message-format=json "${args[@]}" 2>/dev/null |
   while read -r name exe; do cp "$exe" ".gl/t/deps/$name"; done
 for t in "${tests[@]}"; do [ -x ".gl/t/deps/$t" ] || { echo "prepare: test binary $t is missing" >&2; exit 1; }; done
 strip .gl/bin/* .gl/t/deps/* .gl/t/examples/*
-echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src glsl tests examples || echo -dirty)" > .gl/commit
+echo "$(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty)" > .gl/commit
 # Where the test binaries were built: they look for the repository there.
 pwd > .gl/root
 # Packed by xz (the binaries share most of their code, which xz's window finds:

@@ -311,7 +311,7 @@ fn scaling_suite(quick: bool, records: &mut Vec<serde_json::Value>) -> Result<St
         std::env::current_exe().map_err(|e| Error::invalid(format!("cannot find this program: {e}")))?;
     let mut table = format!(
         "\n## Scaling (CPU path, {}; perceptual-taa, time per iteration and the child process's peak memory)\n\n\
-         | tile | slices per iteration | ms per iteration | peak memory (MB) |\n| --- | ---: | ---: | ---: |\n",
+         | tile | slices per iteration | ms per iteration | peak memory (MiB) |\n| --- | ---: | ---: | ---: |\n",
         fsot_cli::bench::machine::cpu_description()
     );
     for (w, h, t, d, spp) in configs {
