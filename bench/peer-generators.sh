@@ -11,7 +11,8 @@ out=$(realpath -m "$out")
 cd "$(dirname "$0")/.."
 cargo build --release --quiet -p fsot-cli
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+# On a failure what was measured so far goes to stderr, as the file in place stays.
+trap 's=$?; [ "$s" = 0 ] || cat "$work/out" >&2 2>/dev/null; rm -rf "$work"' EXIT
 {
   echo "# commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
   for flags in "--method stbn" "--method fast --passes 1" "--method fsot --iterations 1000"; do

@@ -15,6 +15,8 @@ export VK_DRIVER_FILES="${VK_DRIVER_FILES:-/usr/share/vulkan/icd.d/lvp_icd.$(una
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
 cargo build --release --quiet --example convergence
 cargo build --release --quiet
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
 head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)"
 {
   echo "# examples/convergence.rs, $head"
@@ -24,17 +26,15 @@ head="commit $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty
   done
   echo "## spatial 32x32x16 momentum 200 1000"
   target/release/examples/convergence spatial 32x32x16 momentum 200 1000
-} > "$out/convergence.txt.tmp" 2>&1
-mv "$out/convergence.txt.tmp" "$out/convergence.txt"
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+} > "$work/convergence.txt" 2>&1
+mv "$work/convergence.txt" "$out/convergence.txt"
 {
   echo "# the reference command, $head"
   echo '$ fsot optimize --backend cpu --size 32x32x16 --dims 2 --kernel taa --seed 7 --out m.exr'
   /usr/bin/time -f "wall %e s, peak memory %M KB" target/release/fsot optimize --backend cpu --size 32x32x16 \
     --dims 2 --kernel taa --seed 7 --out "$work/m.exr" 2>&1 | grep -v '^optimizing'
-} > "$out/reference-command.txt.tmp" 2>&1
-mv "$out/reference-command.txt.tmp" "$out/reference-command.txt"
+} > "$work/reference-command.txt" 2>&1
+mv "$work/reference-command.txt" "$out/reference-command.txt"
 status=0
 {
   echo "# FSOT_VALIDATION=1 fsot stress --out stress.md, $head"
@@ -43,7 +43,7 @@ status=0
   tail -n 1 "$work/stress.log"
   cat "$work/stress.md" 2>/dev/null || true
   echo "exit status $status"
-} > "$out/stress.txt.tmp" 2>&1
-mv "$out/stress.txt.tmp" "$out/stress.txt"
+} > "$work/stress.txt" 2>&1
+mv "$work/stress.txt" "$out/stress.txt"
 [ "$status" = 0 ] || { echo "the stress suite failed (exit $status): $out/stress.txt" >&2; exit 1; }
 echo "done: $out"

@@ -16,7 +16,8 @@ cd "$(dirname "$0")/../.."
 cargo build --release --quiet -p fsot-cli
 fsot="$PWD/target/release/fsot"
 work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+# On a failure the log so far goes to stderr, as the files in place stay.
+trap 's=$?; [ "$s" = 0 ] || cat "$work/log" >&2 2>/dev/null; rm -rf "$work"' EXIT
 # The log is written beside its place and moved there whole at the end.
 log="$work/log"
 echo "# fsot $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo -dirty), $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(date -u +%F)" > "$log"

@@ -9,9 +9,10 @@
 # FULL_RUN_DIR: the --out of `fsot eval --display standard_fhd,standard_4k
 # --peers ...` (its cache/ holds the planned masks). Prints the JOD tables.
 set -euo pipefail
+# Arguments are paths from where the script was called.
+full=$(realpath "${1:?usage: bench/eval/leads.sh FULL_RUN_DIR OUT_DIR}")
+out=$(realpath -m "${2:?usage: bench/eval/leads.sh FULL_RUN_DIR OUT_DIR}")
 cd "$(dirname "$0")/../.."
-full=$(realpath "$1")
-out=$(realpath -m "$2")
 fsot=target/release/fsot
 peers=../shared/data/peer-masks
 mkdir -p "$out/masks"

@@ -514,7 +514,8 @@ impl Run {
 
     /// For a run that has ended on a GPU it may leave (`BackendChoice::Auto`):
     /// reads its mask back for `finish`. False when the GPU failed reading it
-    /// and the run went on to the CPU path, from its checkpoint, to run again.
+    /// and the run went on to the CPU path, from its checkpoint, to run again
+    /// (not under a time budget, which keeps none and is spent: an error).
     fn settle(&mut self, on: &mut dyn FnMut(Event)) -> Result<bool> {
         if !self.finished() || self.ended.is_some() || self.options.backend != BackendChoice::Auto {
             return Ok(true);
@@ -527,7 +528,9 @@ impl Run {
                 self.ended = Some(mask);
                 Ok(true)
             }
-            Err(e) if self.can_fall_back(&e) => {
+            // A budgeted run keeps no checkpoint: on the CPU it would start
+            // again with its budget spent, so its failure is the run's.
+            Err(e) if self.can_fall_back(&e) && !matches!(self.settings.until, Until::Seconds(_)) => {
                 self.fall_back(&e, on)?;
                 self.stopped = false;
                 Ok(false)
