@@ -517,3 +517,29 @@ fn a_run_from_a_given_mask_records_that_start_not_the_settings_one() {
     let own = Run::start(tile, s, None, RunOptions::default()).unwrap().finish().unwrap();
     assert_eq!(own.meta("start"), Some("animated"));
 }
+
+#[test]
+fn a_checkpoint_of_a_run_from_a_given_mask_resumes_only_with_that_start_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let tile = Tile::new(8, 8, 4, 1, 2).unwrap();
+    let given = Mask::white(tile, 9);
+    let s = settings(40);
+    let path = dir.path().join("run.ckpt");
+    let options = |resume| {
+        RunOptions::default().backend(BackendChoice::Cpu).checkpoint(Some(Checkpointing {
+            path: path.clone(),
+            every: 5,
+            resume,
+        }))
+    };
+    let mut run = Run::start(tile, s, Some(&given), options(false)).unwrap();
+    run.advance(10, &CancelFlag::new(), &mut |_| {}).unwrap();
+    let cancel = CancelFlag::new();
+    cancel.cancel();
+    assert!(matches!(run.run(&cancel, &mut |_| {}).unwrap(), Outcome::Cancelled { .. }));
+    // Without the start it was made from: another run.
+    let other = Run::start(tile, s, None, options(true)).map(|_| ()).unwrap_err().to_string();
+    assert!(other.contains("different run"), "{other}");
+    let resumed = Run::start(tile, s, Some(&given), options(true)).unwrap().finish();
+    assert!(resumed.is_ok());
+}

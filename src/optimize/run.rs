@@ -312,7 +312,12 @@ impl Run {
         if settings.start == Start::Coarse && !matches!(settings.until, Until::Seconds(_)) {
             return Err(Error::invalid("a coarse start divides a time budget: it takes one (`Until::Seconds`, --budget)"));
         }
-        let fingerprint = checkpoint::fingerprint(&tile, &settings);
+        // A run from a given mask is another run than its settings' start
+        // would make (and that start does not run).
+        let fingerprint = match init.is_some() {
+            true => checkpoint::fingerprint(&tile, &Settings { start: Start::White, ..settings }) + "; start a given mask",
+            false => checkpoint::fingerprint(&tile, &settings),
+        };
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile, &settings)?;
         let left = match settings.until {
             Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
