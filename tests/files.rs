@@ -340,3 +340,15 @@ fn a_device_or_a_pipe_given_as_a_file_to_read_is_refused_before_it_is_opened() {
 fn bits(samples: &[f32]) -> Vec<u32> {
     samples.iter().map(|v| v.to_bits()).collect()
 }
+
+#[test]
+fn a_file_larger_than_any_fsot_reads_is_refused_before_it_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.exr");
+    // Sparse: its length past the cap, no blocks written.
+    let file = std::fs::File::create(&path).unwrap();
+    file.set_len(fsot::io::MAX_FILE_BYTES + 1).unwrap();
+    drop(file);
+    let err = exr::read(&path).unwrap_err().to_string();
+    assert!(err.contains("more than any file fsot reads"), "{err}");
+}

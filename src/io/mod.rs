@@ -12,14 +12,25 @@ use std::path::Path;
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 
-/// The bytes of a regular file (through links); a device, a pipe or a folder is
+/// The largest file `read_regular` reads: 4 GiB.
+pub const MAX_FILE_BYTES: u64 = 4 << 30;
+
+/// The bytes of a regular file (through links), at most `MAX_FILE_BYTES`; a device, a pipe or a folder is
 /// an error before it is opened: reading one would never end, or never begin.
 pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
-    let kind = std::fs::metadata(path)?.file_type();
-    if !kind.is_file() {
+    let metadata = std::fs::metadata(path)?;
+    if !metadata.file_type().is_file() {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             "not a regular file (a folder, a device or a pipe)",
+        ));
+    }
+    // Nothing fsot reads is larger: a tile's values (2^28 of 4 bytes) and room
+    // for headers and a format that stores them less tightly.
+    if metadata.len() > MAX_FILE_BYTES {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{} bytes, more than any file fsot reads ({MAX_FILE_BYTES})", metadata.len()),
         ));
     }
     std::fs::read(path)

@@ -41,7 +41,15 @@ pub fn read(path: &Path) -> Result<Mask> {
         return Err(bad(format!("{w} x {h} pixels cannot come from a file of {file_len} bytes")));
     }
     let mut buf = vec![0; reader.output_buffer_size()];
-    reader.next_frame(&mut buf).map_err(|e| bad(format!("not a readable PNG: {e}")))?;
+    let frame = reader.next_frame(&mut buf).map_err(|e| bad(format!("not a readable PNG: {e}")))?;
+    // An animated PNG's first frame may cover less than the image: the rest
+    // would read as zeros.
+    if (frame.width as usize, frame.height as usize) != (w, h) {
+        return Err(bad(format!(
+            "its first frame is {} x {} of a {w} x {h} image (an animated PNG): not a whole image",
+            frame.width, frame.height
+        )));
+    }
     let tile = Tile::new(w, w, h / w, 1, 1)?;
     // Row-major stacked frames match fsot's layout (frame-major, then rows).
     let samples = buf[..w * h * stride].iter().step_by(stride).map(|&v| (v as f32 + 0.5) / 256.0).collect();
