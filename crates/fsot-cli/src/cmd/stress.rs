@@ -26,7 +26,12 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     }
     eprintln!("stress suite on {machine}");
     let checks = run_stress(size, ctx.as_ref(), &mut |c| {
-        eprintln!("[{}] {}: {}: {}", if c.passed { "ok" } else { "FAILED" }, c.group, c.name, c.figure)
+        let held = match c.passed {
+            Some(true) => "ok",
+            Some(false) => "FAILED",
+            None => "not tried",
+        };
+        eprintln!("[{held}] {}: {}: {}", c.group, c.name, c.figure)
     })?;
     if let Some(c) = &ctx {
         let messages = c.validation_messages();
@@ -36,11 +41,19 @@ pub(crate) fn stress_command(args: StressArgs) -> Result<()> {
     }
     let table = to_markdown(&checks, &machine);
     out.commit(table.as_bytes())?;
-    let failed = checks.iter().filter(|c| !c.passed).count();
+    let failed = checks.iter().filter(|c| c.passed == Some(false)).count();
+    let untried = checks.iter().filter(|c| c.passed.is_none()).count();
     outln!("{table}")?;
     if failed > 0 {
         return Err(Error::invalid(format!("{failed} of {} stress checks failed", checks.len())));
     }
-    eprintln!("all {} checks held; table in {}", checks.len(), args.out.display());
+    let held = checks.len() - untried;
+    match untried {
+        0 => eprintln!("all {held} checks held; table in {}", args.out.display()),
+        n => eprintln!(
+            "all {held} checks tried held ({n} not tried on this device); table in {}",
+            args.out.display()
+        ),
+    }
     Ok(())
 }
