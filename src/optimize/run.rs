@@ -314,7 +314,8 @@ impl Run {
         }
         // A run from a given mask is another run than its settings' start
         // would make (and that start does not run).
-        let fingerprint = match init.is_some() {
+        let given_start = init.is_some();
+        let fingerprint = match given_start {
             true => checkpoint::fingerprint(&tile, &Settings { start: Start::White, ..settings }) + "; start a given mask",
             false => checkpoint::fingerprint(&tile, &settings),
         };
@@ -326,7 +327,6 @@ impl Run {
         let started;
         let mut start_note = None;
         let making_start = Instant::now();
-        let given_start = init.is_some();
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
                 let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
@@ -501,13 +501,10 @@ impl Run {
                     let saved = self.save()?;
                     return Ok(Outcome::Cancelled { iteration: self.iteration(), saved });
                 }
-                match self.step_once(to, on) {
-                    Ok(()) => {}
-                    // The GPU failed (in an iteration or reading its state back for a
-                    // checkpoint): continue on the CPU path.
-                    Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on)?,
-                    Err(e) => return Err(e),
-                }
+                // The GPU may fail in an iteration or reading its state back
+                // for a checkpoint.
+                let stepped = self.step_once(to, on);
+                self.or_fall_back(stepped, on)?;
             }
             // Ended: its mask read back now, where a failure can still hand
             // the run to the CPU path (which then goes on from its checkpoint).
@@ -522,10 +519,7 @@ impl Run {
     /// and the run went on to the CPU path, from its checkpoint, to run again
     /// (not under a time budget, which keeps none and is spent: an error).
     fn settle(&mut self, on: &mut dyn FnMut(Event)) -> Result<bool> {
-        if !self.finished() || self.ended.is_some() || self.options.backend != BackendChoice::Auto {
-            return Ok(true);
-        }
-        if self.backend.kind() != crate::optimize::backend::BackendKind::Vulkan {
+        if !self.finished() || self.ended.is_some() || !self.on_a_gpu_it_may_leave() {
             return Ok(true);
         }
         match self.backend.mask() {
@@ -783,10 +777,23 @@ impl Run {
         Ok(Some(c.path.clone()))
     }
 
-    fn can_fall_back(&self, e: &Error) -> bool {
+    /// On the GPU under `BackendChoice::Auto`: the CPU path can take over.
+    fn on_a_gpu_it_may_leave(&self) -> bool {
         self.options.backend == BackendChoice::Auto
             && self.backend.kind() == crate::optimize::backend::BackendKind::Vulkan
-            && e.is_device_failure()
+    }
+
+    fn can_fall_back(&self, e: &Error) -> bool {
+        self.on_a_gpu_it_may_leave() && e.is_device_failure()
+    }
+
+    /// `result`, or, where the GPU failed and the CPU path can take over, the
+    /// run handed over to it.
+    fn or_fall_back(&mut self, result: Result<()>, on: &mut dyn FnMut(Event)) -> Result<()> {
+        match result {
+            Err(e) if self.can_fall_back(&e) => self.fall_back(&e, on),
+            other => other,
+        }
     }
 
     /// Continues on the CPU path, from the checkpoint when there is one.
@@ -856,11 +863,8 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
             for (&r, c) in group.iter().zip(&costs) {
                 // The GPU may fail reading a run's state back for its
                 // checkpoint: that run goes on on the CPU, as `advance` does.
-                match runs[r].stepped(c, &mut |e| on(r, e)) {
-                    Ok(()) => {}
-                    Err(e) if runs[r].can_fall_back(&e) => runs[r].fall_back(&e, &mut |ev| on(r, ev))?,
-                    Err(e) => return Err(e),
-                }
+                let stepped = runs[r].stepped(c, &mut |e| on(r, e));
+                runs[r].or_fall_back(stepped, &mut |e| on(r, e))?;
             }
         }
         Err(e) if group.iter().all(|&r| runs[r].can_fall_back(&e)) => {

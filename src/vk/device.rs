@@ -60,7 +60,7 @@ impl DeviceInfo {
     /// (the radix sort's look-back path) needs; Vulkan does not promise it,
     /// and Apple's and mobile GPUs are known not to keep it.
     pub fn keeps_workgroups_running(&self) -> bool {
-        !self.is_cpu() && matches!(self.vendor_id, 0x10DE | 0x1002)
+        !self.is_cpu() && self.nvidia_or_amd()
     }
 
     /// Whether a workgroup whose size is a multiple of `subgroup_size` runs as
@@ -68,7 +68,11 @@ impl DeviceInfo {
     /// and AMD's GPUs (one subgroup size each for these shaders); elsewhere
     /// only where a pipeline asks (`full_subgroups`).
     pub fn fills_subgroups(&self) -> bool {
-        self.is_cpu() || matches!(self.vendor_id, 0x10DE | 0x1002)
+        self.is_cpu() || self.nvidia_or_amd()
+    }
+
+    fn nvidia_or_amd(&self) -> bool {
+        matches!(self.vendor_id, 0x10DE | 0x1002)
     }
 }
 
@@ -148,17 +152,14 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
     // SAFETY: a plain query.
     let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
-    let has_atomic_ext = extensions.iter().any(|e| {
-        e.extension_name_as_c_str().map(|n| n == ash::ext::shader_atomic_float::NAME).unwrap_or(false)
-    });
+    let has = |name: &std::ffi::CStr| extensions.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
+    let has_atomic_ext = has(ash::ext::shader_atomic_float::NAME);
     if has_atomic_ext {
         // SAFETY: the extension's feature struct is only chained where the device has it.
         unsafe { instance.get_physical_device_features2(pd, &mut features2) };
     }
     let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeaturesEXT::default();
-    let has_size_control = extensions.iter().any(|e| {
-        e.extension_name_as_c_str().map(|n| n == ash::ext::subgroup_size_control::NAME).unwrap_or(false)
-    });
+    let has_size_control = has(ash::ext::subgroup_size_control::NAME);
     if has_size_control {
         let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut size_control);
         // SAFETY: as above.
