@@ -419,6 +419,25 @@ fn a_run_under_a_time_budget_ends_within_about_one_iteration_of_it_with_its_iter
     assert!(mask.samples.iter().all(|v| (0.0..1.0).contains(v)));
 }
 
+#[test]
+fn a_run_under_a_time_budget_that_its_iteration_cap_ends_first_ends_on_the_schedules_last_step() {
+    // A budget of an hour that 40 iterations of a small tile cannot reach: the
+    // cap ends the run, so its steps follow the iterations through the cosine
+    // schedule, one iteration each, to its last step: the fixed run of 40 from
+    // the same start, bit for bit. Following the clock, they would all be near
+    // the full step.
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    let make = |s: Settings| {
+        let mut run = Run::start(tile, s, None, RunOptions::default().backend(BackendChoice::Cpu)).unwrap();
+        run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+        assert_eq!(run.iteration(), 40);
+        run.finish().unwrap()
+    };
+    let fixed = make(settings(40).start(fsot::Start::White));
+    let budgeted = make(settings(40).start(fsot::Start::White).until(fsot::Until::Seconds(3600.0)));
+    assert_eq!(bits(&budgeted), bits(&fixed));
+}
+
 #[cfg(feature = "vulkan")]
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]

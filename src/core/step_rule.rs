@@ -66,7 +66,16 @@ pub fn schedule(iteration: u32, iterations: u32) -> f32 {
     if iterations <= 1 {
         return 1.0;
     }
-    schedule_between(1.0, iteration as f32 / (iterations - 1) as f32)
+    schedule_between(1.0, progress(iteration, iterations))
+}
+
+/// How far through a run of `iterations` the schedule is at `iteration`: 0 at
+/// the first, 1 at the last (0 throughout a run of one).
+pub fn progress(iteration: u32, iterations: u32) -> f32 {
+    if iterations <= 1 {
+        return 0.0;
+    }
+    iteration as f32 / (iterations - 1) as f32
 }
 
 /// The step scale a run under a time budget starts at when it starts from a

@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 use crate::core::animate::{animate, lay_out};
 use crate::core::kernel::{KernelSpec, Temporal};
 use crate::core::mask::Mask;
-use crate::core::step_rule::{schedule_between, Plateau, PlateauState, FROM_MASK_START};
+use crate::core::step_rule::{progress, schedule_between, Plateau, PlateauState, FROM_MASK_START};
 use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
@@ -587,17 +587,23 @@ impl Run {
     }
 
     /// Under a time budget: sets the step scale the cosine schedule gives at the
-    /// time reached (from `FROM_MASK_START` for a run that starts from a mask),
-    /// and caps `count` at the iterations that fit in the budget and at a
-    /// `BUDGET_STEPS`th of it, so the scale follows the clock.
+    /// progress reached (from `FROM_MASK_START` for a run that starts from a
+    /// mask), the further of the clock's through the budget and the iterations'
+    /// through their cap, so that a run its cap ends first still ends at the
+    /// schedule's last step; caps `count` at the iterations that fit in the
+    /// budget, at a `BUDGET_STEPS`th of it and at a `BUDGET_STEPS`th of the cap,
+    /// so the scale follows both.
     fn budget_step(&mut self, count: u32) -> u32 {
         let Some(deadline) = self.deadline() else { return count };
         let now = Instant::now();
         let since = *self.iterating_since.get_or_insert(now);
         let span = deadline.saturating_duration_since(since).as_secs_f64();
-        let progress = if span > 0.0 { now.duration_since(since).as_secs_f64() / span } else { 1.0 };
+        let by_clock = if span > 0.0 { now.duration_since(since).as_secs_f64() / span } else { 1.0 };
+        let cap = self.settings.iterations;
+        let by_count = progress(self.iteration(), cap);
         let start = if self.init.is_some() { FROM_MASK_START } else { 1.0 };
-        self.backend.set_scale(Some(schedule_between(start, progress as f32)));
+        self.backend.set_scale(Some(schedule_between(start, (by_clock as f32).max(by_count))));
+        let count = count.min((f64::from(cap) / BUDGET_STEPS).floor().max(1.0) as u32);
         match self.pace {
             Some(pace) if pace > 0.0 => {
                 let left = deadline.saturating_duration_since(now).as_secs_f64();

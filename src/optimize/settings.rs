@@ -72,8 +72,8 @@ pub enum Start {
     White,
     /// One frame optimized under the kernel's spatial filter alone
     /// (`SPATIAL_ITERATIONS`, and under a time budget at most
-    /// `SPATIAL_BUDGET_SHARE` of it, its step following the clock: where the
-    /// iterations end first, the last step is larger than the schedule's), then
+    /// `SPATIAL_BUDGET_SHARE` of it, its step following the clock or the
+    /// iterations, whichever is further), then
     /// set in motion over the frames by a Kronecker sequence: each pixel's samples
     /// over time are a low-discrepancy sequence, each frame keeps the spatial
     /// structure. A tile of one frame starts white.
@@ -122,9 +122,10 @@ pub enum Until {
     /// schedule over the time left after set-up (from half the step when
     /// the run starts from a mask, as the animated start does), and no
     /// iteration starts that the pace so far says would end past the budget,
-    /// so a run ends past it by at most about one iteration. The step follows
-    /// the clock alone: a run that `iterations` ends first ends at the step
-    /// the clock had reached (so give a cap the budget cannot reach). The set-up
+    /// so a run ends past it by at most about one iteration. The schedule's
+    /// progress is the further of the clock's through the budget and the
+    /// iterations' through `iterations`, so a run that its cap ends first
+    /// still ends at the schedule's last step. The set-up
     /// counts but is not bounded: a budget shorter than the set-up (the
     /// start, the backend's pipelines and upload) ends past it by the set-up's
     /// time, with no iteration (`Run::set_up` says what it took). `iterations`
