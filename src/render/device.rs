@@ -241,7 +241,7 @@ pub unsafe fn make_plan_into_image(
             Err(Error::Interrupted) => return Ok(None),
             run => run?,
         };
-        on(PlanEvent::Start { index, file: &m.file, iteration: 0 });
+        on(PlanEvent::Start { index, file: &m.file, iteration: 0, backend: run.note() });
         let start = std::time::Instant::now();
         if let Outcome::Cancelled { .. } =
             run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))?

@@ -697,6 +697,9 @@ pub enum PlanEvent<'a> {
         file: &'a str,
         /// The iteration its run starts from (0 unless it resumes).
         iteration: u32,
+        /// Where its run goes, in words, and why when not where it was asked
+        /// to (`Run::note`: a GPU that failed as the run started).
+        backend: &'a str,
     },
     /// Its run's event.
     Run {
@@ -865,7 +868,7 @@ impl Plan {
                 for (&index, &end) in batch.iter().zip(&ends[first..]) {
                     let m = &self.masks[index];
                     let run = self.start_run(dir, m, end, &options, every, resume)?;
-                    on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration() });
+                    on(PlanEvent::Start { index, file: &m.file, iteration: run.iteration(), backend: run.note() });
                     runs.push(run);
                 }
                 first += batch.len();

@@ -137,10 +137,10 @@ fn a_swap_search_the_gpu_cannot_finish_starts_again_on_the_cpu_with_auto_and_sto
 fn with_auto_a_scene_whose_device_is_lost_at_any_submission_finishes_on_the_cpu() {
     // Two masks stepping together on one device, checkpointing every 5
     // iterations: the device lost at each of the first submissions, whether
-    // in a step or in a checkpoint's read-back, hands every run to the CPU.
+    // in a step or in a checkpoint's read-back, hands every run to the CPU,
+    // and says so.
     let scene = "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"8x8x4\"\n\
                  [[group]]\nname = \"light\"\ndims = 2\n[[group]]\nname = \"pick\"\ndims = 1\n";
-    let mut fell_back = 0;
     for n in 1..=16 {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("s.toml"), scene).unwrap();
@@ -154,9 +154,10 @@ fn with_auto_a_scene_whose_device_is_lost_at_any_submission_finishes_on_the_cpu(
         let t = text(&o);
         assert!(o.status.success(), "device lost at submission {n}: {t}");
         assert!(dir.path().join("o/plan.json").exists() && !t.contains("panicked"), "{n}: {t}");
-        fell_back += t.contains("the GPU failed") as u32;
+        // The loss is said, wherever it fell: as a mask's run started (its
+        // backend's line) or mid-run (a warning).
+        assert!(t.contains("the GPU failed") || t.contains("no Vulkan GPU used"), "{n}: {t}");
     }
-    assert!(fell_back > 0, "no submission of the first 16 failed a run");
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]

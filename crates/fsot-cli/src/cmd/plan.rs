@@ -161,11 +161,18 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     let cancel = cmd::env::interrupt_flag()?;
     // Iterations of each mask so far (the masks run side by side).
     let mut done = vec![0u64; plan.masks.len()];
+    // Each mask's backend, said when it is not the last one said (a GPU that
+    // failed as a mask's run started).
+    let mut said = String::new();
     let outcome =
         plan.execute(&args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| match e {
-            PlanEvent::Start { index, iteration, .. } => {
+            PlanEvent::Start { index, iteration, backend, .. } => {
                 done[index] = iteration as u64;
                 bar.set_position(done.iter().sum());
+                if backend != said {
+                    bar.suspend(|| eprintln!("{}: backend {backend}", plan.masks[index].file));
+                    said = backend.to_string();
+                }
             }
             PlanEvent::Run { index, event: Event::Progress { iteration, .. } } => {
                 done[index] = iteration as u64;
