@@ -85,7 +85,7 @@ pub const FROM_MASK_START: f32 = 0.5;
 
 /// The cosine schedule from `start` at `progress` 0 to `FINAL_FRACTION` at 1
 /// (progress clamped to [0, 1]). A run under a time budget takes its progress
-/// from the clock.
+/// from the clock, or from its iterations (`progress`) where they are further.
 pub fn schedule_between(start: f32, progress: f32) -> f32 {
     let x = progress.clamp(0.0, 1.0);
     FINAL_FRACTION + (start - FINAL_FRACTION) * 0.5 * (1.0 + (std::f32::consts::PI * x).cos())
