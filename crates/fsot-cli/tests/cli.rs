@@ -115,6 +115,17 @@ fn a_budgeted_run_reports_the_objective_of_its_animated_start_not_of_white_noise
     assert!(start < 0.7 * white, "start {start}, white noise {white}: {out}");
 }
 
+#[test]
+fn a_budgeted_run_that_its_iteration_cap_ends_first_says_so() {
+    // A minute that 20 iterations of a small tile cannot fill.
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["optimize", "--backend", "cpu", "--size", "8x8x4", "--budget", "60s", "--iterations", "20"];
+    let o = fsot(&[&args[..], &["--out", "m.exr"]].concat(), dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(out.contains("the run ended at its cap of 20 iterations (--iterations)"), "{out}");
+}
+
 #[cfg(unix)]
 #[test]
 fn an_output_that_links_to_the_checkpoint_is_refused_and_the_checkpoint_kept() {

@@ -166,6 +166,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     // A resumed run knows its start again only where it is made from the seed
     // or given (a white start, --init); an animated or coarse start is not kept.
     let s = run.settings();
+    let cap = s.iterations;
     let start_lost = run
         .resumed_from()
         .filter(|_| init.is_none() && (s.start.animates(s.until, &tile) || s.start == fsot::Start::Coarse));
@@ -196,8 +197,15 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
             after.ratio()
         )?;
         if let Until::Seconds(budget) = until {
+            // A run its cap ended before the budget did says so: more
+            // iterations (--iterations) would have gone further.
+            let capped = if iterations >= cap {
+                format!(" at its cap of {iterations} iterations (--iterations)")
+            } else {
+                String::new()
+            };
             outln!(
-                "budget {budget} s: the run ended {since_start:.3} s after the process started ({:+.3} s); \
+                "budget {budget} s: the run ended{capped} {since_start:.3} s after the process started ({:+.3} s); \
                  before the first iteration {:.3} s, of which the start {:.3} s and the backend {:.3} s",
                 since_start - budget,
                 since_start - seconds,
