@@ -426,6 +426,7 @@ fn a_run_under_a_time_budget_that_its_iteration_cap_ends_first_ends_on_the_sched
     // schedule, one iteration each, to its last step: the fixed run of 40 from
     // the same start, bit for bit. Following the clock, they would all be near
     // the full step.
+    let _others = others();
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let make = |s: Settings| {
         let mut run = Run::start(tile, s, None, RunOptions::default().backend(BackendChoice::Cpu)).unwrap();

@@ -125,7 +125,8 @@ pub enum Until {
     /// so a run ends past it by at most about one iteration. The schedule's
     /// progress is the further of the clock's through the budget and the
     /// iterations' through `iterations`, so a run that its cap ends first
-    /// still ends at the schedule's last step. The set-up
+    /// still ends at the schedule's last step (within a step of a 32nd of
+    /// the cap, where the GPU takes iterations in batches). The set-up
     /// counts but is not bounded: a budget shorter than the set-up (the
     /// start, the backend's pipelines and upload) ends past it by the set-up's
     /// time, with no iteration (`Run::set_up` says what it took). `iterations`

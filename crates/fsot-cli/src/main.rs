@@ -439,7 +439,8 @@ struct OptimizeArgs {
     /// The best mask reachable in this wall time (`1s`, `500ms`, `2.5s`, `1m`; at
     /// most a day),
     /// counted from the process's start (setting up the backend included): the
-    /// step size follows the cosine schedule over the time, and the run ends at
+    /// step size follows the cosine schedule over the time, or over the
+    /// --iterations cap where that is further, and the run ends at
     /// most about one iteration past it. --iterations caps it [default: 10000].
     /// With --scene: every mask of the plan within it (instead of the scene's
     /// `[plan]` budget).

@@ -161,9 +161,9 @@ pub(crate) fn optimize_scene(args: &OptimizeArgs, path: &std::path::Path) -> Res
     let cancel = cmd::env::interrupt_flag()?;
     // Iterations of each mask so far (the masks run side by side).
     let mut done = vec![0u64; plan.masks.len()];
-    // Each mask's backend, said when it is not the last one said (a GPU that
-    // failed as a mask's run started).
-    let mut said = String::new();
+    // Each mask's backend, said when it is not the last one said (the plan's,
+    // above): a GPU that failed as a mask's run started.
+    let mut said = plan.backend.clone();
     let outcome =
         plan.execute(&args.out, &options, args.checkpoint_every, args.resume, &cancel, &mut |e| match e {
             PlanEvent::Start { index, iteration, backend, .. } => {
