@@ -27,7 +27,7 @@ float send(FsotSlice s, uint at, float target) {
 }
 
 void main() {
-    uint g = gl_WorkGroupID.x;
+    uint g = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     uint tid = gl_LocalInvocationID.x;
     uint wg = gl_WorkGroupSize.x;
     if (g >= large_segments) {

@@ -141,30 +141,28 @@ pub(crate) fn info(instance: &ash::Instance, pd: vk::PhysicalDevice) -> DeviceIn
     // SAFETY: the chained structs live until the call returns.
     unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
     let props = props2.properties;
-    let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
-    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
-    let mut plain2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
-    // SAFETY: as above.
-    unsafe { instance.get_physical_device_features2(pd, &mut plain2) };
-    let float64 = plain2.features.shader_float64 == vk::TRUE;
-    let int64_atomics =
-        plain2.features.shader_int64 == vk::TRUE && features12.shader_buffer_int64_atomics == vk::TRUE;
-    let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut atomics);
     // SAFETY: a plain query.
     let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }.unwrap_or_default();
     let has = |name: &std::ffi::CStr| extensions.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
     let has_atomic_ext = has(ash::ext::shader_atomic_float::NAME);
-    if has_atomic_ext {
-        // SAFETY: the extension's feature struct is only chained where the device has it.
-        unsafe { instance.get_physical_device_features2(pd, &mut features2) };
-    }
-    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeaturesEXT::default();
     let has_size_control = has(ash::ext::subgroup_size_control::NAME);
-    if has_size_control {
-        let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut size_control);
-        // SAFETY: as above.
-        unsafe { instance.get_physical_device_features2(pd, &mut query) };
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut atomics = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
+    let mut size_control = vk::PhysicalDeviceSubgroupSizeControlFeaturesEXT::default();
+    // An extension's feature struct is chained only where the device has it.
+    let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut features12);
+    if has_atomic_ext {
+        features2 = features2.push_next(&mut atomics);
     }
+    if has_size_control {
+        features2 = features2.push_next(&mut size_control);
+    }
+    // SAFETY: the chained structs live until the call returns.
+    unsafe { instance.get_physical_device_features2(pd, &mut features2) };
+    let features = features2.features;
+    let float64 = features.shader_float64 == vk::TRUE;
+    let int64_atomics =
+        features.shader_int64 == vk::TRUE && features12.shader_buffer_int64_atomics == vk::TRUE;
     let text =
         |c: Result<&std::ffi::CStr, _>| c.map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let driver_name = text(driver.driver_name_as_c_str());

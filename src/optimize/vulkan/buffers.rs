@@ -49,11 +49,7 @@ impl LargePlan {
                 }
             }
             let cap = (3.0 * expected * slices as f64) as u64 + 4 * max_class;
-            // The transport takes a class a workgroup, in one dispatch of at
-            // most 65535 (every device's maxComputeWorkGroupCount reaches it):
-            // classes of more than local_max elements fill no more.
-            let by_dispatch = 65_535 * (local_max as u64 + 1);
-            cap.min(by_dispatch).min(RadixSort::max_capacity(ctx) as u64) as u32
+            cap.min(RadixSort::max_capacity(ctx) as u64) as u32
         } else {
             0
         };
