@@ -12,8 +12,9 @@ use std::path::Path;
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 
-/// The largest file `read_regular` reads: 4 GiB.
-pub const MAX_FILE_BYTES: u64 = 4 << 30;
+/// The largest file `read_regular` reads: 4 GiB, four times the largest
+/// tile's values in f32.
+pub const MAX_FILE_BYTES: u64 = crate::core::tile::MAX_VALUES as u64 * 4 * 4;
 
 /// The bytes of a regular file (through links), at most `MAX_FILE_BYTES`; a device, a pipe or a folder is
 /// an error before it is opened: reading one would never end, or never begin.

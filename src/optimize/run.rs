@@ -721,11 +721,8 @@ impl Run {
                 // Alone: the run's own step, with its fall-back.
                 let r = open[0];
                 let to = runs[r].settings.iterations;
-                match runs[r].step_once(to, &mut |e| on(r, e)) {
-                    Ok(()) => {}
-                    Err(e) if runs[r].can_fall_back(&e) => runs[r].fall_back(&e, &mut |ev| on(r, ev))?,
-                    Err(e) => return Err(e),
-                }
+                let stepped = runs[r].step_once(to, &mut |e| on(r, e));
+                runs[r].or_fall_back(stepped, &mut |e| on(r, e))?;
                 continue;
             }
             step_shared(runs, &group, on)?;
@@ -741,14 +738,21 @@ impl Run {
     /// As `finish`, handing the mask to `keep` (writing it out) before the
     /// checkpoint is removed: when `keep` fails, its error is returned and the
     /// checkpoint stays to resume from.
-    pub fn finish_with(self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
-        self.finish_in_place_with(keep)
+    pub fn finish_with(mut self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
+        let ended = self.ended.take();
+        self.finish_mask(ended, keep)
     }
 
     /// As `finish_with`, leaving the run in place (for runs held in a slice).
     pub fn finish_in_place_with(&self, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
-        let mut mask = match &self.ended {
-            Some(mask) => mask.clone(),
+        self.finish_mask(self.ended.clone(), keep)
+    }
+
+    /// The mask (`ended`, the ended run's, or else the backend's now), handed
+    /// to `keep`, then the finished run's checkpoint removed.
+    fn finish_mask(&self, ended: Option<Mask>, keep: impl FnOnce(&Mask) -> Result<()>) -> Result<Mask> {
+        let mut mask = match ended {
+            Some(mask) => mask,
             None => self.backend.mask()?,
         };
         // The settings' start did not run: the caller's mask did.

@@ -165,11 +165,12 @@ impl Filter {
             // frame lag newer.
             let r = 1.0 - alpha;
             // 1 - (1 - beta)^n, without losing a tiny beta.
-            let reach = -(n as f64 * (-beta).ln_1p()).exp_m1();
+            let log_keep = (-beta).ln_1p();
+            let reach = -(n as f64 * log_keep).exp_m1();
             let mut a = vec![0.0f64; n];
             for m in 1..=n {
                 let weight = match reach > 0.0 {
-                    true => beta * (-beta).ln_1p().mul_add(m as f64 - 1.0, 0.0).exp() / reach,
+                    true => beta * (log_keep * (m as f64 - 1.0)).exp() / reach,
                     false => 1.0 / n as f64,
                 };
                 let oldest = r.powi(m as i32 - 1);

@@ -34,10 +34,10 @@ pub fn interrupt_flag() -> Result<fsot::optimize::run::CancelFlag> {
     let set = flag.clone();
     let first = std::sync::OnceLock::new();
     ctrlc::set_handler(move || {
-        if set.is_cancelled() {
+        if let Some(t) = first.get() {
             // The same signal sent again to the process group (as `timeout` and
             // some shells do) within the second is not a second request.
-            if first.get().is_some_and(|t: &std::time::Instant| t.elapsed() < REPEAT) {
+            if std::time::Instant::elapsed(t) < REPEAT {
                 return;
             }
             eprintln!("\nquit at once: what the run did since its last checkpoint is not saved");

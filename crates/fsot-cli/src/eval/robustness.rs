@@ -135,6 +135,14 @@ pub fn run_robustness(
                 _ => (start..r.len()).map(|f| eye.filter(r, f, n)).collect(),
             })
             .collect();
+        // The main tables' masks for this scene (seed k reads mask k mod
+        // `planned_masks`, made from seed 1 + that), made or read once.
+        let planned: Vec<_> = match size.planned {
+            true => (1..=u64::from(size.planned_masks.max(1)))
+                .map(|s| planned_masks(scene, viewing, true, true, size, cache, s))
+                .collect::<Result<_>>()?,
+            false => Vec::new(),
+        };
         // absolute[method][judge][seed]
         let mut absolute = vec![vec![vec![0.0f64; seeds]; JUDGES.len()]; methods.len()];
         for (m, method_masks) in masks.iter().enumerate() {
@@ -148,11 +156,8 @@ pub fn run_robustness(
                             render(scene, size.shot, &MaskSampler::new(mask, scene.dims(), placement))
                         }
                         None => {
-                            // The main tables' mask for this seed (seed k reads
-                            // mask k mod `planned_masks`, made from seed 1 + that).
-                            let mask_seed = (seed as u64 % u64::from(size.planned_masks.max(1))) + 1;
-                            let planned = planned_masks(scene, viewing, true, true, size, cache, mask_seed)?;
-                            render(scene, size.shot, &MaskSampler::planned(&planned.reads(), placement))
+                            let reads = planned[seed % planned.len()].reads();
+                            render(scene, size.shot, &MaskSampler::planned(&reads, placement))
                         }
                     };
                     // TAA once per alpha the judges use.
