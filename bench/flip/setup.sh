@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs NVIDIA's FLIP (the flip-evaluator package, with numpy) in a virtual
-# environment beside this script and prints its python, for `fsot eval --flip`:
-#   fsot eval --flip "$(bench/flip/setup.sh)" ...
+# environment beside this script and prints its python, to run the package that
+# fsot's own FLIP is checked against:
+#   "$(bench/flip/setup.sh)" bench/flip/reference.py > crates/fsot-cli/tests/data/flip-package.json
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 venv="$here/.venv"

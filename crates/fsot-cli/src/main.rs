@@ -123,10 +123,11 @@ struct EvalArgs {
     /// the judging; `fsot-planned` makes only that setting's masks).
     #[arg(long, value_enum, default_value = "both")]
     taa: TaaArg,
-    /// Also judge the frames by FLIP (NVIDIA's flip-evaluator) run with this Python;
-    /// `bench/flip/setup.sh` installs it and prints the path.
-    #[arg(long, value_name = "PYTHON")]
-    flip: Option<PathBuf>,
+    /// Also judge the frames after TAA by FLIP (Andersson et al. 2020, NVIDIA's
+    /// LDR-FLIP at each display's pixels per degree), a still-image metric built
+    /// another way than ColorVideoVDP.
+    #[arg(long)]
+    flip: bool,
     /// Also dissect each method's error into anatomy.md: its power per spatial and
     /// temporal frequency band, and ColorVideoVDP's differences per channel and band.
     #[arg(long)]

@@ -49,7 +49,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
     }
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     size.anatomy = args.anatomy;
-    size.flip = args.flip.clone();
+    size.flip = args.flip;
     size.grey = match args.grey {
         GreyArg::Luminance => fsot_cli::eval::jod::Grey::Luminance,
         GreyArg::Rgb => fsot_cli::eval::jod::Grey::Rgb,

@@ -87,8 +87,8 @@ pub struct EvalSize {
     pub plan_tile: bool,
     /// How grey frames reach ColorVideoVDP.
     pub grey: Grey,
-    /// Also judge by FLIP, with this Python (`flip.rs`).
-    pub flip: Option<PathBuf>,
+    /// Also judge the frames after TAA by FLIP (`flip.rs`).
+    pub flip: bool,
     /// Also dissect each record's error (`anatomy.rs`): its spectra and what
     /// ColorVideoVDP pools per channel and band.
     pub anatomy: bool,
@@ -116,7 +116,7 @@ impl EvalSize {
             displays: vec![DISPLAY],
             plan_tile: true,
             grey: Grey::Rgb,
-            flip: None,
+            flip: false,
             anatomy: false,
             judged: [true, true],
         }
@@ -139,7 +139,7 @@ impl EvalSize {
             displays: vec![DISPLAY],
             plan_tile: false,
             grey: Grey::Rgb,
-            flip: None,
+            flip: false,
             anatomy: false,
             judged: [true, true],
         }
@@ -488,7 +488,7 @@ impl Judging<'_> {
                     false => judge.jod(frames, &r.frames[k], self.start, n)?,
                 };
                 out.jods[k].push(jod);
-                // FLIP judges the frames after TAA (a still-image metric, slow in Python).
+                // FLIP judges the frames after TAA (a still-image metric).
                 if let (Some((flip, ppds)), 1) = (self.flip, k) {
                     out.flips[k].push(flip.judge(frames, &r.frames[k], self.start, n, ppds[d])?);
                 }
@@ -597,7 +597,7 @@ pub fn run_eval(
     let judges: Vec<Judge> =
         size.displays.iter().map(|d| Judge::new(d, 60.0, size.grey)).collect::<Result<_>>()?;
     let every: Vec<usize> = (0..judges.len()).collect();
-    let flip = size.flip.as_deref().map(Flip::start).transpose()?;
+    let flip = size.flip.then_some(Flip);
     let ppds: Vec<f64> =
         size.displays.iter().map(|d| fsot::core::display::preset_ppd(d)).collect::<Result<_>>()?;
     let display_eyes: Vec<Eye> = ppds.iter().map(|&ppd| Eye::on_display(ppd, 60.0)).collect();
