@@ -59,6 +59,7 @@ CASES = [
     ("moved step, fhd", 36, 20, 37.8, ("step", 0), ("step", 1)),
     ("colour noise, package default ppd", 24, 24, 67.0206, ("colour-noise", 4), ("colour-noise", 5)),
     ("grey noise, small eye", 20, 30, 12.5, ("grey-noise", 6), ("grey-noise", 7)),
+    ("grey noise narrower than the filters, 4k", 10, 7, 75.4, ("grey-noise", 9), ("grey-noise", 10)),
     ("equal images", 16, 16, 60.0, ("grey-noise", 8), ("grey-noise", 8)),
 ]
 

@@ -3,7 +3,7 @@
 //! and its error map) for images made from integer hashes, which this test
 //! makes again bit for bit (`bench/flip/reference.py` wrote the file).
 
-use fsot_cli::eval::flip::{error_map, mean_error, Flip};
+use fsot_cli::eval::flip::Flip;
 
 /// A byte from four integers, as `bench/flip/reference.py` computes it.
 fn hash_byte(x: u32, y: u32, c: u32, seed: u32) -> u32 {
@@ -64,12 +64,13 @@ fn flip_agrees_with_nvidias_package_pixel_by_pixel_and_in_the_mean() {
     for case in cases {
         let name = case["name"].as_str().unwrap();
         let (w, h) = (case["width"].as_u64().unwrap() as u32, case["height"].as_u64().unwrap() as u32);
-        let ppd = case["ppd"].as_f64().unwrap() as f32;
+        let ppd = case["ppd"].as_f64().unwrap() as f32; // as the package takes it
         let made = |side: &str| {
             image(case[side]["kind"].as_str().unwrap(), w, h, case[side]["seed"].as_u64().unwrap() as u32)
         };
         let (reference, test) = (made("reference"), made("test"));
-        let ours = error_map(planes(&reference), planes(&test), w as usize, ppd);
+        let flip = Flip::at(ppd as f64).unwrap();
+        let ours = flip.error_map(planes(&reference), planes(&test), w as usize).unwrap();
         let theirs: Vec<f64> = case["map"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
         assert_eq!(ours.len(), theirs.len(), "{name}");
         // f32 as the package computes: the same to an ulp or two.
@@ -80,7 +81,7 @@ fn flip_agrees_with_nvidias_package_pixel_by_pixel_and_in_the_mean() {
                 "{name}, pixel ({x}, {y}): {ours} against {theirs}"
             );
         }
-        let mean = mean_error(planes(&reference), planes(&test), w as usize, ppd) as f64;
+        let mean = flip.mean_error(planes(&reference), planes(&test), w as usize).unwrap() as f64;
         let package = case["mean"].as_f64().unwrap();
         assert!(
             (mean - package).abs() <= 1e-6 * package,
@@ -97,18 +98,36 @@ fn flip_of_equal_frames_is_zero_and_grows_with_the_noise() {
     let mut noisy = |a: f64| -> Vec<Vec<f64>> {
         reference.iter().map(|f| f.iter().map(|v| v + a * (rng.next_f64() - 0.5)).collect()).collect()
     };
-    assert_eq!(Flip.judge(&reference, &reference, 2, n, 60.0).unwrap(), 0.0);
+    let flip = Flip::at(60.0).unwrap();
+    assert_eq!(flip.judge(&reference, &reference, 2, n).unwrap(), 0.0);
     let (weak, strong) = (noisy(0.05), noisy(0.4));
-    let weak = Flip.judge(&weak, &reference, 2, n, 60.0).unwrap();
-    let strong = Flip.judge(&strong, &reference, 2, n, 60.0).unwrap();
+    let weak = flip.judge(&weak, &reference, 2, n).unwrap();
+    let strong = flip.judge(&strong, &reference, 2, n).unwrap();
     assert!(0.0 < weak && weak < strong, "weak {weak}, strong {strong}");
 }
 
 #[test]
-fn flip_refuses_frames_that_do_not_pair_up() {
+fn flip_refuses_what_it_cannot_judge() {
+    for ppd in [0.0, 1.5, f64::NAN, f64::INFINITY, -3.0] {
+        let err = Flip::at(ppd).err().unwrap();
+        assert!(err.to_string().contains("pixels per degree"), "{err}");
+    }
+    let flip = Flip::at(60.0).unwrap();
     let frames = vec![vec![0.5; 16]; 3];
-    let err = Flip.judge(&frames, &frames[..2], 0, 4, 60.0).unwrap_err();
+    let err = flip.judge(&frames, &frames[..2], 0, 4).unwrap_err();
     assert!(err.to_string().contains("FLIP of 3 frames against 2"), "{err}");
-    assert!(Flip.judge(&frames, &frames, 3, 4, 60.0).is_err());
-    assert!(Flip.judge(&frames, &frames, 0, 4, 0.0).is_err());
+    assert!(flip.judge(&frames, &frames, 3, 4).is_err(), "no frame from 3 on");
+    assert!(flip.judge(&frames, &frames, 0, 5).is_err(), "frames of 16 values are not 5 x 5");
+    let mut holed = frames.clone();
+    holed[1][7] = f64::NAN;
+    assert!(flip.judge(&holed, &frames, 0, 4).is_err(), "a NaN");
+    let plane = [0.5f32; 12];
+    let short = [0.5f32; 11];
+    assert!(flip.error_map([&plane, &plane, &plane], [&plane, &plane, &short], 4).is_err());
+    assert!(
+        flip.error_map([&plane, &plane, &plane], [&plane, &plane, &plane], 5).is_err(),
+        "12 is not 5 wide"
+    );
+    assert!(flip.error_map([&plane, &plane, &plane], [&plane, &plane, &plane], 0).is_err());
+    assert_eq!(flip.error_map([&plane, &plane, &plane], [&plane, &plane, &plane], 4).unwrap(), vec![0.0; 12]);
 }

@@ -51,10 +51,10 @@ fn srgb_to_linear(v: f32) -> f32 {
 
 /// Linear sRGB (D65) to XYZ.
 fn rgb_to_xyz([r, g, b]: [f32; 3]) -> [f32; 3] {
-    let m = [
+    let m: [[f32; 3]; 3] = [
         [10135552.0 / 24577794.0, 8788810.0 / 24577794.0, 4435075.0 / 24577794.0],
         [2613072.0 / 12288897.0, 8788810.0 / 12288897.0, 887015.0 / 12288897.0],
-        [1425312.0 / 73733382.0, 8788810.0 / 73733382.0, 70074185.0 / 73733382.0f32],
+        [1425312.0 / 73733382.0, 8788810.0 / 73733382.0, 70074185.0 / 73733382.0],
     ];
     m.map(|row| row[0] * r + row[1] * g + row[2] * b)
 }
@@ -199,6 +199,12 @@ fn along_y(plane: &[f32], w: usize, taps: &[f32]) -> Vec<f32> {
     out
 }
 
+/// `v` clamped to [0, 1] as the reference clamps (NaN to 0, where `clamp` keeps it).
+#[allow(clippy::manual_clamp)]
+fn unit(v: f32) -> f32 {
+    v.max(0.0).min(1.0)
+}
+
 /// An image in YCxCz, one plane per channel.
 struct Opponent([Vec<f32>; 3]);
 
@@ -207,7 +213,7 @@ impl Opponent {
     fn from_srgb(rgb: [&[f32]; 3]) -> Self {
         let mut planes = [(); 3].map(|_| Vec::with_capacity(rgb[0].len()));
         for ((&r, &g), &b) in rgb[0].iter().zip(rgb[1]).zip(rgb[2]) {
-            let linear = [r, g, b].map(|v| srgb_to_linear(v).clamp(0.0, 1.0));
+            let linear = [r, g, b].map(|v| unit(srgb_to_linear(v)));
             for (plane, v) in planes.iter_mut().zip(xyz_to_ycxcz(rgb_to_xyz(linear))) {
                 plane.push(v);
             }
@@ -223,7 +229,7 @@ impl Opponent {
         let (cz1, cz2) = (both(&self.0[2], &f.cz[0]), both(&self.0[2], &f.cz[1]));
         (0..l.len())
             .map(|i| {
-                let rgb = xyz_to_rgb(ycxcz_to_xyz([l[i], cx[i], cz1[i] + cz2[i]])).map(|v| v.clamp(0.0, 1.0));
+                let rgb = xyz_to_rgb(ycxcz_to_xyz([l[i], cx[i], cz1[i] + cz2[i]])).map(unit);
                 hunt(xyz_to_lab(rgb_to_xyz(rgb)))
             })
             .collect()
@@ -241,71 +247,83 @@ impl Opponent {
     }
 }
 
-/// FLIP's error map (row-major, width `w`) of `test` against `reference`, each
-/// three sRGB planes with values in [0, 1], seen at `ppd` pixels per degree.
-pub fn error_map(reference: [&[f32]; 3], test: [&[f32]; 3], w: usize, ppd: f32) -> Vec<f32> {
-    let filters = Filters::new(ppd);
-    let (r, t) = (Opponent::from_srgb(reference), Opponent::from_srgb(test));
-    let cmax = max_colour_error();
-    let pccmax = PC * cmax;
-    let colour = r.seen(w, &filters).into_iter().zip(t.seen(w, &filters)).map(|(p, q)| {
-        let e = hyab(p, q).powf(QC);
-        // Up to PC of the largest error maps to [0, PT]; the rest to (PT, 1].
-        if e < pccmax {
-            e * (PT / pccmax)
-        } else {
-            PT + ((e - pccmax) / (cmax - pccmax)) * (1.0 - PT)
-        }
-    });
-    let features = r.features(w, &filters).into_iter().zip(t.features(w, &filters));
-    colour
-        .zip(features)
-        .map(|(e, (p, q))| {
-            let edge = (p[0] - q[0]).abs();
-            let point = (p[1] - q[1]).abs();
-            let feature = ((1.0 / 2.0f32.sqrt()) * edge.max(point)).powf(QF);
-            e.powf(1.0 - feature)
-        })
-        .collect()
+/// FLIP seen from one distance: its filters at a number of pixels per degree.
+pub struct Flip {
+    filters: Filters,
+    /// The largest colour error.
+    cmax: f32,
 }
-
-/// The mean of the error map, summed in order as the reference does.
-pub fn mean_error(reference: [&[f32]; 3], test: [&[f32]; 3], w: usize, ppd: f32) -> f32 {
-    let map = error_map(reference, test, w, ppd);
-    map.iter().fold(0.0f32, |s, &v| s + v) / map.len() as f32
-}
-
-/// FLIP as `fsot eval` runs it on grey frames.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Flip;
 
 impl Flip {
-    /// The mean over frames of FLIP's mean error of `render` against
-    /// `reference` (n x n grey frames, from `start`), seen at `ppd` pixels per degree.
-    pub fn judge(
-        &self,
-        render: &[Vec<f64>],
-        reference: &[Vec<f64>],
-        start: usize,
-        n: usize,
-        ppd: f64,
-    ) -> Result<f64> {
-        if render.len() != reference.len() || start >= render.len() || ppd.is_nan() || ppd <= 0.0 {
+    /// FLIP at `ppd` pixels per degree: at least 2 (below, the feature
+    /// detectors' taps vanish in f32) and finite.
+    pub fn at(ppd: f64) -> Result<Self> {
+        if !(2.0..=1e4).contains(&ppd) {
+            return Err(Error::invalid(format!("FLIP at {ppd} pixels per degree: give 2 to 10000")));
+        }
+        Ok(Self { filters: Filters::new(ppd as f32), cmax: max_colour_error() })
+    }
+
+    /// The error map (row-major, width `w`) of `test` against `reference`, each
+    /// three sRGB planes of the same size with values in [0, 1].
+    pub fn error_map(&self, reference: [&[f32]; 3], test: [&[f32]; 3], w: usize) -> Result<Vec<f32>> {
+        let len = reference[0].len();
+        if w == 0 || len == 0 || len % w != 0 || reference.iter().chain(&test).any(|p| p.len() != len) {
             return Err(Error::invalid(format!(
-                "FLIP of {} frames against {}, from frame {start}, at {ppd} pixels per degree",
+                "FLIP of planes of {:?} values against {:?}, {w} wide",
+                test.map(|p| p.len()),
+                reference.map(|p| p.len())
+            )));
+        }
+        let (f, cmax) = (&self.filters, self.cmax);
+        let (r, t) = (Opponent::from_srgb(reference), Opponent::from_srgb(test));
+        let pccmax = PC * cmax;
+        let colour = r.seen(w, f).into_iter().zip(t.seen(w, f)).map(|(p, q)| {
+            let e = hyab(p, q).powf(QC);
+            // Up to PC of the largest error maps to [0, PT]; the rest to (PT, 1].
+            if e < pccmax {
+                e * (PT / pccmax)
+            } else {
+                PT + ((e - pccmax) / (cmax - pccmax)) * (1.0 - PT)
+            }
+        });
+        let features = r.features(w, f).into_iter().zip(t.features(w, f));
+        Ok(colour
+            .zip(features)
+            .map(|(e, (p, q))| {
+                let edge = (p[0] - q[0]).abs();
+                let point = (p[1] - q[1]).abs();
+                let feature = ((1.0 / 2.0f32.sqrt()) * edge.max(point)).powf(QF);
+                e.powf(1.0 - feature)
+            })
+            .collect())
+    }
+
+    /// The mean of the error map, summed in order as the reference does.
+    pub fn mean_error(&self, reference: [&[f32]; 3], test: [&[f32]; 3], w: usize) -> Result<f32> {
+        let map = self.error_map(reference, test, w)?;
+        Ok(map.iter().fold(0.0f32, |s, &v| s + v) / map.len() as f32)
+    }
+
+    /// The mean over frames of the mean error of `render` against `reference`
+    /// (n x n grey frames, from `start`), as `fsot eval` judges.
+    pub fn judge(&self, render: &[Vec<f64>], reference: &[Vec<f64>], start: usize, n: usize) -> Result<f64> {
+        let sized = |seq: &[Vec<f64>]| seq.iter().all(|f| f.len() == n * n);
+        if render.len() != reference.len() || start >= render.len() || !sized(render) || !sized(reference) {
+            return Err(Error::invalid(format!(
+                "FLIP of {} frames against {}, from frame {start}, each {n} x {n}",
                 render.len(),
                 reference.len()
             )));
         }
+        if render.iter().chain(reference).flatten().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("FLIP of frames that hold values that are not finite"));
+        }
         let [test, refs] = shown(render, reference, start);
-        let total: f64 = test
-            .iter()
-            .zip(&refs)
-            .map(|(t, r)| {
-                debug_assert_eq!(t.len(), n * n);
-                mean_error([r, r, r], [t, t, t], n, ppd as f32) as f64
-            })
-            .sum();
+        let mut total = 0.0;
+        for (t, r) in test.iter().zip(&refs) {
+            total += self.mean_error([r, r, r], [t, t, t], n)? as f64;
+        }
         Ok(total / test.len() as f64)
     }
 }

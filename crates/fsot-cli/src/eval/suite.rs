@@ -452,8 +452,8 @@ struct Judging<'a> {
     display_eyes: &'a [Eye],
     start: usize,
     judges: &'a [Judge],
-    /// FLIP, with each display's pixels per degree, when asked for.
-    flip: Option<(&'a Flip, &'a [f64])>,
+    /// FLIP at each display's pixels per degree, when asked for.
+    flip: Option<&'a [Flip]>,
 }
 
 impl Judging<'_> {
@@ -489,8 +489,8 @@ impl Judging<'_> {
                 };
                 out.jods[k].push(jod);
                 // FLIP judges the frames after TAA (a still-image metric).
-                if let (Some((flip, ppds)), 1) = (self.flip, k) {
-                    out.flips[k].push(flip.judge(frames, &r.frames[k], self.start, n, ppds[d])?);
+                if let (Some(flips), 1) = (self.flip, k) {
+                    out.flips[k].push(flips[d].judge(frames, &r.frames[k], self.start, n)?);
                 }
             }
         }
@@ -597,10 +597,13 @@ pub fn run_eval(
     let judges: Vec<Judge> =
         size.displays.iter().map(|d| Judge::new(d, 60.0, size.grey)).collect::<Result<_>>()?;
     let every: Vec<usize> = (0..judges.len()).collect();
-    let flip = size.flip.then_some(Flip);
     let ppds: Vec<f64> =
         size.displays.iter().map(|d| fsot::core::display::preset_ppd(d)).collect::<Result<_>>()?;
     let display_eyes: Vec<Eye> = ppds.iter().map(|&ppd| Eye::on_display(ppd, 60.0)).collect();
+    let flips: Vec<Flip> = match size.flip {
+        true => ppds.iter().map(|&ppd| Flip::at(ppd)).collect::<Result<_>>()?,
+        false => Vec::new(),
+    };
     for (eye, display) in display_eyes.iter().zip(&size.displays) {
         if n <= 2 * eye.margin {
             return Err(Error::invalid(format!("image {n} too small for the eye on {display}")));
@@ -646,7 +649,7 @@ pub fn run_eval(
                     .collect(),
                 frames: [refs.clone(), taa_frames],
             };
-            let flip = flip.as_ref().map(|f| (f, &ppds[..]));
+            let flip = size.flip.then_some(&flips[..]);
             let judging = Judging {
                 scene,
                 size,
