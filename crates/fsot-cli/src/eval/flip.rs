@@ -255,8 +255,8 @@ pub struct Flip {
 }
 
 impl Flip {
-    /// FLIP at `ppd` pixels per degree: at least 2 (below, the feature
-    /// detectors' taps vanish in f32) and finite.
+    /// FLIP at `ppd` pixels per degree, 2 to 10000 (below 2 the feature
+    /// detectors' taps vanish in f32).
     pub fn at(ppd: f64) -> Result<Self> {
         if !(2.0..=1e4).contains(&ppd) {
             return Err(Error::invalid(format!("FLIP at {ppd} pixels per degree: give 2 to 10000")));
