@@ -4,7 +4,7 @@
 # (white noise left out: a quarter of the judging, and no verdict needs it). One
 # `fsot eval` per scene, all sharing one cache, so a run stopped part way keeps
 # the scenes it finished and a second call does only the rest; then the records
-# merged into one file (all.json) and the verdicts (verdicts.md).
+# merged into one file (all.json), the verdicts (verdicts.md) and FLIP's table (flip.md).
 #
 #   bench/eval/placements-400.sh [FSOT_BINARY] [OUT_DIR]
 #
@@ -39,4 +39,5 @@ with open(f"{out}/all.json", "w") as f:
     json.dump(records, f, indent=1)
 PY
 python3 "$here/compare.py" "$out/all.json" fsot-planned published-stbn published-fast > "$out/verdicts.md"
-echo "wrote $out/all.json and $out/verdicts.md"
+python3 "$here/flip_table.py" "$out/all.json" fsot-planned published-stbn published-fast > "$out/flip.md"
+echo "wrote $out/all.json, $out/verdicts.md and $out/flip.md"
