@@ -159,6 +159,8 @@ impl Filters {
             let negative: f32 = -taps.iter().filter(|&&t| t <= 0.0).sum::<f32>();
             taps.into_iter().map(|t| t / if t > 0.0 { positive } else { negative }).collect::<Vec<_>>()
         };
+        // Divided by the sum, where the spatial filters are multiplied by its
+        // inverse: each as the reference rounds it.
         let sum: f32 = g.iter().sum();
         let g = g.into_iter().map(|t| t / sum).collect();
         Self { y, cx, cz, g, dg: signed(dg), ddg: signed(ddg) }
