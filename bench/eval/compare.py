@@ -3,12 +3,28 @@
 setting and scene, the method's JOD, pRelMSE (the column's sigma, and the
 display's eye where measured) and FLIP (after TAA, where
 measured) beside each other method's, and the verdict: ahead or behind where
-the 95% intervals do not overlap, else level.
+the 95% intervals do not overlap, else level. Where the records hold each
+placement's values (both methods judged at the same placements), the verdict
+placement by placement follows in brackets when it differs: ahead or behind
+where the 95% interval of the differences clears zero.
 
     python3 bench/eval/compare.py RESULTS.json METHOD OTHER...
 """
 import json
+import math
 import sys
+
+# Two-sided 95% quantiles of Student's t, 1 to 30 degrees of freedom.
+T95 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145,
+       2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048,
+       2.045, 2.042]
+
+
+def t95(dof):
+    if dof <= 30:
+        return T95[dof - 1]
+    z, v = 1.959964, float(dof)
+    return z + (z**3 + z) / (4 * v) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * v * v)
 
 
 def verdict(a, a_ci, b, b_ci, higher_better):
@@ -17,6 +33,21 @@ def verdict(a, a_ci, b, b_ci, higher_better):
     if a + a_ci < b - b_ci:
         return "behind" if higher_better else "ahead"
     return "level"
+
+
+def paired(m, r, key, higher_better):
+    """The verdict from the differences placement by placement, or None."""
+    a = m.get("placements", {}).get(key) or []
+    b = r.get("placements", {}).get(key) or []
+    if len(a) != len(b) or len(a) < 2:
+        return None
+    d = [x - y for x, y in zip(a, b)]
+    n = len(d)
+    mean = sum(d) / n
+    ci = t95(n - 1) * math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1) / n)
+    if not math.isfinite(mean) or not math.isfinite(ci):
+        return None
+    return verdict(mean, ci, 0.0, 0.0, higher_better)
 
 
 def jod(r):
@@ -50,7 +81,7 @@ def main():
         head += [f"vs {o}: {j[3]}" for o in others for j in judges]
         print("| " + " | ".join(head) + " |")
         print("|" + " --- |" * len(head))
-        counts = {}
+        counts, by_pair = {}, {}
         for s in scenes:
             m = at.get((s, method))
             if m is None:
@@ -67,10 +98,18 @@ def main():
                     v = verdict(m[key], m[ci], r[key], r[ci], hb)
                     counts.setdefault((o, name), {}).setdefault(v, 0)
                     counts[(o, name)][v] += 1
-                    row.append(v)
+                    p = paired(m, r, key, hb)
+                    if p is not None:
+                        by_pair.setdefault((o, name), {}).setdefault(p, 0)
+                        by_pair[(o, name)][p] += 1
+                    row.append(v if p is None or p == v else f"{v} (paired: {p})")
             print("| " + " | ".join(row) + " |")
         for (o, name), c in counts.items():
-            print(f"- vs {o} by {name}: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items())))
+            line = f"- vs {o} by {name}: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
+            if (o, name) in by_pair:
+                line += "; placement by placement: " + ", ".join(
+                    f"{k} {v}" for k, v in sorted(by_pair[(o, name)].items()))
+            print(line)
 
 
 if __name__ == "__main__":

@@ -57,6 +57,13 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
         assert_eq!(r.seeds, 2, "{r:?}");
         assert!(r.prelmse_ci95.is_finite() && r.relmse_ci95.is_finite() && r.jod_ci95.is_finite(), "{r:?}");
         assert!(r.jod < 10.0 && r.jod > -5.0, "{r:?}");
+        // Each placement's values, whose mean is the record's.
+        let p = &r.placements;
+        for (values, mean) in [(&p.prelmse, r.prelmse), (&p.relmse, r.relmse), (&p.jod, r.jod)] {
+            assert_eq!(values.len(), 2, "{r:?}");
+            assert!((values.iter().sum::<f64>() / 2.0 - mean).abs() <= 1e-12 * mean.abs(), "{r:?}");
+        }
+        assert_eq!(p.prelmse_display.len(), 2, "{r:?}");
     }
     // TAA averages 1-spp noise over frames: far less error than without.
     for scene in ["light-pick", "defocus-motion"] {
@@ -70,16 +77,16 @@ fn every_scene_and_method_gets_a_record_with_and_without_taa() {
         "\"method\"",
         "\"taa\"",
         "\"sigma\"",
-        "\"prelmse\"",
-        "\"relmse\"",
-        "\"jod\"",
         "\"jod_ci95\"",
         "\"prelmse_ci95\"",
-        "\"prelmse_display\"",
         "\"prelmse_display_ci95\"",
         "\"seeds\"",
     ] {
         assert_eq!(json.matches(key).count(), records.len(), "{key}");
+    }
+    // The means, and again in each record's placements.
+    for key in ["\"prelmse\"", "\"relmse\"", "\"jod\"", "\"prelmse_display\""] {
+        assert_eq!(json.matches(key).count(), 2 * records.len(), "{key}");
     }
     // Four picture strips per scene, each a PNG as wide as the reference (if
     // any) and eight methods.
@@ -322,6 +329,7 @@ fn record(
         flip: None,
         flip_ci95: None,
         seeds: 5,
+        placements: Default::default(),
         anatomy: None,
     }
 }

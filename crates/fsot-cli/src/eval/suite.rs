@@ -173,9 +173,24 @@ pub struct Record {
     pub flip_ci95: Option<f64>,
     /// Independent masks measured (1 for a mask given from outside).
     pub seeds: u32,
+    /// Every placement's values, in order: placement k is the same for every
+    /// method of a run, so two methods' values pair up placement by placement.
+    pub placements: Placements,
     /// The error dissected (mean over the renders), when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub anatomy: Option<Anatomy>,
+}
+
+/// Per placement (the mean over its renders), the values a record's means
+/// and intervals are made from.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Placements {
+    pub prelmse: Vec<f64>,
+    pub relmse: Vec<f64>,
+    pub prelmse_display: Vec<f64>,
+    pub jod: Vec<f64>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub flip: Vec<f64>,
 }
 
 /// What one seed's renders measured, per TAA setting (without, with): the
@@ -207,16 +222,23 @@ fn records_of(
     for (d, display) in displays.iter().enumerate() {
         for taa in [false, true].into_iter().filter(|&t| judged[t as usize]) {
             let k = taa as usize;
-            let of = |j: usize| Interval::of(&values.iter().map(|v| v.errors[k][j]).collect::<Vec<_>>());
             let dissected: Vec<Anatomy> =
                 values.iter().flat_map(|v| v.anatomy[k].get(d).into_iter().flatten().cloned()).collect();
-            let (p, r) = (of(0), of(1));
-            let j = Interval::of(&values.iter().map(|v| v.jods[k][d]).collect::<Vec<_>>());
-            let pd = Interval::of(&values.iter().map(|v| v.display_errors[k][d]).collect::<Vec<_>>());
-            let flip = values
-                .iter()
-                .all(|v| v.flips[k].len() > d)
-                .then(|| Interval::of(&values.iter().map(|v| v.flips[k][d]).collect::<Vec<_>>()));
+            let placements = Placements {
+                prelmse: values.iter().map(|v| v.errors[k][0]).collect(),
+                relmse: values.iter().map(|v| v.errors[k][1]).collect(),
+                prelmse_display: values.iter().map(|v| v.display_errors[k][d]).collect(),
+                jod: values.iter().map(|v| v.jods[k][d]).collect(),
+                flip: if values.iter().all(|v| v.flips[k].len() > d) {
+                    values.iter().map(|v| v.flips[k][d]).collect()
+                } else {
+                    Vec::new()
+                },
+            };
+            let (p, r) = (Interval::of(&placements.prelmse), Interval::of(&placements.relmse));
+            let j = Interval::of(&placements.jod);
+            let pd = Interval::of(&placements.prelmse_display);
+            let flip = (!placements.flip.is_empty()).then(|| Interval::of(&placements.flip));
             out.push(Record {
                 scene: scene.name().to_string(),
                 method: method.to_string(),
@@ -234,6 +256,7 @@ fn records_of(
                 flip: flip.map(|f| f.mean),
                 flip_ci95: flip.map(|f| f.ci95),
                 seeds,
+                placements,
                 anatomy: (!dissected.is_empty()).then(|| Anatomy::mean(&dissected)),
             });
         }
@@ -801,8 +824,9 @@ fn planned_records(
 
 /// The records as JSON: a list of {"scene", "method", "taa", "sigma",
 /// "prelmse", "prelmse_ci95", "relmse", "relmse_ci95", "prelmse_display",
-/// "prelmse_display_ci95", "jod", "jod_ci95",
-/// "seeds"}.
+/// "prelmse_display_ci95", "jod", "jod_ci95", "flip" and "flip_ci95" (when
+/// judged), "seeds", "placements" (every placement's values, in order, by
+/// the same names) and "anatomy" (when asked for)}.
 pub fn to_json(records: &[Record]) -> Result<String> {
     let mut text = serde_json::to_string_pretty(records)
         .map_err(|e| Error::invalid(format!("cannot write the records as JSON: {e}")))?;
@@ -864,8 +888,10 @@ pub fn to_markdown(records: &[Record]) -> String {
                     &methods,
                     |scene, m| {
                         let white = find(scene, "white").map(|r| r.prelmse);
-                        find(scene, m).map(|r| {
-                            (Interval { mean: r.prelmse, ci95: r.prelmse_ci95 }, Shown::Error { white })
+                        find(scene, m).map(|r| Cell {
+                            interval: Interval { mean: r.prelmse, ci95: r.prelmse_ci95 },
+                            shown: Shown::Error { white },
+                            placements: &r.placements.prelmse,
                         })
                     },
                     false,
@@ -878,11 +904,10 @@ pub fn to_markdown(records: &[Record]) -> String {
                     &methods,
                     |scene, m| {
                         let white = find(scene, "white").map(|r| r.prelmse_display);
-                        find(scene, m).map(|r| {
-                            (
-                                Interval { mean: r.prelmse_display, ci95: r.prelmse_display_ci95 },
-                                Shown::Error { white },
-                            )
+                        find(scene, m).map(|r| Cell {
+                            interval: Interval { mean: r.prelmse_display, ci95: r.prelmse_display_ci95 },
+                            shown: Shown::Error { white },
+                            placements: &r.placements.prelmse_display,
                         })
                     },
                     false,
@@ -892,7 +917,11 @@ pub fn to_markdown(records: &[Record]) -> String {
                     &scenes,
                     &methods,
                     |scene, m| {
-                        find(scene, m).map(|r| (Interval { mean: r.jod, ci95: r.jod_ci95 }, Shown::Fixed(3)))
+                        find(scene, m).map(|r| Cell {
+                            interval: Interval { mean: r.jod, ci95: r.jod_ci95 },
+                            shown: Shown::Fixed(3),
+                            placements: &r.placements.jod,
+                        })
                     },
                     true,
                 );
@@ -903,7 +932,11 @@ pub fn to_markdown(records: &[Record]) -> String {
                         &methods,
                         |scene, m| {
                             let r = find(scene, m)?;
-                            Some((Interval { mean: r.flip?, ci95: r.flip_ci95? }, Shown::Fixed(4)))
+                            Some(Cell {
+                                interval: Interval { mean: r.flip?, ci95: r.flip_ci95? },
+                                shown: Shown::Fixed(4),
+                                placements: &r.placements.flip,
+                            })
                         },
                         false,
                     );
@@ -925,43 +958,61 @@ enum Shown {
     Error { white: Option<f64> },
 }
 
+/// A table's cell: a method's interval, how it is shown, and the values per
+/// placement it was made from (empty where not known).
+struct Cell<'a> {
+    interval: Interval,
+    shown: Shown,
+    placements: &'a [f64],
+}
+
+/// Whether `best` is ahead of `next` (higher when `higher_better`): placement
+/// by placement where both were judged at the same placements (the 95%
+/// interval of their differences clears zero), else side by side (their
+/// intervals do not overlap).
+fn ahead(best: &Cell, next: &Cell, higher_better: bool) -> bool {
+    match Interval::difference(best.placements, next.placements) {
+        Some(d) => d.sign() == Some(higher_better),
+        None => !best.interval.overlaps(&next.interval),
+    }
+}
+
 /// One table: a row per scene, a column per method; `cell` gives a method's
-/// interval and how it is shown. The best (highest when `higher_better`) is
-/// bold where its interval does not overlap the runner-up's; with no runner-up
-/// (white noise is not ranked by an error measure, whose column is its ratio
-/// to white), nothing is bold.
-fn table(
+/// cell. The best (highest when `higher_better`) is bold where it is `ahead`
+/// of the runner-up; with no runner-up (white noise is not ranked by an error
+/// measure, whose column is its ratio to white), nothing is bold.
+fn table<'a>(
     scenes: &[&str],
     methods: &[&str],
-    cell: impl Fn(&str, &str) -> Option<(Interval, Shown)>,
+    cell: impl Fn(&str, &str) -> Option<Cell<'a>>,
     higher_better: bool,
 ) -> String {
     let mut out =
         format!("| scene | {} |\n| --- |{}\n", methods.join(" | "), " ---: |".repeat(methods.len()));
     for scene in scenes {
-        let mut ranked: Vec<(&str, Interval)> = methods
+        let mut ranked: Vec<(&str, Cell)> = methods
             .iter()
             .filter(|m| **m != "white" || higher_better)
-            .filter_map(|m| cell(scene, m).map(|c| (*m, c.0)))
+            .filter_map(|m| cell(scene, m).map(|c| (*m, c)))
             // A value that is not a number ranks nowhere (NaN would sort first).
-            .filter(|(_, i)| i.mean.is_finite() && i.ci95.is_finite())
+            .filter(|(_, c)| c.interval.mean.is_finite() && c.interval.ci95.is_finite())
             .collect();
         ranked.sort_by(|a, b| {
             if higher_better {
-                b.1.mean.total_cmp(&a.1.mean)
+                b.1.interval.mean.total_cmp(&a.1.interval.mean)
             } else {
-                a.1.mean.total_cmp(&b.1.mean)
+                a.1.interval.mean.total_cmp(&b.1.interval.mean)
             }
         });
         let winner = match ranked.as_slice() {
-            [best, next, ..] if !best.1.overlaps(&next.1) => Some(best.0),
+            [best, next, ..] if ahead(&best.1, &next.1, higher_better) => Some(best.0),
             _ => None,
         };
         let cells: Vec<String> = methods
             .iter()
             .map(|m| match cell(scene, m) {
                 None => "-".to_string(),
-                Some((i, shown)) => {
+                Some(Cell { interval: i, shown, .. }) => {
                     let text = match shown {
                         Shown::Fixed(digits) => format!("{:.digits$} +- {:.digits$}", i.mean, i.ci95),
                         Shown::Error { white: Some(w) } if w > 0.0 && *m != "white" => {
@@ -1070,10 +1121,34 @@ pub fn cache_dir(out: &Path) -> PathBuf {
 mod tests {
     use super::*;
 
-    fn cells<'a>(values: &'a [(&'a str, f64, f64)]) -> impl Fn(&str, &str) -> Option<(Interval, Shown)> + 'a {
+    fn cells<'a>(values: &'a [(&'a str, f64, f64)]) -> impl Fn(&str, &str) -> Option<Cell<'a>> + 'a {
         move |_, m| {
-            values.iter().find(|v| v.0 == m).map(|v| (Interval { mean: v.1, ci95: v.2 }, Shown::Fixed(2)))
+            values.iter().find(|v| v.0 == m).map(|v| Cell {
+                interval: Interval { mean: v.1, ci95: v.2 },
+                shown: Shown::Fixed(2),
+                placements: &[],
+            })
         }
+    }
+
+    #[test]
+    fn judged_at_the_same_placements_a_winner_is_bold_where_their_differences_clear_zero() {
+        // Placements that move both methods alike: the intervals side by side
+        // overlap, the differences (1, 0.9, 1.1) do not reach zero.
+        let a: &'static [f64] = &[10.0, 20.0, 30.0];
+        let b: &'static [f64] = &[9.0, 19.1, 28.9];
+        let paired = |a: &'static [f64], b: &'static [f64]| {
+            move |_: &str, m: &str| {
+                let values: &'static [f64] = if m == "a" { a } else { b };
+                Some(Cell { interval: Interval::of(values), shown: Shown::Fixed(2), placements: values })
+            }
+        };
+        assert!(table(&["s"], &["a", "b"], paired(a, b), true).contains("**20.00 +- "));
+        // Lower is better: b's errors are below a's at every placement.
+        assert!(table(&["s"], &["a", "b"], paired(a, b), false).contains("**19.00 +- "));
+        // Differences whose interval holds zero: nothing is bold.
+        let c: &'static [f64] = &[9.0, 21.0, 29.5];
+        assert!(!table(&["s"], &["a", "b"], paired(a, c), true).contains("**"));
     }
 
     #[test]
