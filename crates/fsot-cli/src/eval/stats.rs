@@ -1,9 +1,10 @@
 //! Means with 95% confidence intervals over independent seeds: Student's t
 //! (two-sided 95% quantiles by degrees of freedom), the interval's half-width
-//! t s / sqrt n, and whether two intervals overlap. Two methods judged at the
-//! same placements are compared placement by placement: the interval of their
-//! differences is narrower than the two intervals side by side wherever a
-//! placement moves both alike.
+//! t s / sqrt n, and whether two intervals overlap. Two methods judged at
+//! placements drawn alike are compared placement by placement: the interval of
+//! their differences tests the difference at 95%, where two intervals apart is
+//! a stricter test, and it is narrower still wherever a placement moves both
+//! alike.
 
 use serde::Serialize;
 
