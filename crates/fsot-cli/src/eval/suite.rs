@@ -173,8 +173,9 @@ pub struct Record {
     pub flip_ci95: Option<f64>,
     /// Independent masks measured (1 for a mask given from outside).
     pub seeds: u32,
-    /// Every placement's values, in order: placement k is the same for every
-    /// method of a run, so two methods' values pair up placement by placement.
+    /// Every placement's values, in order: placement k is drawn from the same
+    /// seed for every method of a run, independently of the other placements,
+    /// so two methods' values pair up placement by placement.
     pub placements: Placements,
     /// The error dissected (mean over the renders), when asked for.
     #[serde(skip_serializing_if = "Option::is_none")]
