@@ -6,7 +6,9 @@ measured) beside each other method's, and the verdict: ahead or behind where
 the 95% intervals do not overlap, else level. Where the records hold each
 placement's values (both methods judged at the same placements), the verdict
 placement by placement follows in brackets when it differs: ahead or behind
-where the 95% interval of the differences clears zero.
+where the 95% interval of the differences clears zero; beside it, for JOD, the
+mean difference, its interval and the two methods' correlation over placements
+(r: how alike a placement moves both, which is what pairing gains from).
 
     python3 bench/eval/compare.py RESULTS.json METHOD OTHER...
 """
@@ -35,11 +37,12 @@ def verdict(a, a_ci, b, b_ci, higher_better):
     return "level"
 
 
-def paired(m, r, key, higher_better):
-    """The verdict from the differences placement by placement, or None."""
+def difference(m, r, key):
+    """The mean of m's values minus r's, placement by placement, and the
+    half-width of its 95% interval; None without paired placements."""
     a = m.get("placements", {}).get(key) or []
     b = r.get("placements", {}).get(key) or []
-    if len(a) != len(b) or len(a) < 2:
+    if len(a) != len(b) or len(a) < 2 or any(x is None for x in a + b):
         return None
     d = [x - y for x, y in zip(a, b)]
     n = len(d)
@@ -47,7 +50,24 @@ def paired(m, r, key, higher_better):
     ci = t95(n - 1) * math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1) / n)
     if not math.isfinite(mean) or not math.isfinite(ci):
         return None
-    return verdict(mean, ci, 0.0, 0.0, higher_better)
+    return mean, ci, correlation(a, b)
+
+
+def correlation(a, b):
+    """Pearson's correlation of two methods' values over the placements (how
+    alike a placement moves both; 0 where either does not move)."""
+    ma, mb = sum(a) / len(a), sum(b) / len(b)
+    sa = math.sqrt(sum((x - ma) ** 2 for x in a))
+    sb = math.sqrt(sum((y - mb) ** 2 for y in b))
+    if sa == 0 or sb == 0:
+        return 0.0
+    return sum((x - ma) * (y - mb) for x, y in zip(a, b)) / (sa * sb)
+
+
+def paired(m, r, key, higher_better):
+    """The verdict from the differences placement by placement, or None."""
+    d = difference(m, r, key)
+    return None if d is None else verdict(d[0], d[1], 0.0, 0.0, higher_better)
 
 
 def jod(r):
@@ -79,6 +99,9 @@ def main():
         if taa and any(r.get("flip") is not None for r in at.values()):
             judges.append(("flip", "flip_ci95", False, "FLIP"))
         head += [f"vs {o}: {j[3]}" for o in others for j in judges]
+        paired_jod = any(m.get("placements") for m in at.values())
+        if paired_jod:
+            head += [f"JOD minus {o}'s, placement by placement (r)" for o in others]
         print("| " + " | ".join(head) + " |")
         print("|" + " --- |" * len(head))
         counts, by_pair = {}, {}
@@ -103,6 +126,10 @@ def main():
                         by_pair.setdefault((o, name), {}).setdefault(p, 0)
                         by_pair[(o, name)][p] += 1
                     row.append(v if p is None or p == v else f"{v} (paired: {p})")
+            if paired_jod:
+                for o in others:
+                    d = difference(m, at[(s, o)], "jod") if (s, o) in at else None
+                    row.append("" if d is None else f"{d[0]:+.3f} +- {d[1]:.3f} (r {d[2]:+.2f})")
             print("| " + " | ".join(row) + " |")
         for (o, name), c in counts.items():
             line = f"- vs {o} by {name}: " + ", ".join(f"{k} {v}" for k, v in sorted(c.items()))
