@@ -61,6 +61,24 @@ fn the_look_back_path_sorts_stably_by_any_number_of_low_bits_with_either_count()
         assert!(gk == ck && gv == cv, "device count, n = {n}: differs from the CPU's stable sort");
     }
     drop(sort);
+    // Never given a count: the host's count starts at 0, so nothing moves; then
+    // a known count past the capacity sorts the capacity.
+    let n = 5000u32;
+    let keys: Vec<u32> = (0..n).map(|_| rng.next_u32()).collect();
+    let vals: Vec<u32> = (0..n).collect();
+    let mut sort = RadixSort::new(&ctx, n, SortCount::Host).unwrap();
+    sort.path = SortPath::LookBack;
+    sort.upload_pairs(&keys, &vals).unwrap();
+    // SAFETY: the sort outlives this submission, which is waited for.
+    ctx.submit(|cmd| unsafe { sort.record(cmd, 32, None) }).unwrap();
+    assert_eq!(sort.keys().download::<u32>(n as usize).unwrap(), keys, "a sort of 0 pairs");
+    sort.set_count(n).unwrap();
+    // SAFETY: as above.
+    ctx.submit(|cmd| unsafe { sort.record(cmd, 32, Some(u32::MAX)) }).unwrap();
+    let (ck, cv) = cpu_sort_by(&keys, &vals, 32);
+    assert_eq!(sort.keys().download::<u32>(n as usize).unwrap(), ck, "a count past the capacity");
+    assert_eq!(sort.vals().download::<u32>(n as usize).unwrap(), cv, "a count past the capacity");
+    drop(sort);
     // The sort benchmark times this path on GPUs; its run checks the result
     // against the CPU's (an error otherwise) in five dispatches.
     let b = fsot_cli::bench::bench_sort(&ctx, 70_000, 1, SortPath::LookBack).unwrap();
