@@ -110,7 +110,11 @@ pub enum SortPath {
     /// (`radix_digits.comp`), then one dispatch per pass (`radix_onesweep.comp`),
     /// in which a workgroup waits on the blocks that started before it. Only for
     /// devices on which a started workgroup goes on running while another waits
-    /// (GPUs; not lavapipe with several threads). `Auto`
+    /// (GPUs). Not lavapipe with several threads: there a workgroup can wait
+    /// past lavapipe's 65535 loop iterations per invocation, which ends its
+    /// wait silently and leaves its block misplaced (measured: about 2 sorts in
+    /// 1000 of 5000 pairs on two busy cores, every one of them an invocation
+    /// cut at the cap). `Auto`
     /// never takes it; `sort_choice::choose_sort_path` picks it on a GPU where it
     /// was timed faster there (the optimizer's large-class stage does so).
     /// Tested on lavapipe with one thread (`crates/fsot-cli/tests/gpu_sort_look_back.rs`,

@@ -1,10 +1,12 @@
 //! The radix sort's decoupled look-back path (`SortPath::LookBack`) against the
 //! CPU's stable sort. A workgroup of that path waits on blocks that started
-//! before it, which lavapipe with several threads does not guarantee to let run,
-//! so on lavapipe this binary runs it with one thread (LP_NUM_THREADS=1, set
-//! before the device is made: blocks then run one after another, in ticket
-//! order); on a GPU the variable is ignored and the workgroups really wait on
-//! each other.
+//! before it; on lavapipe with several threads such a wait can run past
+//! lavapipe's 65535 loop iterations per invocation, which cuts it short
+//! silently and misplaces the block (`SortPath::LookBack`), so on lavapipe this
+//! binary runs it with one thread (LP_NUM_THREADS=1, set before the device is
+//! made: blocks then run one after another, in ticket order, and none waits);
+//! on a GPU the variable is ignored and the workgroups really wait on each
+//! other.
 
 #[path = "../../../tests/common/mod.rs"]
 mod common;
