@@ -112,9 +112,8 @@ pub enum SortPath {
     /// devices on which a started workgroup goes on running while another waits
     /// (GPUs). Not lavapipe with several threads: there a workgroup can wait
     /// past lavapipe's 65535 loop iterations per invocation, which ends its
-    /// wait silently and leaves its block misplaced (measured: about 2 sorts in
-    /// 1000 of 5000 pairs on two busy cores, every one of them an invocation
-    /// cut at the cap). `Auto`
+    /// wait silently and leaves its block misplaced (on busy cores, now and
+    /// then; every such sort had an invocation cut at the cap). `Auto`
     /// never takes it; `sort_choice::choose_sort_path` picks it on a GPU where it
     /// was timed faster there (the optimizer's large-class stage does so).
     /// Tested on lavapipe with one thread (`crates/fsot-cli/tests/gpu_sort_look_back.rs`,
