@@ -3,7 +3,8 @@
 //! elsewhere; and whichever path the optimizer's large-class stage takes,
 //! the masks are the same bits (deterministic mode). The look-back path's
 //! workgroups wait on blocks that started before them, which lavapipe with
-//! several threads does not promise to let run, so this binary runs lavapipe
+//! several threads does not promise to let run (and cuts a long wait short at
+//! its cap on loop iterations, misplacing a block), so this binary runs lavapipe
 //! with one thread (LP_NUM_THREADS=1, set before the device is made); on a GPU
 //! the variable is ignored.
 #![cfg(feature = "vulkan")]
