@@ -4,11 +4,11 @@
 //! and AMD's GPUs do (`DeviceInfo::keeps_workgroups_running`); Apple's and
 //! mobile GPUs and CPU implementations with several threads (lavapipe) do not
 //! promise it, and are never given it (on lavapipe a wait can also run past its
-//! cap on loop iterations, which cuts it short silently). Where it may run, whether it beats the
-//! block passes depends on the device and the size, so the two are timed on the
-//! device itself, with timestamp queries, on pairs of the size to be sorted,
-//! and the faster is kept. Both sort stably: the choice changes how long a sort
-//! takes, never its result.
+//! cap on loop iterations, which cuts it short silently). Where it may run,
+//! whether it beats the block passes depends on the device and the size, so the
+//! two are timed on the device itself, with timestamp queries, on pairs of the
+//! size to be sorted, and the faster is kept. Both sort stably: the choice
+//! changes how long a sort takes, never its result.
 
 use super::buffer::{Buffer, Location};
 use super::commands::{barrier, copy};
