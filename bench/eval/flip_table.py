@@ -8,13 +8,7 @@ verdict, ahead or behind where the intervals do not overlap, else level.
 import json
 import sys
 
-
-def verdict(a, b):
-    if a["flip"] + a["flip_ci95"] < b["flip"] - b["flip_ci95"]:
-        return "ahead"
-    if a["flip"] - a["flip_ci95"] > b["flip"] + b["flip_ci95"]:
-        return "behind"
-    return "level"
+from compare import verdict
 
 
 def main():
@@ -35,7 +29,7 @@ def main():
             rs = [at.get((s, o, d)) for o in others]
             if m is None or None in rs:
                 continue
-            cells = [shown(m)] + [shown(r) for r in rs] + [verdict(m, r) for r in rs]
+            cells = [shown(m)] + [shown(r) for r in rs] + [verdict(m["flip"], m["flip_ci95"], r["flip"], r["flip_ci95"], False) for r in rs]
             print(f"| {s} | `{d}` | " + " | ".join(cells) + " |")
 
 
