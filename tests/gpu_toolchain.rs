@@ -69,6 +69,9 @@ fn the_validation_layer_is_live_and_its_messages_are_caught() {
     // it, or the other GPU tests' "no messages" would prove nothing.
     let ctx = common::gpu_context();
     let info = ash::vk::BufferCreateInfo::default().size(16).usage(ash::vk::BufferUsageFlags::empty());
+    // Another context of the process, alive meanwhile: the message names the
+    // first one's device, so it goes to that context alone.
+    let other = common::gpu_context();
     // SAFETY: a deliberately invalid create info; the layer reports it, the driver may still make the buffer.
     let made = unsafe { ctx.device().create_buffer(&info, None) };
     if let Ok(buffer) = made {
@@ -80,4 +83,26 @@ fn the_validation_layer_is_live_and_its_messages_are_caught() {
         messages.iter().any(|m| m.contains("usage")),
         "expected a validation error about buffer usage, got {messages:?}"
     );
+    common::assert_no_validation_messages(&other);
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn contexts_made_one_after_another_share_one_instance_and_each_has_its_own_device() {
+    // Drivers have failed after many instances made and destroyed in one
+    // process: a context makes and destroys its device, on the process's one
+    // instance (per validation setting).
+    let first = common::gpu_context();
+    let instance = first.external().instance.handle();
+    drop(first);
+    let second = common::gpu_context();
+    assert_eq!(second.external().instance.handle(), instance, "a new instance for the second context");
+    let third = common::gpu_context();
+    assert_eq!(third.external().instance.handle(), instance);
+    assert_ne!(second.device().handle(), third.device().handle(), "two live contexts share a device");
+    // The first context's device is gone; the later ones work.
+    let buffer = Buffer::new(&third, 64, Location::Device, "after-others").unwrap();
+    drop(buffer);
+    common::assert_no_validation_messages(&second);
+    common::assert_no_validation_messages(&third);
 }

@@ -17,6 +17,11 @@ pub(crate) struct Commands {
 }
 
 impl Commands {
+    /// The command buffer (its handle names this context in validation messages).
+    pub fn command_buffer(&self) -> vk::CommandBuffer {
+        self.cmd
+    }
+
     pub fn new(device: &ash::Device, queue_family: u32) -> Result<Self> {
         let info = vk::CommandPoolCreateInfo::default().queue_family_index(queue_family);
         // SAFETY: a valid device and create info.

@@ -12,7 +12,7 @@
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use ash::vk;
+use ash::vk::{self, Handle};
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 
 use super::commands::Commands;
@@ -84,8 +84,9 @@ pub(crate) struct Shared {
     pub commands: ManuallyDrop<Mutex<Commands>>,
     pub allocator: ManuallyDrop<Mutex<Allocator>>,
     pub info: DeviceInfo,
-    /// The instance fsot made (None for a wrapped device).
-    owned: Option<Instance>,
+    /// The process's instance the device was made on (None for a wrapped
+    /// device): fsot destroys the device, never the instance.
+    owned: Option<&'static Instance>,
     messages: MessageSink,
 }
 
@@ -96,10 +97,14 @@ pub struct Context {
 }
 
 impl Context {
-    /// A context on its own instance and device, chosen by `options`.
+    /// A context on a device of its own, chosen by `options`, made on the
+    /// process's Vulkan instance (one per validation setting, made by the first
+    /// context and kept for the process's life; dropping the context destroys
+    /// its device only). With validation, `validation_messages` collects the
+    /// layer's messages that name this context's device, queue or command
+    /// buffer, and those that name no context's.
     pub fn new(options: &ContextOptions) -> Result<Self> {
-        let messages: MessageSink = Box::new(Mutex::new(Vec::new()));
-        let instance = Instance::new(options.validation, &messages)?;
+        let instance = Instance::shared(options.validation)?;
         let (physical_device, queue_family) = device::pick(&instance.raw, options.device.as_deref())?;
         let info = device::info(&instance.raw, physical_device);
         let priorities = [1.0f32];
@@ -145,7 +150,7 @@ impl Context {
             full_subgroups: info.full_subgroups,
             queue_lock: None,
         };
-        Self::build(external, info, Some(instance), messages)
+        Self::build(external, info, Some(instance))
     }
 
     /// Works on a device that a host application made (see `ExternalDevice`); fsot
@@ -207,17 +212,12 @@ impl Context {
         info.float_atomic_add &= external.float_atomic_add;
         info.float64 &= external.float64;
         info.full_subgroups &= external.full_subgroups;
-        Self::build(external, info, None, Box::new(Mutex::new(Vec::new())))
+        Self::build(external, info, None)
     }
 
     /// The rest of a context around a device; on failure, what was made here is
-    /// destroyed (an owned device and instance included).
-    fn build(
-        external: ExternalDevice,
-        info: DeviceInfo,
-        owned: Option<Instance>,
-        messages: MessageSink,
-    ) -> Result<Self> {
+    /// destroyed (an owned device included).
+    fn build(external: ExternalDevice, info: DeviceInfo, owned: Option<&'static Instance>) -> Result<Self> {
         let device = external.device.clone();
         let made = (|| -> Result<(Commands, Allocator)> {
             let commands = Commands::new(&device, external.queue_family)?;
@@ -245,14 +245,16 @@ impl Context {
                     // SAFETY: the device was made by `new` and nothing else uses it yet.
                     unsafe { device.destroy_device(None) };
                 }
-                // The messenger and instance before the message sink they write to.
-                drop(owned);
-                drop(messages);
                 return Err(e);
             }
         };
         // SAFETY: the family and index name a queue the device was created with.
         let queue = unsafe { device.get_device_queue(external.queue_family, external.queue_index) };
+        let messages = MessageSink::default();
+        if let Some(instance) = owned {
+            let handles = [device.handle().as_raw(), queue.as_raw(), commands.command_buffer().as_raw()];
+            instance.listen(handles.to_vec(), &messages);
+        }
         Ok(Self {
             shared: Arc::new(Shared {
                 entry: external.entry,
@@ -300,7 +302,8 @@ impl Context {
         &self.shared.device
     }
 
-    /// Validation messages collected so far (empty when validation is off).
+    /// Validation messages collected so far (empty when validation is off, and
+    /// on a wrapped device: the host's instance has the host's messenger).
     pub fn validation_messages(&self) -> Vec<String> {
         self.shared.messages.lock().map(|l| l.clone()).unwrap_or_default()
     }
@@ -338,6 +341,5 @@ impl Drop for Shared {
                 self.device.destroy_device(None);
             }
         }
-        drop(self.owned.take()); // the messenger and instance, before the message sink
     }
 }

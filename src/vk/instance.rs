@@ -1,7 +1,17 @@
-//! The Vulkan instance, with the validation layer and its messages when asked.
+//! The Vulkan instance fsot makes its own devices on (`Context::new`): one per
+//! process for each validation setting, made on first use and kept until the
+//! process ends; each context makes and destroys only its device. Drivers have
+//! failed when a process creates and destroys many instances (NVIDIA's has
+//! been reported to return wrong subgroup invocation ids after about ten such
+//! cycles, and to fail `vkCreateInstance` after a few dozen), and a test binary
+//! or a host that makes several contexts would do exactly that.
+//!
+//! With validation, the layer's messages go to the contexts that listen
+//! (`Instance::listen`): a message goes to the contexts whose device, queue or
+//! command buffer it names, and one that names none of them to every context.
 
 use std::ffi::{c_void, CStr};
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex, Weak};
 
 use ash::vk;
 
@@ -10,16 +20,26 @@ use super::error::{Error, Result};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
-/// Where the validation layer's messages go; boxed so its address is stable for
-/// the callback.
-pub(crate) type MessageSink = Box<Mutex<Vec<String>>>;
+/// Where a context's validation messages go.
+pub(crate) type MessageSink = Arc<Mutex<Vec<String>>>;
 
-/// An instance made by fsot, with its debug messenger when validating.
+/// A context listening for the messages that name its handles.
+struct Listener {
+    /// Raw dispatchable handles: the device, its queue, the command buffer.
+    handles: Vec<u64>,
+    sink: Weak<Mutex<Vec<String>>>,
+}
+
+/// An instance made by fsot; with validation, its debug messenger (made once,
+/// never destroyed, like the instance) writes to the listeners.
 pub(crate) struct Instance {
     pub entry: ash::Entry,
     pub raw: ash::Instance,
-    pub debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    listeners: Mutex<Vec<Listener>>,
 }
+
+/// The process's instances, without and with validation.
+static SHARED: Mutex<[Option<&'static Instance>; 2]> = Mutex::new([None, None]);
 
 unsafe extern "system" fn on_message(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
@@ -27,24 +47,62 @@ unsafe extern "system" fn on_message(
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
     user: *mut c_void,
 ) -> vk::Bool32 {
-    if !user.is_null() && !data.is_null() {
-        // SAFETY: the layer passes valid callback data for the duration of the call.
-        let text = unsafe { (*data).message_as_c_str() }
-            .map(|m| m.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        // SAFETY: `user` is the MessageSink of the context, which outlives the messenger.
-        let sink = unsafe { &*(user as *const Mutex<Vec<String>>) };
+    if user.is_null() || data.is_null() {
+        return vk::FALSE;
+    }
+    // SAFETY: the layer passes valid callback data for the duration of the call.
+    let data = unsafe { &*data };
+    // SAFETY: as above; the message is a C string or null.
+    let text =
+        unsafe { data.message_as_c_str() }.map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
+    let named: Vec<u64> = if data.p_objects.is_null() {
+        Vec::new()
+    } else {
+        // SAFETY: `p_objects` points to `object_count` entries for the call's duration.
+        unsafe { std::slice::from_raw_parts(data.p_objects, data.object_count as usize) }
+            .iter()
+            .map(|o| o.object_handle)
+            .collect()
+    };
+    // SAFETY: `user` is the listeners of a leaked, never dropped `Instance`.
+    let listeners = unsafe { &*(user as *const Mutex<Vec<Listener>>) };
+    let Ok(listeners) = listeners.lock() else { return vk::FALSE };
+    let live: Vec<(&Listener, MessageSink)> =
+        listeners.iter().filter_map(|l| l.sink.upgrade().map(|s| (l, s))).collect();
+    let named_by = |l: &Listener| l.handles.iter().any(|h| named.contains(h));
+    let owners = live.iter().filter(|(l, _)| named_by(l)).count();
+    let line = format!("{severity:?}: {text}");
+    for (_, sink) in live.iter().filter(|(l, _)| owners == 0 || named_by(l)) {
         if let Ok(mut list) = sink.lock() {
-            list.push(format!("{severity:?}: {text}"));
+            list.push(line.clone());
         }
     }
     vk::FALSE
 }
 
 impl Instance {
-    /// A Vulkan 1.2 instance; with `validation`, VK_LAYER_KHRONOS_validation (an
-    /// error if missing) reporting warnings and errors into `sink`.
-    pub fn new(validation: bool, sink: &MessageSink) -> Result<Self> {
+    /// The process's Vulkan 1.2 instance, with VK_LAYER_KHRONOS_validation when
+    /// `validation` (an error if missing), made on the first call.
+    pub fn shared(validation: bool) -> Result<&'static Self> {
+        let mut made = SHARED.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(instance) = made[validation as usize] {
+            return Ok(instance);
+        }
+        let instance = Self::make(validation)?;
+        made[validation as usize] = Some(instance);
+        Ok(instance)
+    }
+
+    /// Sends the validation messages that name any of `handles` (raw
+    /// dispatchable handles), and those that name no listener's, to `sink`
+    /// while it lives.
+    pub fn listen(&self, handles: Vec<u64>, sink: &MessageSink) {
+        let mut listeners = self.listeners.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        listeners.retain(|l| l.sink.strong_count() > 0);
+        listeners.push(Listener { handles, sink: Arc::downgrade(sink) });
+    }
+
+    fn make(validation: bool) -> Result<&'static Self> {
         // SAFETY: loads the system's Vulkan loader; its functions are only called through ash.
         let entry = unsafe { ash::Entry::load() }
             .map_err(|e| Error::VulkanUnavailable(format!("no Vulkan loader ({e})")))?;
@@ -75,7 +133,8 @@ impl Instance {
             .enabled_extension_names(&extensions);
         // SAFETY: the create info and the names it points to live until the call returns.
         let raw = check("vkCreateInstance", unsafe { entry.create_instance(&create, None) })?;
-        let mut me = Self { entry, raw, debug: None };
+        // Kept for the process's life: nothing destroys it.
+        let me: &'static Self = Box::leak(Box::new(Self { entry, raw, listeners: Mutex::new(Vec::new()) }));
         if validation {
             let loader = ash::ext::debug_utils::Instance::new(&me.entry, &me.raw);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
@@ -89,25 +148,15 @@ impl Instance {
                         | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
                 )
                 .pfn_user_callback(Some(on_message))
-                .user_data(&**sink as *const Mutex<Vec<String>> as *mut c_void);
-            // SAFETY: the sink outlives the messenger (both owned by the context, messenger destroyed first).
-            let messenger = check("vkCreateDebugUtilsMessengerEXT", unsafe {
-                loader.create_debug_utils_messenger(&info, None)
-            })?;
-            me.debug = Some((loader, messenger));
+                .user_data(&me.listeners as *const Mutex<Vec<Listener>> as *mut c_void);
+            // SAFETY: the listeners live as long as the leaked instance, as does the messenger.
+            let made = unsafe { loader.create_debug_utils_messenger(&info, None) };
+            if let Err(result) = made {
+                // SAFETY: nothing was made from the instance; it is not shared yet.
+                unsafe { me.raw.destroy_instance(None) };
+                return Err(Error::Vulkan { call: "vkCreateDebugUtilsMessengerEXT", result });
+            }
         }
         Ok(me)
-    }
-}
-
-impl Drop for Instance {
-    fn drop(&mut self) {
-        // SAFETY: every object made from the instance is gone (the context drops its device first).
-        unsafe {
-            if let Some((loader, m)) = &self.debug {
-                loader.destroy_debug_utils_messenger(*m, None);
-            }
-            self.raw.destroy_instance(None);
-        }
     }
 }

@@ -2,7 +2,8 @@
 //! nothing of sampling; a renderer can share it (`Context::wrap` works on the
 //! host's own device).
 //!
-//! - `instance`: the instance and the validation layer's messages;
+//! - `instance`: the process's instance (one per validation setting, kept for
+//!   the process's life) and the validation layer's messages, per context;
 //! - `device`: device choice and what fsot reads of a device (`DeviceInfo`);
 //! - `context`: a device, its compute queue (submission guarded by a lock) and
 //!   its memory allocator, made here or wrapped around a host's device;
