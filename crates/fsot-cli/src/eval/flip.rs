@@ -10,7 +10,7 @@
 //! Written in f32 the way NVIDIA's reference evaluates it (its spatial filters
 //! separated into passes along x and y, image edges clamped), and tested
 //! against the answers of NVIDIA's `flip-evaluator` package
-//! (`tests/data/flip-package.json`, which `bench/flip/reference.py` writes).
+//! (`crates/fsot-cli/tests/data/flip-package.json`, which `bench/flip/reference.py` writes).
 //! `fsot eval --flip` compares each judged frame alone and reports the mean of
 //! the per-frame mean errors (0: no difference; lower is better), on the frames
 //! the ColorVideoVDP judge sees (`jod::shown`), grey as three equal sRGB channels.
