@@ -4,7 +4,7 @@
 
 use fsot::core::mask::Mask;
 use fsot::core::tile::Tile;
-use fsot::io::ktx2::{encode, format_for, Format};
+use fsot::io::ktx2::{decode, encode, format_for, Format};
 use fsot::io::MaskFile;
 
 fn mask(dims: usize, spp: usize) -> Mask {
@@ -113,4 +113,97 @@ fn a_format_that_cannot_hold_the_mask_is_refused_before_any_work() {
     assert!(MaskFile::for_path(p("m.exr"), 2, Some("r16_unorm")).is_err(), "a KTX2 format for an EXR");
     assert_eq!(MaskFile::for_path(p("m.h"), 2, None).unwrap(), MaskFile::CHeader);
     assert_eq!(MaskFile::for_path(p("m.KTX2"), 1, None).unwrap(), MaskFile::Ktx2(Format::R16Unorm));
+}
+
+#[test]
+fn a_ktx2_file_reads_back_as_the_mask_within_half_a_level_with_its_provenance() {
+    for format in Format::ALL {
+        for dims in 1..=format.channels() {
+            for spp in [1, 2] {
+                let m = mask(dims, spp);
+                let back = decode(&encode(&m, format).unwrap()).unwrap();
+                assert_eq!(back.tile, m.tile, "{format:?}");
+                let mut meta = m.meta.clone();
+                meta.sort();
+                assert_eq!(back.meta, meta, "{format:?}: the provenance");
+                let level = if format.is_float() { 0.0 } else { 1.0 / ((1u64 << format.bits()) - 1) as f64 };
+                for (&got, &want) in back.samples.iter().zip(&m.samples) {
+                    // On the torus: the top level reads 0.
+                    let apart = (got as f64 - want as f64).abs();
+                    assert!(apart.min(1.0 - apart) <= 0.5 * level + 1e-7, "{format:?}: {got} against {want}");
+                }
+                if format.is_float() {
+                    assert_eq!(back.samples, m.samples, "a float texture holds the values exactly");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_shipped_ktx2_mask_agrees_with_its_png_slices_texel_by_texel() {
+    // Two files of one mask written by different paths, read by different
+    // readers (the PNG by the `png` crate): layers, rows and channels must
+    // line up, each value within the two roundings (KTX2: q / 255; PNG: the
+    // level's centre (p + 0.5) / 256), on the torus.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("masks");
+    let m = fsot::Mask::open(root.join("rg-64x64x32-taa.ktx2")).unwrap();
+    assert_eq!((m.tile.width, m.tile.height, m.tile.frames, m.tile.spp, m.tile.dims), (64, 64, 32, 1, 2));
+    assert_eq!(m.meta("kernel").map(|k| k.starts_with("perceptual-taa")), Some(true), "{:?}", m.meta);
+    let mut worst = 0.0f64;
+    for t in 0..32 {
+        let file = std::fs::File::open(root.join(format!("rg-64x64x32-taa/frame{t:04}.png"))).unwrap();
+        let mut reader = png::Decoder::new(file).read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        assert_eq!((info.width, info.height, info.bit_depth), (64, 64, png::BitDepth::Eight));
+        let channels = info.color_type.samples();
+        for y in 0..64 {
+            for x in 0..64 {
+                for c in 0..2 {
+                    let p = buf[(y * 64 + x) * channels + c] as f64;
+                    let apart = (m.sample(x, y, t, 0)[c] as f64 - (p + 0.5) / 256.0).abs();
+                    worst = worst.max(apart.min(1.0 - apart));
+                }
+            }
+        }
+    }
+    assert!(worst <= 0.5 / 255.0 + 0.5 / 256.0 + 1e-6, "largest difference {worst}");
+}
+
+#[test]
+fn a_ktx2_file_fsot_cannot_read_is_refused_with_its_reason_and_no_byte_change_panics() {
+    let good = encode(&mask(2, 1), Format::R16G16Unorm).unwrap();
+    let refused = |bytes: &[u8], says: &str| {
+        let e = decode(bytes).expect_err(says);
+        assert!(e.contains(says), "{e:?} should say {says:?}");
+    };
+    refused(&good[..100], "not a readable KTX2 file");
+    refused(&good[..good.len() - 1], "not a readable KTX2 file");
+    let mut other = good.clone();
+    other[12..16].copy_from_slice(&44u32.to_le_bytes()); // VK_FORMAT_B8G8R8A8_UNORM
+    refused(&other, "VkFormat 44");
+    let mut volume = good.clone();
+    volume[28..32].copy_from_slice(&2u32.to_le_bytes()); // pixelDepth
+    refused(&volume, "not a 2-D array texture");
+    // A float texture holding 1.0, and one whose provenance contradicts its size.
+    let mut m = mask(1, 1);
+    m.samples[4] = 0.75;
+    let mut float = encode(&m, Format::R32Sfloat).unwrap();
+    let at = float.windows(4).rposition(|w| w == 0.75f32.to_le_bytes()).unwrap();
+    float[at..at + 4].copy_from_slice(&1.0f32.to_le_bytes());
+    refused(&float, "outside [0, 1)");
+    let mut tiled = encode(&m, Format::R32Sfloat).unwrap();
+    let at = tiled.windows(5).position(|w| w == b"5x3x4").unwrap();
+    tiled[at..at + 5].copy_from_slice(b"5x3x2");
+    refused(&tiled, "fsot.tile says 5x3x2");
+    // Every single-byte change of a small file decodes or is refused; none panics.
+    let small = encode(&mask(2, 2), Format::R8G8Unorm).unwrap();
+    for i in 0..small.len() {
+        for v in [0u8, 1, 0x7f, 0xff, small[i] ^ 0x10] {
+            let mut b = small.clone();
+            b[i] = v;
+            let _ = decode(&b);
+        }
+    }
 }

@@ -13,7 +13,10 @@
 //! mask is toroidal, so that is the value's nearest point on the circle. SFLOAT
 //! formats hold v exactly.
 
+use std::path::Path;
+
 use crate::core::mask::Mask;
+use crate::core::tile::Tile;
 use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 
@@ -305,6 +308,150 @@ pub fn encode(mask: &Mask, format: Format) -> Result<Vec<u8>> {
     out.resize(data_offset, 0);
     out.extend_from_slice(&data);
     Ok(out)
+}
+
+/// The provenance keys `encode` writes from the tile, not from the mask's `meta`.
+const STRUCTURAL_KEYS: [&str; 5] = ["fsot.tile", "fsot.spp", "fsot.dims", "fsot.layers", "fsot.quantisation"];
+
+/// Reads a mask from a KTX2 array texture (fsot's, or one laid out the same
+/// way: see `decode`).
+pub fn read(path: &Path) -> Result<Mask> {
+    let bytes = crate::io::read_regular(path).map_err(|e| Error::bad_file(path, format!("cannot read: {e}")))?;
+    decode(&bytes).map_err(|reason| Error::bad_file(path, reason))
+}
+
+/// Decodes a KTX2 file into a mask; the error is a reason for the user. The
+/// file is a 2-D array texture in one of `Format::ALL`, with no
+/// supercompression; level 0 is read. Layer `t * spp + s` holds sample s of
+/// frame t, spp and d from `fsot.spp` and `fsot.dims` (default 1 and the
+/// format's channels); a UNORM level q reads q / (2^b - 1), the top level
+/// wrapping to 0, and a float must lie in [0, 1). The `fsot.*` provenance
+/// entries come back as the mask's `meta`.
+pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
+    let file = Parsed::of(bytes).map_err(|e| format!("not a readable KTX2 file ({e})"))?;
+    let vk = file.field(3);
+    let format = Format::ALL.into_iter().find(|f| f.vk_format() == vk).ok_or_else(|| {
+        let names: Vec<&str> = Format::ALL.iter().map(|f| f.name()).collect();
+        format!("VkFormat {vk} is not one fsot reads ({})", names.join(", "))
+    })?;
+    let [type_size, width, height, depth, layer_count, faces, _, supercompression] =
+        std::array::from_fn(|i| file.field(4 + i));
+    if supercompression != 0 {
+        return Err("its levels are supercompressed; fsot reads plain ones".into());
+    }
+    if height == 0 || depth != 0 || faces != 1 {
+        return Err(format!("a {width}x{height}x{depth} texture of {faces} faces, not a 2-D array texture"));
+    }
+    if type_size * 8 != format.bits() {
+        return Err(format!("typeSize {type_size} for {}, which has {}-bit channels", format.name(), format.bits()));
+    }
+    let entries = file.entries;
+    let entry = |key: &str| entries.iter().find(|(k, _)| *k == key).map(|(_, v)| v.as_str());
+    let count = |key: &str, default: usize| match entry(key) {
+        None => Ok(default),
+        Some(v) => v.parse::<usize>().map_err(|_| format!("{key} = {v:?} is not a count")),
+    };
+    let (spp, dims) = (count("fsot.spp", 1)?, count("fsot.dims", format.channels())?);
+    if dims > format.channels() {
+        return Err(format!("fsot.dims = {dims}, but {} has {} channels", format.name(), format.channels()));
+    }
+    let layers = layer_count.max(1) as usize;
+    if spp == 0 || layers % spp != 0 {
+        return Err(format!("{layers} layers do not split into frames of fsot.spp = {spp} samples"));
+    }
+    let (width, height) = (width as usize, height as usize);
+    let tile = Tile::new(width, height, layers / spp, spp, dims).map_err(|e| e.to_string())?;
+    let size = format!("{width}x{height}x{}", tile.frames);
+    if let Some(said) = entry("fsot.tile").filter(|said| *said != size) {
+        return Err(format!("fsot.tile says {said}, the texture is {size}"));
+    }
+    let level = file.level;
+    let texel = format.texel_bytes();
+    let want = tile.pixels() * spp * texel;
+    if level.len() != want {
+        return Err(format!(
+            "level 0 holds {} bytes; {layers} layers of {width}x{height} {} texels take {want}",
+            level.len(),
+            format.name()
+        ));
+    }
+    let top = ((1u64 << format.bits()) - 1) as f64;
+    let channel_bytes = format.bits() as usize / 8;
+    let mut samples = vec![0.0f32; tile.values()];
+    for (i, texel_bytes) in level.chunks_exact(texel).enumerate() {
+        let (layer, pixel) = (i / (width * height), i % (width * height));
+        let (t, s, x, y) = (layer / spp, layer % spp, pixel % width, pixel / width);
+        for (c, raw) in texel_bytes.chunks_exact(channel_bytes).take(dims).enumerate() {
+            let v = match format.bits() {
+                8 => wrap(raw[0] as f64 / top),
+                16 => wrap(u16::from_le_bytes([raw[0], raw[1]]) as f64 / top),
+                _ => f32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]),
+            };
+            if !(v.is_finite() && (0.0..1.0).contains(&v)) {
+                return Err(format!("frame {t}, sample {s}, pixel ({x}, {y}), channel {c}: value {v} is outside [0, 1)"));
+            }
+            samples[(tile.pixel_index(x, y, t) * spp + s) * dims + c] = v;
+        }
+    }
+    let mut meta: Vec<(String, String)> = entries
+        .iter()
+        .filter(|(k, _)| !STRUCTURAL_KEYS.contains(&k.as_str()))
+        .filter_map(|(k, v)| Some((k.strip_prefix("fsot.")?.to_string(), v.clone())))
+        .collect();
+    meta.sort();
+    Ok(Mask { tile, samples, meta })
+}
+
+/// The parts of a KTX2 file `decode` reads, bounds-checked: the header's
+/// 32-bit fields, level 0's bytes and the key/value entries (values without
+/// their closing NUL).
+struct Parsed<'a> {
+    bytes: &'a [u8],
+    level: &'a [u8],
+    entries: Vec<(String, String)>,
+}
+
+impl<'a> Parsed<'a> {
+    fn of(bytes: &'a [u8]) -> std::result::Result<Self, &'static str> {
+        if bytes.len() < HEADER_BYTES + LEVEL_INDEX_BYTES || bytes[..12] != IDENTIFIER {
+            return Err("no KTX 20 identifier and header");
+        }
+        let mut file = Self { bytes, level: &[], entries: Vec::new() };
+        let u64_at = |at: usize| u64::from_le_bytes(std::array::from_fn(|i| bytes[at + i]));
+        let range = |offset: u64, length: u64| -> std::result::Result<&'a [u8], &'static str> {
+            let end = offset.checked_add(length).filter(|&e| e <= bytes.len() as u64).ok_or("a part past its end")?;
+            Ok(&bytes[offset as usize..end as usize])
+        };
+        // Level 0's index entry follows the header, whatever the level count.
+        file.level = range(u64_at(HEADER_BYTES), u64_at(HEADER_BYTES + 8))?;
+        let mut kvd = range(file.field(14) as u64, file.field(15) as u64)?;
+        while kvd.len() >= 4 {
+            let length = u32::from_le_bytes(std::array::from_fn(|i| kvd[i])) as usize;
+            let entry = kvd.get(4..4 + length).ok_or("a key/value entry past its data")?;
+            let nul = entry.iter().position(|&b| b == 0).ok_or("a key without its NUL")?;
+            let value = &entry[nul + 1..];
+            let value = value.strip_suffix(&[0]).unwrap_or(value);
+            let key = std::str::from_utf8(&entry[..nul]).map_err(|_| "a key that is not UTF-8")?;
+            file.entries.push((key.to_string(), String::from_utf8_lossy(value).into_owned()));
+            kvd = kvd.get((4 + length).div_ceil(4) * 4..).unwrap_or(&[]);
+        }
+        Ok(file)
+    }
+
+    /// The header's 32-bit field `i` (0: the identifier's first word; 3: vkFormat).
+    fn field(&self, i: usize) -> u32 {
+        u32::from_le_bytes(std::array::from_fn(|k| self.bytes[4 * i + k]))
+    }
+}
+
+/// A UNORM value in [0, 1] as a point of [0, 1): the top level, 1.0, is 0.0 on the torus.
+fn wrap(v: f64) -> f32 {
+    let v = v as f32;
+    if v >= 1.0 {
+        0.0
+    } else {
+        v
+    }
 }
 
 /// Writes the mask as KTX2 through an atomic file.

@@ -95,8 +95,8 @@ impl MaskFile {
 }
 
 impl Mask {
-    /// Saves the mask by the file's extension: `.exr` (exact, 32-bit float, the
-    /// format `open` reads), `.ktx2` (an array texture, 16-bit UNORM with the
+    /// Saves the mask by the file's extension: `.exr` (exact, 32-bit float),
+    /// `.ktx2` (an array texture, 16-bit UNORM with the
     /// fewest channels that hold its dimensions: `Mask::ktx2` for another
     /// format) or `.h` (a C header); any other extension is an error. The
     /// file is written beside the target and renamed into place, so a failed save
@@ -139,9 +139,26 @@ impl Mask {
         ktx2::encode(self, format)
     }
 
-    /// Opens a mask saved as EXR, checking its layout and that every value is
-    /// finite and in [0, 1).
+    /// Opens a mask saved as KTX2 (`.ktx2`: `ktx2::decode` says what it reads;
+    /// a UNORM file gives its levels back, not the exact values it was made
+    /// from) or as EXR (any other name), checking its layout and that every
+    /// value is finite and in [0, 1).
+    ///
+    /// ```
+    /// let mask = fsot::Mask::white(fsot::Tile::new(8, 8, 2, 1, 2)?, 1);
+    /// let dir = std::env::temp_dir().join(format!("fsot-open-{}", std::process::id()));
+    /// std::fs::create_dir_all(&dir)?;
+    /// std::fs::write(dir.join("mask.ktx2"), mask.ktx2(Some(fsot::TexelFormat::R32G32Sfloat))?)?;
+    /// assert_eq!(fsot::Mask::open(dir.join("mask.ktx2"))?.samples, mask.samples);
+    /// # std::fs::remove_dir_all(&dir)?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn open(path: impl AsRef<Path>) -> Result<Mask> {
-        exr::read(path.as_ref())
+        let path = path.as_ref();
+        let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        match ext.as_deref() {
+            Some("ktx2") => ktx2::read(path),
+            _ => exr::read(path),
+        }
     }
 }

@@ -270,7 +270,7 @@ fn device_options(ctx: &Context, cancel: &CancelFlag) -> RunOptions {
     }
 }
 
-/// Writes a mask file (`.exr`) or a plan folder (`fsot optimize --scene`'s,
+/// Writes a mask file (`.exr` or `.ktx2`, `Mask::open`) or a plan folder (`fsot optimize --scene`'s,
 /// with `plan.json`) made earlier into the renderer's image; the plan, for its
 /// block.
 /// # Safety

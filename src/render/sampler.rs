@@ -110,11 +110,11 @@ impl SamplerPlan {
         &self.parts
     }
 
-    /// A plan folder (`read`) or a mask file (`.exr`, a one-part plan).
+    /// A plan folder (`read`) or a mask file (`.exr` or `.ktx2`: `Mask::open`; a one-part plan).
     pub fn load(path: &Path) -> Result<Self> {
         match path.is_dir() {
             true => Self::read(path),
-            false => Self::single(crate::io::exr::read(path)?),
+            false => Self::single(Mask::open(path)?),
         }
     }
 

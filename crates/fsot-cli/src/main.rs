@@ -137,7 +137,7 @@ struct EvalArgs {
     /// as `published-stbn` and `published-fast`.
     #[arg(long)]
     peers: Option<PathBuf>,
-    /// Also measure this mask file (.exr), as method NAME; repeatable.
+    /// Also measure this mask file (.exr or .ktx2), as method NAME; repeatable.
     #[arg(long = "mask", value_name = "NAME=FILE")]
     masks: Vec<String>,
     /// Iterations of fsot's masks [default: 500 with --quick, else 1000].
@@ -482,7 +482,7 @@ struct OptimizeArgs {
     /// Worker threads for the CPU path, 1 to 1024 [default: every core].
     #[arg(long, allow_negative_numbers = true)]
     threads: Option<usize>,
-    /// Start from this mask (EXR written by fsot or laid out the same way); with
+    /// Start from this mask (.exr or .ktx2, written by fsot or laid out the same way); with
     /// --method fast, the swaps rearrange its values.
     #[arg(long)]
     init: Option<PathBuf>,
@@ -563,7 +563,7 @@ struct StressArgs {
 
 #[derive(Args)]
 struct ScoreArgs {
-    /// The mask to score (EXR).
+    /// The mask to score (.exr or .ktx2).
     mask: PathBuf,
     /// The kernel to score with [default: the one recorded in the mask's
     /// attributes; perceptual-taa when a kernel flag below is given alone].

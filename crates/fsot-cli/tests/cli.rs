@@ -16,6 +16,48 @@ fn stderr(o: &Output) -> String {
 }
 
 #[test]
+fn a_ktx2_mask_is_read_wherever_a_mask_file_is_taken() {
+    // A float KTX2 holds the values exactly: it scores as its EXR twin does, and
+    // a run started from it is the run started from the EXR, bit for bit.
+    let dir = tempfile::tempdir().unwrap();
+    let make = ["optimize", "--backend", "cpu", "--size", "8x8x4", "--iterations", "10", "--seed", "3"];
+    let o = fsot(
+        &[&make[..], &["--out", "m.ktx2", "--ktx2-format", "r32g32_sfloat", "--also", "m.exr"]].concat(),
+        dir.path(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let score = |file: &str| {
+        let s = fsot(&["score", file], dir.path());
+        assert!(s.status.success(), "{}", stderr(&s));
+        String::from_utf8_lossy(&s.stdout).split(": objective").nth(1).unwrap().to_string()
+    };
+    assert_eq!(score("m.ktx2"), score("m.exr"));
+    for init in ["m.ktx2", "m.exr"] {
+        let out = format!("from-{init}.exr");
+        let o = fsot(&[&make[..], &["--init", init, "--out", &out]].concat(), dir.path());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |f: &str| std::fs::read(dir.path().join(f)).unwrap();
+    assert_eq!(
+        fsot::Mask::open(dir.path().join("from-m.ktx2.exr")).unwrap(),
+        fsot::Mask::open(dir.path().join("from-m.exr.exr")).unwrap()
+    );
+    // An 8-bit one reads as its levels; a truncated one is refused by name.
+    let o = fsot(&[&make[..], &["--out", "m8.ktx2", "--ktx2-format", "r8g8_unorm"]].concat(), dir.path());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s = fsot(&["score", "m8.ktx2"], dir.path());
+    assert!(s.status.success(), "{}", stderr(&s));
+    let bytes = read("m8.ktx2");
+    std::fs::write(dir.path().join("cut.ktx2"), &bytes[..bytes.len() / 2]).unwrap();
+    let s = fsot(&["score", "cut.ktx2"], dir.path());
+    assert!(
+        !s.status.success() && stderr(&s).contains("cut.ktx2") && stderr(&s).contains("KTX2"),
+        "{}",
+        stderr(&s)
+    );
+}
+
+#[test]
 fn optimize_writes_exr_and_png_and_score_reads_it() {
     let dir = tempfile::tempdir().unwrap();
     let o = fsot(

@@ -45,7 +45,7 @@ pub(crate) fn eval_command(args: EvalArgs) -> Result<()> {
         if taken || name.starts_with("fsot-planned") || own.iter().any(|(n, _)| n == name) {
             return Err(Error::invalid(format!("--mask {spec:?}: the name {name} is taken")));
         }
-        own.push((name.to_string(), fsot::io::exr::read(std::path::Path::new(file))?));
+        own.push((name.to_string(), fsot::Mask::open(file)?));
     }
     let mut size = if args.quick { EvalSize::quick() } else { EvalSize::full() };
     size.anatomy = args.anatomy;

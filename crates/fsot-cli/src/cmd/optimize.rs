@@ -16,7 +16,7 @@ pub(crate) fn optimize(args: OptimizeArgs) -> Result<()> {
     if args.init.is_some() && args.start != StartArg::Auto {
         return Err(Error::invalid("--init and --start both say where the run starts: give one"));
     }
-    let init = args.init.as_deref().map(fsot::io::exr::read).transpose()?;
+    let init = args.init.as_deref().map(fsot::Mask::open).transpose()?;
     let (w, h, t) = match (&args.size, &init) {
         (Some(s), _) => Tile::parse_size(s)?,
         (None, Some(m)) => (m.tile.width, m.tile.height, m.tile.frames),

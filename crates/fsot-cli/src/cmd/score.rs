@@ -10,7 +10,7 @@ pub(crate) fn score_command(args: ScoreArgs) -> Result<()> {
             args.slices
         )));
     }
-    let mask = fsot::io::exr::read(&args.mask)?;
+    let mask = fsot::Mask::open(&args.mask)?;
     let chosen = args.kernel.is_some()
         || args.display.is_some()
         || args.sigma.is_some()
