@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Makes the ready-made masks in masks/: each as a KTX2 texture (8-bit UNORM) and
 # as 8-bit PNG slices, on the CPU path, which is bit-identical on every run and
-# thread count. Then judges each by `fsot eval --quick` beside the published
-# masks and writes masks/manifest.json.
+# thread count. Then judges each shipped KTX2 file (its 8-bit levels, as a
+# renderer reads them) by `fsot eval --quick` beside the published masks and
+# writes masks/manifest.json.
 #
 # Usage: scripts/make-masks.sh [NAME...]   (default: every mask; names below)
-#   MASKS_WORK   folder for the exact EXR masks and the evaluation [default: target/masks]
+#   MASKS_WORK   folder for the exact EXR masks, the logs and the evaluation [default: target/masks]
 #   MASKS_PEERS  folder of the published masks for the comparison
 #                [default: ../shared/data/peer-masks, skipped when missing]
 #   MASKS_EVAL=0 makes the files only (no evaluation, no manifest)
@@ -51,8 +52,8 @@ args=()
 methods=(white)
 for entry in "${masks[@]}"; do
   name=${entry%%|*}
-  [[ -f $work/$name.exr ]] || { echo "missing $work/$name.exr: run without names first" >&2; exit 1; }
-  args+=(--mask "$name=$work/$name.exr")
+  [[ -f masks/$name.ktx2 && -f $work/$name.log ]] || { echo "missing masks/$name.ktx2 or $work/$name.log: run without names first" >&2; exit 1; }
+  args+=(--mask "$name=masks/$name.ktx2")
   methods+=("$name")
 done
 if [[ -d $peers ]]; then
