@@ -342,7 +342,7 @@ pub fn decode(bytes: &[u8]) -> std::result::Result<Mask, String> {
     if height == 0 || depth != 0 || faces != 1 {
         return Err(format!("a {width}x{height}x{depth} texture of {faces} faces, not a 2-D array texture"));
     }
-    if type_size * 8 != format.bits() {
+    if type_size != format.bits() / 8 {
         return Err(format!("typeSize {type_size} for {}, which has {}-bit channels", format.name(), format.bits()));
     }
     let entries = file.entries;
@@ -427,13 +427,14 @@ impl<'a> Parsed<'a> {
         let mut kvd = range(file.field(14) as u64, file.field(15) as u64)?;
         while kvd.len() >= 4 {
             let length = u32::from_le_bytes(std::array::from_fn(|i| kvd[i])) as usize;
-            let entry = kvd.get(4..4 + length).ok_or("a key/value entry past its data")?;
+            let end = length.checked_add(4).ok_or("a key/value entry past its data")?;
+            let entry = kvd.get(4..end).ok_or("a key/value entry past its data")?;
             let nul = entry.iter().position(|&b| b == 0).ok_or("a key without its NUL")?;
             let value = &entry[nul + 1..];
             let value = value.strip_suffix(&[0]).unwrap_or(value);
             let key = std::str::from_utf8(&entry[..nul]).map_err(|_| "a key that is not UTF-8")?;
             file.entries.push((key.to_string(), String::from_utf8_lossy(value).into_owned()));
-            kvd = kvd.get((4 + length).div_ceil(4) * 4..).unwrap_or(&[]);
+            kvd = kvd.get(end.div_ceil(4) * 4..).unwrap_or(&[]);
         }
         Ok(file)
     }

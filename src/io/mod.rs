@@ -61,6 +61,13 @@ impl MaskFile {
             "ktx2" => return Ok(MaskFile::Ktx2(ktx2::format_for(dims, ktx2_format)?)),
             "h" => MaskFile::CHeader,
             "exr" => MaskFile::Exr,
+            _ if path.is_dir() => {
+                return Err(Error::invalid(format!(
+                    "{} is a folder: name a mask file in it, ending .exr, .ktx2 or .h \
+                     (a scene's masks go into a folder with --scene)",
+                    path.display()
+                )))
+            }
             _ => {
                 return Err(Error::invalid(format!(
                     "cannot tell the format of {} by its name: give it .exr, .ktx2 or .h \

@@ -105,6 +105,9 @@ impl Context {
     /// buffer, and those that name no context's.
     pub fn new(options: &ContextOptions) -> Result<Self> {
         let instance = Instance::shared(options.validation)?;
+        // Listening from here: what making the device says reaches this context.
+        let messages = MessageSink::default();
+        instance.listen(&messages);
         let (physical_device, queue_family) = device::pick(&instance.raw, options.device.as_deref())?;
         let info = device::info(&instance.raw, physical_device);
         let priorities = [1.0f32];
@@ -150,7 +153,7 @@ impl Context {
             full_subgroups: info.full_subgroups,
             queue_lock: None,
         };
-        Self::build(external, info, Some(instance))
+        Self::build(external, info, Some((instance, messages)))
     }
 
     /// Works on a device that a host application made (see `ExternalDevice`); fsot
@@ -217,7 +220,11 @@ impl Context {
 
     /// The rest of a context around a device; on failure, what was made here is
     /// destroyed (an owned device included).
-    fn build(external: ExternalDevice, info: DeviceInfo, owned: Option<&'static Instance>) -> Result<Self> {
+    fn build(
+        external: ExternalDevice,
+        info: DeviceInfo,
+        owned: Option<(&'static Instance, MessageSink)>,
+    ) -> Result<Self> {
         let device = external.device.clone();
         let made = (|| -> Result<(Commands, Allocator)> {
             let commands = Commands::new(&device, external.queue_family)?;
@@ -250,11 +257,14 @@ impl Context {
         };
         // SAFETY: the family and index name a queue the device was created with.
         let queue = unsafe { device.get_device_queue(external.queue_family, external.queue_index) };
-        let messages = MessageSink::default();
-        if let Some(instance) = owned {
-            let handles = [device.handle().as_raw(), queue.as_raw(), commands.command_buffer().as_raw()];
-            instance.listen(handles.to_vec(), &messages);
-        }
+        let (owned, messages) = match owned {
+            Some((instance, messages)) => {
+                let handles = [device.handle().as_raw(), queue.as_raw(), commands.command_buffer().as_raw()];
+                instance.own(&messages, handles.to_vec());
+                (Some(instance), messages)
+            }
+            None => (None, MessageSink::default()),
+        };
         Ok(Self {
             shared: Arc::new(Shared {
                 entry: external.entry,

@@ -1,14 +1,17 @@
 //! The Vulkan instance fsot makes its own devices on (`Context::new`): one per
 //! process for each validation setting, made on first use and kept until the
 //! process ends; each context makes and destroys only its device. Drivers have
-//! failed when a process creates and destroys many instances (NVIDIA's has
-//! been reported to return wrong subgroup invocation ids after about ten such
-//! cycles, and to fail `vkCreateInstance` after a few dozen), and a test binary
-//! or a host that makes several contexts would do exactly that.
+//! failed when a process creates and destroys many instances (reported for
+//! NVIDIA's: wrong `SubgroupLocalInvocationId` after about eleven cycles,
+//! github.com/Genesis-Embodied-AI/quadrants pull request 465; device creation
+//! failing after about ten, github.com/shader-slang/slang-rhi issue 757), and a
+//! test binary or a host that makes several contexts would do exactly that.
 //!
 //! With validation, the layer's messages go to the contexts that listen
-//! (`Instance::listen`): a message goes to the contexts whose device, queue or
-//! command buffer it names, and one that names none of them to every context.
+//! (`Instance::listen`, from before a context makes its device): a message goes
+//! to the contexts whose device, queue or command buffer it names, and one that
+//! names none of them (objects of no context's, or only non-dispatchable ones)
+//! to every live context of the instance.
 
 use std::ffi::{c_void, CStr};
 use std::sync::{Arc, Mutex, Weak};
@@ -93,13 +96,20 @@ impl Instance {
         Ok(instance)
     }
 
-    /// Sends the validation messages that name any of `handles` (raw
-    /// dispatchable handles), and those that name no listener's, to `sink`
-    /// while it lives.
-    pub fn listen(&self, handles: Vec<u64>, sink: &MessageSink) {
+    /// Sends the validation messages that name no listener's handles to `sink`
+    /// while it lives, and once `own` gives it its handles, those that name them.
+    pub fn listen(&self, sink: &MessageSink) {
         let mut listeners = self.listeners.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
         listeners.retain(|l| l.sink.strong_count() > 0);
-        listeners.push(Listener { handles, sink: Arc::downgrade(sink) });
+        listeners.push(Listener { handles: Vec::new(), sink: Arc::downgrade(sink) });
+    }
+
+    /// Gives `sink`'s listener its context's raw dispatchable handles.
+    pub fn own(&self, sink: &MessageSink, handles: Vec<u64>) {
+        let mut listeners = self.listeners.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+        if let Some(l) = listeners.iter_mut().find(|l| std::ptr::eq(l.sink.as_ptr(), Arc::as_ptr(sink))) {
+            l.handles = handles;
+        }
     }
 
     fn make(validation: bool) -> Result<&'static Self> {
