@@ -276,6 +276,15 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
         .file_name()
         .to_string_lossy()
         .ends_with(".ckpt")));
+    // Each part's `layer`: its mask's first layer when the masks are stacked in
+    // one array image in the order the parts first read them, T = 4 layers each;
+    // the plan block the include reads (32 bytes of head, then 32 a part: the
+    // base layer is the fourth u32) says the same.
+    let layers: Vec<u64> = groups.iter().map(|g| g["parts"][0]["layer"].as_u64().unwrap()).collect();
+    assert_eq!(layers, [0, 4, 8]);
+    let block = fsot::SamplerPlan::read(dir.path()).unwrap().plan_block().unwrap();
+    let base = |k: usize| u32::from_le_bytes(block[44 + 32 * k..48 + 32 * k].try_into().unwrap()) as u64;
+    assert_eq!((0..3).map(base).collect::<Vec<_>>(), layers);
 }
 
 #[test]
@@ -580,4 +589,32 @@ fn a_plan_that_fails_or_stops_before_its_first_mask_keeps_the_folder_s_plan_json
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&kept).unwrap()).unwrap();
         assert_eq!(json["scene"], "kept");
     }
+}
+
+#[test]
+fn each_part_in_plan_json_names_the_layer_its_mask_starts_at_in_the_stacked_image() {
+    // Two samples a pixel, a 3-D decision split over two masks, a decision that
+    // shares an earlier one's mask, and white noise: the layers plan.json gives
+    // are the plan block's base layers (the include's), part by part.
+    let groups =
+        "[[group]]\nname = \"light\"\ndims = 3\nspp = 2\n[[group]]\nname = \"bounce\"\ndims = 2\nspp = 2\n\
+                  [[group]]\nname = \"deep\"\ndims = 2\nspp = 2\nvisible = false\n";
+    let plan = Plan::new(&scene("taa_alpha = 0.1", groups), &model()).unwrap();
+    let parts: Vec<&fsot::scene::plan::Part> = plan.groups.iter().flat_map(|g| &g.parts).collect();
+    assert!(plan.groups[0].parts.len() == 2, "a split decision: {:?}", plan.groups[0].parts);
+    assert!(parts.iter().any(|p| p.shares.is_some()), "a shared mask: {parts:?}");
+    let doc: serde_json::Value = serde_json::from_str(&plan.document(&[]).unwrap()).unwrap();
+    let layers: Vec<u64> = doc["groups"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|g| g["parts"].as_array().unwrap().iter().map(|p| p["layer"].as_u64().unwrap()))
+        .collect();
+    let masks = plan.masks.iter().map(|m| fsot::Mask::white(plan.tile(m).unwrap(), 1)).collect();
+    let block = fsot::SamplerPlan::from_plan(&plan, masks).unwrap().plan_block_for(parts.len()).unwrap();
+    let base = |k: usize| u32::from_le_bytes(block[44 + 32 * k..48 + 32 * k].try_into().unwrap()) as u64;
+    assert_eq!(layers, (0..parts.len()).map(base).collect::<Vec<_>>());
+    let t = plan.tile[2] as u64;
+    assert!(layers.iter().all(|l| l % (2 * t) == 0), "T x spp layers a mask: {layers:?}");
+    assert!(layers.iter().max().unwrap() > &0);
 }

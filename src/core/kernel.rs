@@ -144,17 +144,23 @@ impl KernelSpec {
     /// Kernel names as the command line and files spell them.
     pub const NAMES: [&'static str; 5] = KERNEL_NAMES;
 
-    /// The kernel of that name (one of [`KernelSpec::NAMES`]) with the default eye
-    /// (sigma 2.1 pixels) and display (TAA alpha 0.1 at 60 fps).
+    /// The kernel of that name (one of [`KernelSpec::NAMES`]) as `fsot optimize
+    /// --kernel NAME` makes it by default: the eye on the default display
+    /// (`standard_fhd`, 37.84 pixels per degree), TAA alpha 0.1 at 60 fps, and
+    /// for `gaussian` a temporal sigma of 2.1 frames. `from_name` takes a
+    /// Gaussian eye of a sigma in pixels instead, `on_display_named` another
+    /// display.
     ///
     /// ```
     /// let taa = fsot::KernelSpec::named("perceptual-taa")?;
     /// assert_eq!(taa.name(), "perceptual-taa");
+    /// assert_eq!(taa.spatial, fsot::Spatial::Display { ppd: 37.84 });
     /// assert!(fsot::KernelSpec::named("no such kernel").is_err());
     /// # Ok::<(), fsot::Error>(())
     /// ```
     pub fn named(name: &str) -> Result<Self> {
-        Self::from_name(name, DEFAULT_SIGMA, None, DEFAULT_ALPHA, DEFAULT_FPS)
+        Self::from_name(name, DEFAULT_SIGMA, None, DEFAULT_ALPHA, DEFAULT_FPS)?
+            .on_display_named(crate::core::display::DEFAULT_DISPLAY)
     }
 
     /// Builds a spec from a kernel name and its parameters, validating each.

@@ -753,11 +753,21 @@ struct GroupFile<'a> {
     offset: [u32; 3],
     shift: &'a [f32],
     /// Every mask the group reads, in dimension order (more than one when split).
-    parts: &'a [Part],
+    parts: Vec<PartFile<'a>>,
     kernel: Option<&'a str>,
     iterations: Option<u32>,
     seconds: Option<f64>,
     skipped: Option<&'a str>,
+}
+
+/// A part as `plan.json` gives it: with `layer`, the first layer of its mask
+/// where the plan's masks are stacked in one array image (`write_plan`: in the
+/// order the parts first read them, T x spp layers each).
+#[derive(Serialize)]
+struct PartFile<'a> {
+    #[serde(flatten)]
+    part: &'a Part,
+    layer: usize,
 }
 
 impl Plan {
@@ -994,6 +1004,20 @@ impl Plan {
     pub fn document(&self, made: &[Made]) -> Result<String> {
         self.check()?;
         let took = |file: &str| made.iter().find(|m| m.file == file);
+        // The stacked image's layers: each mask in the order the parts first
+        // read it (as `SamplerPlan::from_plan` stacks them), T x spp each.
+        let mut stacked: Vec<(&str, usize)> = Vec::new();
+        let mut next = 0;
+        for p in self.groups.iter().flat_map(|g| &g.parts) {
+            if !stacked.iter().any(|(m, _)| *m == p.mask) {
+                stacked.push((&p.mask, next));
+                if let Some(m) = self.masks.iter().find(|m| m.file == p.mask) {
+                    let tile = self.tile(m)?;
+                    next += tile.frames * tile.spp;
+                }
+            }
+        }
+        let layer = |mask: &str| stacked.iter().find(|(m, _)| *m == mask).map_or(0, |&(_, l)| l);
         let groups = self
             .groups
             .iter()
@@ -1014,7 +1038,7 @@ impl Plan {
                     mask: &first.mask,
                     offset: first.offset,
                     shift: &first.shift,
-                    parts: &g.parts,
+                    parts: g.parts.iter().map(|p| PartFile { part: p, layer: layer(&p.mask) }).collect(),
                     kernel: first.kernel.as_deref().filter(|_| optimized),
                     iterations: optimized.then(|| read.iter().map(|m| m.iterations).sum()),
                     seconds: optimized.then(|| own.iter().fold(0.0, |a, m| a + m.seconds)),

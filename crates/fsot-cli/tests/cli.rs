@@ -222,6 +222,7 @@ fn bad_input_gets_a_clear_error_and_leaves_existing_files_alone() {
         (&["--out", "m.png"], "cannot tell the format of m.png"),
         (&["--ktx2-format", "r8_unorm", "--also", "m.h"], "neither --out nor --also names a .ktx2 file"),
         (&["--out", "m"], "cannot tell the format of m"),
+        (&["--out", "."], ". is a folder: name a mask file in it"),
         (&["--init", "missing.exr"], "cannot read"),
         (&["--init", "garbage.exr"], "not a readable EXR"),
         (&["--out", "no/such/folder/m.exr"], "does not exist"),
