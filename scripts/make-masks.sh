@@ -10,7 +10,8 @@
 #   MASKS_PEERS  folder of the published masks for the comparison
 #                [default: ../shared/data/peer-masks, skipped when missing]
 #   MASKS_EVAL=0 makes the files only (no evaluation, no manifest)
-#   MASKS_MAKE=0 evaluates the masks made before (in MASKS_WORK) and writes the manifest
+#   MASKS_MAKE=0 evaluates the KTX2 files in masks/ (made before: their logs in MASKS_WORK)
+#                and writes the manifest
 set -euo pipefail
 cd "$(dirname "$0")/.."
 work=${MASKS_WORK:-target/masks}
