@@ -172,7 +172,10 @@ pub unsafe fn write_mask_to_buffer(ctx: &Context, mask: &Mask, format: Format, t
 /// deterministic mode, so the same settings give the same mask bit for bit,
 /// run to run; `settings` as for `fsot optimize`) and writes it into the
 /// renderer's image. The image is checked before the optimization starts.
-/// Returns the mask (None when `cancel` stopped the run: nothing is written then).
+/// Under a time budget (`Until::Seconds`) the budget counts from this call, the
+/// run's start on the device (pipelines, buffers) included; the write after it
+/// is not. Returns the mask (None when `cancel` stopped the run: nothing is
+/// written then).
 /// # Safety
 /// The target is as the module's notes say (`# Safety`).
 pub unsafe fn make_into_image(
@@ -183,9 +186,11 @@ pub unsafe fn make_into_image(
     cancel: &CancelFlag,
     on: &mut dyn FnMut(Event),
 ) -> Result<Option<Mask>> {
+    let called = std::time::Instant::now();
     tile.check()?;
     check_image(ctx, image, &tile, 1, tile.dims)?;
-    let mut run = match Run::start(tile, settings, None, device_options(ctx, cancel)) {
+    let options = RunOptions { budget_from: Some(called), ..device_options(ctx, cancel) };
+    let mut run = match Run::start(tile, settings, None, options) {
         Err(Error::Interrupted) => return Ok(None),
         run => run?,
     };
@@ -202,9 +207,9 @@ pub unsafe fn make_into_image(
 /// `fsot optimize --scene` would: the plateau rule stopping each, or under the
 /// plan's budget each in its share of it, one after another; white noise for
 /// what is not visible; the deterministic mode) and writes them, stacked,
-/// into the renderer's image. The image is checked before the first run.
-/// Returns the plan as the include reads it, for its block (None when `cancel`
-/// stopped a run: nothing is written then).
+/// into the renderer's image. The image is checked before the first run. The
+/// plan's budget counts from this call. Returns the plan as the include reads
+/// it, for its block (None when `cancel` stopped a run: nothing is written then).
 /// # Safety
 /// The target is as the module's notes say (`# Safety`).
 pub unsafe fn make_plan_into_image(
@@ -214,6 +219,7 @@ pub unsafe fn make_plan_into_image(
     cancel: &CancelFlag,
     on: &mut dyn FnMut(PlanEvent),
 ) -> Result<Option<SamplerPlan>> {
+    let origin = std::time::Instant::now();
     plan.check()?;
     let first = &plan.masks[0];
     if plan.masks.iter().any(|m| m.spp != first.spp) {
@@ -222,7 +228,6 @@ pub unsafe fn make_plan_into_image(
     let dims = plan.masks.iter().map(|m| m.dims).max().unwrap_or(1);
     check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
     // Under the plan's budget each run ends at the end of its share of it.
-    let origin = std::time::Instant::now();
     let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
     let mut ends = plan.run_ends(&optimized, origin, false)?.into_iter();
     let mut masks = Vec::with_capacity(plan.masks.len());
