@@ -18,18 +18,15 @@ use std::time::Instant;
 
 use ash::vk;
 use clap::Parser;
-use fsot::core::kernel::KernelSpec;
-use fsot::core::mask::Mask;
-use fsot::core::tile::Tile;
-use fsot::error::{Error, Result};
+// The mask calls, through the public API a renderer uses.
+use fsot::{
+    layers_for, make_into_image, vk_format, write_plan, CancelFlag, Error, Event, KernelSpec, Mask, Result,
+    SamplerPlan, Settings, TexelFormat as Format, Tile,
+};
+// This renderer's own passes and its measure, on fsot's modules (`internals`).
 use fsot::io::atomic::{make_folder, AtomicFile};
-use fsot::io::ktx2::Format;
-use fsot::optimize::run::{CancelFlag, Event};
-use fsot::optimize::settings::Settings;
 use fsot::quality::eye::Eye;
 use fsot::quality::metric::relative_errors_rect;
-use fsot::render::device::{layers_for, make_into_image, vk_format, write_plan};
-use fsot::render::sampler::SamplerPlan;
 use fsot::vk::commands::barrier;
 use fsot::vk::{
     Buffer, ComputeDesc, ComputePipeline, Context, ContextOptions, Image, ImageDesc, Location, Sampler,

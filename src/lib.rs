@@ -221,6 +221,6 @@ pub use ash;
 pub use optimize::vulkan::VulkanOptions;
 #[cfg(feature = "vulkan")]
 pub use render::device::{
-    layers_for, make_into_image, make_plan_into_image, upload, write_mask, write_mask_to_buffer, write_plan,
-    write_plan_block, write_plan_block_for,
+    layers_for, make_into_image, make_plan_into_image, upload, vk_format, write_mask, write_mask_to_buffer,
+    write_plan, write_plan_block, write_plan_block_for,
 };
