@@ -50,9 +50,22 @@ impl StepRule {
             Ok(())
         } else {
             Err(crate::error::Error::invalid(format!(
-                "step rule {self:?} out of range (steps above 0 and at most {}, decays in [0, 1))",
+                "step rule {self} out of range (steps above 0 and at most {}, decays in [0, 1))",
                 Self::MAX_STEP
             )))
+        }
+    }
+}
+
+/// As files record it: `momentum (step 2, beta 0.8)`,
+/// `adam (lr 0.01, beta1 0.9, beta2 0.99, eps 0.00000001)`.
+impl std::fmt::Display for StepRule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            StepRule::Momentum { step, beta } => write!(f, "momentum (step {step}, beta {beta})"),
+            StepRule::Adam { lr, beta1, beta2, eps } => {
+                write!(f, "adam (lr {lr}, beta1 {beta1}, beta2 {beta2}, eps {eps})")
+            }
         }
     }
 }
@@ -247,6 +260,12 @@ mod tests {
     }
 
     use super::*;
+
+    #[test]
+    fn a_rule_reads_in_a_file_as_words_and_numbers() {
+        assert_eq!(StepRule::DEFAULT.to_string(), "momentum (step 2, beta 0.8)");
+        assert_eq!(StepRule::DEFAULT_ADAM.to_string(), "adam (lr 0.01, beta1 0.9, beta2 0.99, eps 0.00000001)");
+    }
 
     #[test]
     fn adam_and_momentum_steps_follow_their_closed_forms_under_a_constant_gradient() {

@@ -387,7 +387,7 @@ pub fn run_mask(tile: &Tile, s: &Settings, iterations: u32, slices: u32, samples
         ("seed".to_string(), s.seed.to_string()),
         ("iterations".to_string(), iterations.to_string()),
         ("slices".to_string(), slices.to_string()),
-        ("step".to_string(), format!("{:?}", s.rule)),
+        ("step".to_string(), s.rule.to_string()),
         ("version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
     ];
     if s.start.animates(s.until, tile) {

@@ -41,6 +41,19 @@ pub enum Filter {
     Ema { alpha: f64, beta: f64 },
 }
 
+/// As `parse` takes it (`gaussian:1.3435`, `ema:0.1:0.1`, `none`).
+impl std::fmt::Display for Filter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Filter::None => write!(f, "none"),
+            Filter::Gaussian { sigma } => write!(f, "gaussian:{sigma}"),
+            Filter::Box { n } => write!(f, "box:{n}"),
+            Filter::Binomial { n } => write!(f, "binomial:{n}"),
+            Filter::Ema { alpha, beta } => write!(f, "ema:{alpha}:{beta}"),
+        }
+    }
+}
+
 impl Filter {
     /// Parses `none`, `gaussian:SIGMA`, `box:N`, `binomial:N`, `ema:ALPHA:BETA`.
     pub fn parse(text: &str, temporal: bool) -> Result<Self> {
@@ -312,7 +325,7 @@ impl FastSpec {
             Combine::Product => "product".to_string(),
             Combine::Sum { spatial_weight } => format!("sum, spatial weight {spatial_weight}"),
         };
-        format!("fast: spatial {:?}, temporal {:?}, {c}", self.spatial, self.temporal)
+        format!("fast: spatial {}, temporal {}, {c}", self.spatial, self.temporal)
     }
 
     /// The pair weights of the loss on a tile.
@@ -562,6 +575,10 @@ mod tests {
         }
         assert_eq!(Combine::parse("sum:0.25").unwrap(), Combine::Sum { spatial_weight: 0.25 });
         assert!(Combine::parse("sum:2").is_err() && Combine::parse("mix").is_err());
+        // A filter is written as it is given.
+        for text in ["none", "gaussian:1.3435", "box:3", "binomial:4", "ema:0.1:0.1"] {
+            assert_eq!(Filter::parse(text, true).unwrap().to_string(), text);
+        }
     }
 
     #[test]
