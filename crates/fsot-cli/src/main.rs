@@ -411,7 +411,7 @@ fn kernel_spec(
 
 #[derive(Args)]
 struct OptimizeArgs {
-    /// Tile size W x H x T (pixels x pixels x frames) [default: 64x64x16, or the
+    /// Tile size W x H x T (pixels x pixels x frames; W x H: one frame) [default: 64x64x16, or the
     /// --init file's].
     #[arg(long)]
     size: Option<String>,
