@@ -1,11 +1,10 @@
 //! The Vulkan instance fsot makes its own devices on (`Context::new`): one per
 //! process for each validation setting, made on first use and kept until the
 //! process ends; each context makes and destroys only its device. Drivers have
-//! failed when a process creates and destroys many instances (reported for
-//! NVIDIA's: wrong `SubgroupLocalInvocationId` after about eleven cycles,
-//! github.com/Genesis-Embodied-AI/quadrants pull request 465; device creation
-//! failing after about ten, github.com/shader-slang/slang-rhi issue 757), and a
-//! test binary or a host that makes several contexts would do exactly that.
+//! failed when a process creates and destroys many instances (NVIDIA's has been
+//! seen to give wrong `SubgroupLocalInvocationId` after about eleven cycles, and
+//! to fail device creation after about ten), and a test binary or a host that
+//! makes several contexts would do exactly that.
 //!
 //! With validation, the layer's messages go to the contexts that listen
 //! (`Instance::listen`, from before a context makes its device): a message goes
