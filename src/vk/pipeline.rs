@@ -59,6 +59,7 @@ pub struct ComputePipeline {
 impl ComputePipeline {
     /// Whether the pipeline asks the driver for full subgroups
     /// (`ComputeDesc::full_subgroups` on a device that offers it).
+    #[cfg_attr(not(feature = "internals"), allow(dead_code))]
     pub fn full_subgroups(&self) -> bool {
         self.full_subgroups
     }
