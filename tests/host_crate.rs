@@ -1,47 +1,111 @@
 //! A renderer's crate outside the workspace (`examples/host-crate`) depends on
-//! fsot by path in one line and builds, with the default features and with
+//! fsot in one line and builds, on fsot as `cargo package` packs it for a
+//! registry: only the files its manifest's `include` names, in a package under
+//! crates.io's 10 MiB limit. It builds with the default features and with
 //! `default-features = false`, where no shader compiler is found (shaderc's
 //! lookup pointed at an empty folder): neither build has shaderc or cmake in its
 //! dependency tree, and without Vulkan neither ash nor gpu-allocator. The
-//! host's program then makes a CPU mask through the public API.
+//! host's program then makes a CPU mask through the public API. The command
+//! line's package, packed beside it, builds on that same packed library.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::OnceLock;
 
-fn host_crate() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/host-crate")
+/// crates.io's default limit on a package's compressed size.
+const REGISTRY_LIMIT: u64 = 10 * 1024 * 1024;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn cargo(args: &[&str], empty: &Path) -> String {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let target = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/host-crate");
-    let out = Command::new(cargo)
+fn target() -> PathBuf {
+    root().join("target/host-crate")
+}
+
+fn run(what: &mut Command) -> String {
+    let out = what.output().unwrap();
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{what:?}:\n{text}");
+    text
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+/// The workspace's crates packed for a registry, once per process, and fsot's
+/// and the command line's packages unpacked (as a registry's copies are).
+fn unpacked() -> &'static Path {
+    static UNPACKED: OnceLock<PathBuf> = OnceLock::new();
+    UNPACKED.get_or_init(|| {
+        let target = target();
+        run(cargo()
+            .args(["package", "--workspace", "--no-verify", "--allow-dirty", "--offline"])
+            .arg("--target-dir")
+            .arg(&target)
+            .current_dir(root()));
+        let unpacked = target.join("unpacked");
+        let _ = std::fs::remove_dir_all(&unpacked);
+        std::fs::create_dir_all(&unpacked).unwrap();
+        for name in [package("fsot"), package("fsot-cli")] {
+            let packed = target.join("package").join(format!("{name}.crate"));
+            let size = std::fs::metadata(&packed).unwrap().len();
+            assert!(size < REGISTRY_LIMIT, "{} is {size} bytes, over crates.io's limit", packed.display());
+            run(Command::new("tar").arg("-xzf").arg(&packed).arg("-C").arg(&unpacked));
+        }
+        unpacked
+    })
+}
+
+/// A crate's package name: fsot's crates share one version.
+fn package(name: &str) -> String {
+    format!("{name}-{}", env!("CARGO_PKG_VERSION"))
+}
+
+/// The host crate, its manifest's one line pointing at the packed fsot.
+fn host_crate() -> &'static Path {
+    static HOST: OnceLock<PathBuf> = OnceLock::new();
+    HOST.get_or_init(|| {
+        let example = root().join("examples/host-crate");
+        let manifest = std::fs::read_to_string(example.join("Cargo.toml")).unwrap();
+        let line = r#"fsot = { path = "../..", default-features = false }"#;
+        assert!(manifest.contains(line), "the host's manifest has no line `{line}`");
+        let packed = unpacked().join(package("fsot"));
+        let manifest =
+            manifest.replace(line, &format!("fsot = {{ path = {packed:?}, default-features = false }}"));
+        let host = target().join("host");
+        let _ = std::fs::remove_dir_all(&host);
+        std::fs::create_dir_all(host.join("src")).unwrap();
+        std::fs::write(host.join("Cargo.toml"), manifest).unwrap();
+        std::fs::copy(example.join("src/main.rs"), host.join("src/main.rs")).unwrap();
+        host
+    })
+}
+
+fn host_cargo(args: &[&str], empty: &Path) -> String {
+    run(cargo()
         .args(args)
         .current_dir(host_crate())
-        .env("CARGO_TARGET_DIR", target)
+        .env("CARGO_TARGET_DIR", target())
         .env("SHADERC_LIB_DIR", empty)
-        .env_remove("VULKAN_SDK")
-        .output()
-        .unwrap();
-    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "cargo {}:\n{text}", args.join(" "));
-    text
+        .env_remove("VULKAN_SDK"))
 }
 
 fn builds_and_runs(features: &[&str], absent: &[&str]) {
     let empty = tempfile::tempdir().unwrap();
     let mut tree = vec!["tree", "--offline", "-e", "normal,build", "--prefix", "none"];
     tree.extend_from_slice(features);
-    let deps = cargo(&tree, empty.path());
+    let deps = host_cargo(&tree, empty.path());
     for name in absent {
         assert!(
             !deps.lines().any(|l| l.split_whitespace().next() == Some(name)),
             "{name} is in the host's dependencies ({features:?}):\n{deps}"
         );
     }
-    let mut run = vec!["run", "--offline", "--quiet"];
-    run.extend_from_slice(features);
-    let said = cargo(&run, empty.path());
+    let mut args = vec!["run", "--offline", "--quiet"];
+    args.extend_from_slice(features);
+    let said = host_cargo(&args, empty.path());
     assert!(said.contains("made a 16x16x4 mask, 2048 samples"), "{said}");
 }
 
@@ -66,4 +130,15 @@ fn a_host_crate_builds_without_vulkan() {
             "colorvideovdp",
         ],
     );
+}
+
+#[test]
+fn the_command_line_builds_from_its_package_on_the_packed_library() {
+    let cli = unpacked().join(package("fsot-cli"));
+    let patch = format!("patch.crates-io.fsot.path={:?}", unpacked().join(package("fsot")));
+    let said = run(cargo()
+        .args(["check", "--offline", "--config", &patch])
+        .current_dir(&cli)
+        .env("CARGO_TARGET_DIR", target()));
+    assert!(!said.contains("warning: Patch"), "the packed library was not used:\n{said}");
 }

@@ -63,8 +63,8 @@ pub struct EvalSize {
     /// Renders per mask, each at its own placement.
     pub renders: u32,
     pub reference_samples: usize,
-    /// Also measure `fsot-planned`: each scene's plan (`scenes/*.toml`), every
-    /// decision reading its own mask, made from the animated start until
+    /// Also measure `fsot-planned`: each scene's plan (`crates/fsot-cli/scenes/*.toml`),
+    /// every decision reading its own mask, made from the animated start until
     /// iterations no longer pay (at most ten times `iterations`).
     pub planned: bool,
     /// Also the no-TAA plan's masks (`fsot-planned` without TAA); the quick run
@@ -321,14 +321,14 @@ pub fn method_mask(method: &str, sigma: f64, size: &EvalSize, cache: &Path, seed
     Ok(mask)
 }
 
-/// The scene files of the evaluation's scenes (`scenes/*.toml`).
+/// The scene files of the evaluation's scenes (`crates/fsot-cli/scenes/*.toml`).
 pub const SCENE_FILES: [(&str, &str); 6] = [
-    ("light-pick", include_str!("../../../../scenes/light-pick.toml")),
-    ("soft-shadow", include_str!("../../../../scenes/soft-shadow.toml")),
-    ("occlusion", include_str!("../../../../scenes/occlusion.toml")),
-    ("highlight", include_str!("../../../../scenes/highlight.toml")),
-    ("defocus-motion", include_str!("../../../../scenes/defocus-motion.toml")),
-    ("veach-mis", include_str!("../../../../scenes/veach-mis.toml")),
+    ("light-pick", include_str!("../../scenes/light-pick.toml")),
+    ("soft-shadow", include_str!("../../scenes/soft-shadow.toml")),
+    ("occlusion", include_str!("../../scenes/occlusion.toml")),
+    ("highlight", include_str!("../../scenes/highlight.toml")),
+    ("defocus-motion", include_str!("../../scenes/defocus-motion.toml")),
+    ("veach-mis", include_str!("../../scenes/veach-mis.toml")),
 ];
 
 /// A scene's planned masks (each file once) and the reads of its decisions.
@@ -439,7 +439,7 @@ pub fn scene_plan(scene: Scene, viewing: Spatial, taa: bool, share: bool, size: 
         .map(|s| s.1)
         .ok_or_else(|| Error::invalid(format!("no scene file for {}", scene.name())))?;
     let mut file = fsot::scene::file::Scene::parse(text, scene.name())
-        .map_err(|e| Error::invalid(format!("scenes/{}.toml: {e}", scene.name())))?;
+        .map_err(|e| Error::invalid(format!("the {} scene file: {e}", scene.name())))?;
     file.display.spatial = viewing;
     file.display.seen_on = match viewing {
         Spatial::Display { ppd } => format!("the judge's display: {ppd:.1} pixels per degree"),
