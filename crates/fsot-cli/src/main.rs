@@ -27,7 +27,7 @@ use fsot::peers::swap::SwapDevice;
 #[derive(Parser)]
 #[command(
     name = "fsot",
-    version,
+    version = concat!(env!("CARGO_PKG_VERSION"), " (", env!("FSOT_COMMIT"), ")"),
     about = "Perceptually optimized spatio-temporal sample masks (filtered sliced optimal transport)"
 )]
 struct Cli {

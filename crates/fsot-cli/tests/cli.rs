@@ -58,6 +58,17 @@ fn a_ktx2_mask_is_read_wherever_a_mask_file_is_taken() {
 }
 
 #[test]
+fn the_version_names_the_commit_built_for_a_bug_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = fsot(&["--version"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    let commit = env!("FSOT_COMMIT");
+    assert_eq!(said.trim_end(), format!("fsot {} ({commit})", env!("CARGO_PKG_VERSION")));
+    assert!(commit == "unknown" || commit.trim_end_matches("-dirty").len() >= 7, "{commit}");
+}
+
+#[test]
 fn optimize_writes_exr_and_png_and_score_reads_it() {
     let dir = tempfile::tempdir().unwrap();
     let o = fsot(
