@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::io::atomic::AtomicFile;
 use crate::optimize::backend::{Backend, BackendChoice, BackendKind, Report};
 use crate::optimize::checkpoint;
+use crate::optimize::clock::{self, Stamp};
 use crate::optimize::cpu::CpuRun;
 use crate::optimize::settings::{
     check_axis_share, RunState, Settings, Start, Until, COARSE_BUDGET_SHARE, MAX_BUDGET_SECONDS, COARSE_MIN_QUARTER, SPATIAL_BUDGET_SHARE,
@@ -258,7 +259,7 @@ pub struct Run {
     iterating_since: Option<Instant>,
     /// What a time budget counts from: `RunOptions::budget_from`, or when
     /// `Run::start` began.
-    begun: Instant,
+    begun: Stamp,
     /// How long `Run::start` took, and on what.
     set_up: SetUp,
 }
@@ -280,7 +281,7 @@ impl Run {
     /// Starts a run: checks the checkpoint rules (before any long work), picks the
     /// backend, and resumes from the checkpoint when asked.
     pub fn start(tile: Tile, settings: Settings, init: Option<&Mask>, options: RunOptions) -> Result<Self> {
-        let begun = options.budget_from.unwrap_or_else(Instant::now);
+        let begun = options.budget_from.map_or_else(Stamp::now, Stamp::at);
         if settings.iterations == 0 {
             return Err(Error::invalid("iterations must be at least 1"));
         }
@@ -302,6 +303,7 @@ impl Run {
                     "a time budget must be more than 0 and at most {MAX_BUDGET_SECONDS} seconds, got {s:?}"
                 )))
             }
+            Until::Seconds(_) if !clock::HAS_CLOCK => clock::needs_clock("a time budget")?,
             Until::Seconds(_) if options.checkpoint.is_some() => {
                 return Err(Error::invalid(
                     "a run under a time budget takes no checkpoints: it is made again within its budget",
@@ -321,12 +323,12 @@ impl Run {
         };
         let saved = saved_state(options.checkpoint.as_ref(), &fingerprint, &tile, &settings)?;
         let left = match settings.until {
-            Until::Seconds(s) => Some(s - begun.elapsed().as_secs_f64()),
+            Until::Seconds(s) => Some(s - begun.seconds()),
             _ => None,
         };
         let started;
         let mut start_note = None;
-        let making_start = Instant::now();
+        let making_start = Stamp::now();
         let init = match (init, &saved, settings.start) {
             (None, None, Start::Coarse) => {
                 let (mask, note) = coarse_start(tile, &settings, left.unwrap_or(0.0), &options)?;
@@ -342,14 +344,14 @@ impl Run {
             }
             _ => init,
         };
-        let starting_backend = Instant::now();
+        let starting_backend = Stamp::now();
         let (mut backend, note) = start_backend(tile, settings, init, &options)?;
         if let Some(state) = &saved {
             backend.restore(state)?;
         }
         let set_up = SetUp {
-            start: (starting_backend - making_start).as_secs_f64(),
-            backend: starting_backend.elapsed().as_secs_f64(),
+            start: starting_backend.seconds_since(making_start),
+            backend: starting_backend.seconds(),
         };
         let plateau = schedule(&settings, saved.as_ref());
         let resumed_from = saved.map(|s| s.iteration);
@@ -542,9 +544,9 @@ impl Run {
     /// next checkpoint), then the checkpoint when one is due.
     fn step_once(&mut self, to: u32, on: &mut dyn FnMut(Event)) -> Result<()> {
         let count = self.next_step(to);
-        let start = std::time::Instant::now();
+        let start = Stamp::now();
         let costs = self.backend.step_up_to(count)?;
-        let seconds = start.elapsed().as_secs_f64();
+        let seconds = start.seconds();
         self.busy += seconds;
         self.paced(seconds, costs.len());
         self.stepped(&costs, on)
@@ -554,7 +556,7 @@ impl Run {
     /// when `Run::start` began: its set-up and an animated start included), in
     /// seconds: what a time budget counts.
     pub fn elapsed(&self) -> f64 {
-        self.begun.elapsed().as_secs_f64()
+        self.begun.seconds()
     }
 
     /// Where `Run::start` spent its time: making the start and starting the
@@ -572,7 +574,8 @@ impl Run {
     /// When a time budget ends (`Until::Seconds`).
     fn deadline(&self) -> Option<Instant> {
         match self.settings.until {
-            Until::Seconds(s) => Some(self.begun + Duration::from_secs_f64(s)),
+            // Run::start refuses a budget where there is no clock.
+            Until::Seconds(s) => self.begun.instant().map(|b| b + Duration::from_secs_f64(s)),
             _ => None,
         }
     }
@@ -849,7 +852,7 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
             runs[r].next_step(to)
         })
         .collect();
-    let start = std::time::Instant::now();
+    let start = Stamp::now();
     let result = {
         let mut members: Vec<&mut dyn Backend> = runs
             .iter_mut()
@@ -862,7 +865,7 @@ fn step_shared(runs: &mut [Run], group: &[usize], on: &mut dyn FnMut(usize, Even
             None => Ok(Vec::new()),
         }
     };
-    let seconds = start.elapsed().as_secs_f64();
+    let seconds = start.seconds();
     let most = result.as_ref().map_or(0, |costs| costs.iter().map(Vec::len).max().unwrap_or(0));
     for &r in group {
         runs[r].busy += seconds;
@@ -947,7 +950,7 @@ fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions
     let until = Until::Seconds((left * COARSE_BUDGET_SHARE).max(MIN_SPATIAL_SECONDS));
     let first = Settings { until, start: Start::Auto, ..*settings };
     let options = RunOptions { checkpoint: None, budget_from: None, ..options.clone() };
-    let began = Instant::now();
+    let began = Stamp::now();
     let cancel = options.cancel_start.clone().unwrap_or_default();
     let mut run = Run::start(quarter, first, None, options)?;
     run.run(&cancel, &mut |_| {})?;
@@ -955,7 +958,7 @@ fn coarse_start(tile: Tile, settings: &Settings, left: f64, options: &RunOptions
         "a quarter, {}, of {} iterations in {:.2} s, laid out 2x2",
         quarter.describe(),
         run.iteration(),
-        began.elapsed().as_secs_f64()
+        began.seconds()
     );
     Ok((lay_out(&run.finish()?, tile)?, note))
 }

@@ -229,7 +229,7 @@ pub unsafe fn make_plan_into_image(
     check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
     // Under the plan's budget each run ends at the end of its share of it.
     let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
-    let mut ends = plan.run_ends(&optimized, origin, false)?.into_iter();
+    let mut ends = plan.run_ends(&optimized, crate::optimize::clock::Stamp::at(origin), false)?.into_iter();
     let mut masks = Vec::with_capacity(plan.masks.len());
     for (index, m) in plan.masks.iter().enumerate() {
         let tile = plan.tile(m)?;

@@ -42,7 +42,7 @@
 //!   and backend scaled by the scaling suite's factors for dimension and spp.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use crate::optimize::clock::{self, Stamp};
 
 use serde::Serialize;
 
@@ -317,9 +317,9 @@ impl CostModel {
         let mut run = Run::start(tile, settings, None, options)?;
         let never = CancelFlag::new();
         run.advance(8, &never, &mut |_| {})?;
-        let start = Instant::now();
+        let start = Stamp::now();
         run.advance(40, &never, &mut |_| {})?;
-        let seconds = start.elapsed().as_secs_f64() / 32.0;
+        let seconds = start.seconds() / 32.0;
         Ok(Self { seconds_per_point: seconds / tile.points() as f64, backend: run.note().to_string() })
     }
 
@@ -803,7 +803,10 @@ impl Plan {
                  its masks are made again within the budget",
             ));
         }
-        let origin = options.budget_from.unwrap_or_else(Instant::now);
+        if self.budget.is_some() {
+            clock::needs_clock("a plan's time budget")?;
+        }
+        let origin = options.budget_from.map_or_else(Stamp::now, Stamp::at);
         crate::io::atomic::make_folder(dir)?;
         let plan_file = AtomicFile::create(&dir.join("plan.json"))?;
         let mut made: Vec<Option<Made>> = vec![None; self.masks.len()];
@@ -842,7 +845,7 @@ impl Plan {
                 // One Vulkan device for the plan, opened once.
                 // A cancel cuts short a mask's animated start too.
                 let options = RunOptions {
-                    budget_from: Some(origin),
+                    budget_from: origin.instant(),
                     cancel_start: Some(cancel.clone()),
                     ..crate::optimize::run::shared_context(options)?
                 };
@@ -908,12 +911,12 @@ impl Plan {
     /// Where each run of the masks `indices` ends, in seconds from `origin`,
     /// under the plan's budget: on one device every run at its end; on the CPU
     /// each at the end of its share of what is left of it. None: no budget.
-    pub(crate) fn run_ends(&self, indices: &[usize], origin: Instant, together: bool) -> Result<Vec<Option<f64>>> {
+    pub(crate) fn run_ends(&self, indices: &[usize], origin: Stamp, together: bool) -> Result<Vec<Option<f64>>> {
         let Some(budget) = self.budget else { return Ok(vec![None; indices.len()]) };
         if together {
             return Ok(vec![Some(budget); indices.len()]);
         }
-        let spent = origin.elapsed().as_secs_f64();
+        let spent = origin.seconds();
         let tiles: Vec<Option<Tile>> =
             indices.iter().map(|&i| self.tile(&self.masks[i]).map(Some)).collect::<Result<_>>()?;
         let mut end = spent.max(f64::MIN_POSITIVE);
@@ -1114,7 +1117,7 @@ mod tests {
         let scene = Scene::parse(&text, "day").unwrap();
         let plan = Plan::new(&scene, &CostModel { seconds_per_point: 1e-6, backend: String::new() }).unwrap();
         let all: Vec<usize> = (0..plan.masks.len()).collect();
-        let ends = plan.run_ends(&all, Instant::now(), false).unwrap();
+        let ends = plan.run_ends(&all, Stamp::now(), false).unwrap();
         assert_eq!(ends.len(), plan.masks.len());
         assert!(ends.iter().all(|e| matches!(e, Some(s) if *s <= 86400.0)), "{ends:?}");
         assert_eq!(ends.last().copied().flatten(), Some(86400.0), "the last ends at the budget");

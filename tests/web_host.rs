@@ -1,0 +1,93 @@
+//! A web build (wasm32-unknown-unknown: one thread, no clock) makes its mask at
+//! start-up through fsot's CPU path: `examples/web-host`, built for that target
+//! and loaded in Node.js as a page would load it, imports nothing, makes a mask
+//! that is the mask this machine's build makes from the same settings, hands
+//! it over as KTX2 bytes, and is told plainly that a time budget needs a clock.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use fsot::{KernelSpec, Mask, Settings, Start, TexelFormat, Tile};
+
+mod common;
+
+const TARGET: &str = "wasm32-unknown-unknown";
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn run(what: &mut Command) -> String {
+    let out = what.output().unwrap_or_else(|e| panic!("{what:?}: {e}"));
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{what:?}:\n{text}");
+    text
+}
+
+/// What this machine lacks to build and load the module, if anything.
+fn missing() -> Option<String> {
+    if Command::new("node").arg("--version").output().map_or(true, |o| !o.status.success()) {
+        return Some(
+            "Node.js (`node`) is not installed (scripts/install-deps.sh --tests installs it)".into(),
+        );
+    }
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    let libdir = Command::new(rustc).args(["--print", "target-libdir", "--target", TARGET]).output().ok()?;
+    let libdir = PathBuf::from(String::from_utf8_lossy(&libdir.stdout).trim());
+    match libdir.is_dir() {
+        true => None,
+        false => Some(format!(
+            "Rust's standard library for {TARGET} is not installed (scripts/install-deps.sh --tests adds it)"
+        )),
+    }
+}
+
+/// The web host's module, built for the web.
+fn module() -> PathBuf {
+    let target = root().join("target/web-host");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    run(Command::new(cargo)
+        .args(["build", "--release", "--offline", "--target", TARGET])
+        .current_dir(root().join("examples/web-host"))
+        .env("CARGO_TARGET_DIR", &target));
+    target.join(TARGET).join("release/fsot_web_host.wasm")
+}
+
+#[test]
+fn a_web_build_makes_this_machines_mask_in_node_and_refuses_a_time_budget() {
+    if let Some(reason) = missing() {
+        if common::skip(&reason) {
+            return;
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("web.ktx2");
+    let said = run(Command::new("node")
+        .arg(root().join("examples/web-host/run.mjs"))
+        .arg(module())
+        .args(["16x16x4", "2", "8"])
+        .arg(&out));
+    assert!(said.contains("imports: none"), "{said}");
+    assert!(said.contains("made 16x16x4, d = 2, 8 iterations"), "{said}");
+    assert!(
+        said.contains("a time budget: a time budget needs a wall clock, and this platform has none"),
+        "{said}"
+    );
+
+    // The same settings here, in this process.
+    let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
+    let kernel = KernelSpec::named("perceptual-taa").unwrap().on_display_named("standard_fhd").unwrap();
+    let settings = Settings::new(kernel, 1).iterations(8).start(Start::Animated);
+    let here = fsot::optimize(tile, settings, None).unwrap();
+    let web = Mask::open(&out).unwrap();
+    assert_eq!((web.tile.width, web.tile.height, web.tile.frames, web.tile.dims), (16, 16, 4, 2));
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(
+        bytes,
+        here.ktx2(Some(TexelFormat::R8G8Unorm)).unwrap(),
+        "the web's mask differs from this machine's"
+    );
+    let ratio = here.score(kernel).unwrap().ratio();
+    assert!(said.contains(&format!("objective {ratio:.4} x white noise")), "{said}\nhere: {ratio:.4}");
+    assert!(ratio < 0.8, "{ratio}");
+}
