@@ -122,6 +122,8 @@ fn host_crate() -> &'static Path {
         let _ = std::fs::remove_dir_all(&host);
         std::fs::create_dir_all(host.join("src")).unwrap();
         std::fs::write(host.join("Cargo.toml"), manifest).unwrap();
+        // The workspace's locked versions, which the offline build then keeps.
+        std::fs::copy(root().join("Cargo.lock"), host.join("Cargo.lock")).unwrap();
         std::fs::copy(example.join("src/main.rs"), host.join("src/main.rs")).unwrap();
         host
     })

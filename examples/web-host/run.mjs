@@ -18,7 +18,7 @@ if (ratio < 0) {
   console.log(`error: ${new TextDecoder().decode(kept())}`);
   process.exit(1);
 }
-const ktx2 = kept();
+const ktx2 = kept().slice(); // a copy: the next call may move the kept bytes
 const identifier = Array.from(ktx2.slice(1, 7), (c) => String.fromCharCode(c)).join('');
 console.log(`made ${w}x${h}x${t}, d = ${dims}, ${iterations} iterations in ${seconds.toFixed(2)} s: ` +
   `objective ${ratio.toFixed(4)} x white noise, ${ktx2.length} bytes of ${identifier}`);

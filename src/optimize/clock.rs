@@ -1,13 +1,14 @@
 //! The wall clock that time budgets and reported times read. A platform without
-//! one (wasm32-unknown-unknown, where `std::time::Instant::now` panics) still
-//! runs the optimizer: its stamps are empty, every time reads 0 s, and a time
-//! budget is refused before any work.
+//! one (WebAssembly with no host, wasm32-unknown-unknown, where
+//! `std::time::Instant::now` panics) still runs the optimizer: its stamps are
+//! empty, every time reads 0 s, a step takes one iteration, and a time budget is
+//! refused before any work.
 
 use crate::error::{Error, Result};
 use std::time::Instant;
 
 /// Whether this platform has a wall clock.
-pub(crate) const HAS_CLOCK: bool = !cfg!(all(target_arch = "wasm32", target_os = "unknown"));
+pub(crate) const HAS_CLOCK: bool = !cfg!(all(target_family = "wasm", target_os = "unknown"));
 
 /// A moment on the wall clock; empty where the platform has none.
 #[derive(Clone, Copy, Debug)]

@@ -554,7 +554,8 @@ impl Run {
 
     /// Wall time since the budget's origin (`RunOptions::budget_from`, else
     /// when `Run::start` began: its set-up and an animated start included), in
-    /// seconds: what a time budget counts.
+    /// seconds: what a time budget counts. 0 on a platform without a clock
+    /// (wasm32-unknown-unknown), as are `set_up` and `seconds`.
     pub fn elapsed(&self) -> f64 {
         self.begun.seconds()
     }
@@ -618,9 +619,11 @@ impl Run {
         }
     }
 
-    /// Notes the pace of a step of `iterations` that took `seconds`.
+    /// Notes the pace of a step of `iterations` that took `seconds` (without a
+    /// clock, none: every step then takes one iteration, with its event and a
+    /// look at the cancel flag).
     fn paced(&mut self, seconds: f64, iterations: usize) {
-        if iterations > 0 {
+        if iterations > 0 && clock::HAS_CLOCK {
             self.pace = Some(seconds / iterations as f64);
         }
     }

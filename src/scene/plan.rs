@@ -308,8 +308,12 @@ pub struct CostModel {
 
 impl CostModel {
     /// Times a few iterations of a 32x32x8, d = 2 `perceptual-taa` run (after a
-    /// warm-up) on the backend `options` choose.
+    /// warm-up) on the backend `options` choose; without a clock
+    /// (wasm32-unknown-unknown), the model with no calibration.
     pub fn calibrate(options: &RunOptions) -> Result<Self> {
+        if !clock::HAS_CLOCK {
+            return Ok(Self { backend: "not measured: this platform has no clock".into(), ..Self::unmeasured() });
+        }
         let tile = Tile::new(32, 32, 8, 1, 2)?;
         let mut settings = Settings::new(KernelSpec::from_name("perceptual-taa", 2.1, None, 0.1, 60.0)?, 1);
         settings.iterations = 40;

@@ -2,25 +2,29 @@
 //! made in the page by fsot's CPU path and handed to JavaScript as KTX2 bytes to
 //! upload as a texture. wasm32-unknown-unknown has one thread (fsot's parallel
 //! loops run on it) and no clock, so the run takes a number of iterations rather
-//! than a time budget, and the mask is the same on every machine.
+//! than a time budget: the mask does not depend on how fast the machine is.
 //!
 //! `run.mjs` loads the module in Node.js (a page does the same with
 //! `WebAssembly.instantiateStreaming`); the module imports nothing.
 
+use std::cell::RefCell;
+
 use fsot::{KernelSpec, Settings, Start, TexelFormat, Tile, Until};
 
-/// The last mask's KTX2 bytes, or the last error's text.
-static mut OUT: Vec<u8> = Vec::new();
+thread_local! {
+    /// The last call's output: a mask's KTX2 bytes, or an error's text.
+    static OUT: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+}
 
 fn put(bytes: Vec<u8>) {
-    // SAFETY: one thread, and no reference to OUT outlives a call.
-    unsafe { *std::ptr::addr_of_mut!(OUT) = bytes }
+    OUT.with(|out| *out.borrow_mut() = bytes);
 }
 
 /// Makes a `width` x `height` x `frames` mask of `dims` dimensions for TAA on a
-/// 1080p display in `iterations` iterations from the animated start of `seed`, keeps its KTX2 bytes
-/// (8-bit UNORM) for `out_ptr`/`out_len`, and returns its objective as a
-/// fraction of white noise's; on an error, keeps the error's text and returns -1.
+/// 1080p display in `iterations` iterations from the animated start of `seed`,
+/// keeps its KTX2 bytes (8-bit UNORM) for `out_ptr` and `out_len`, and returns
+/// its objective as a fraction of white noise's; on an error, keeps the error's
+/// text and returns -1.
 #[no_mangle]
 pub extern "C" fn make(width: u32, height: u32, frames: u32, dims: u32, iterations: u32, seed: u64) -> f64 {
     let made = (|| -> fsot::Result<(Vec<u8>, f64)> {
@@ -46,7 +50,8 @@ pub extern "C" fn make(width: u32, height: u32, frames: u32, dims: u32, iteratio
 }
 
 /// Asks for a mask within a one-second budget, which needs a clock: returns -1
-/// with the error's text kept (or the objective, on a platform with a clock).
+/// and keeps the error's text (on a platform with a clock, returns the mask's
+/// objective as a fraction of white noise's and keeps nothing new).
 #[no_mangle]
 pub extern "C" fn make_within_a_second() -> f64 {
     let made = (|| -> fsot::Result<f64> {
@@ -61,16 +66,16 @@ pub extern "C" fn make_within_a_second() -> f64 {
     })
 }
 
-/// Where the kept bytes start in the module's memory.
+/// Where the kept bytes start in the module's memory. Valid until the next call
+/// of `make` or `make_within_a_second`; a view of them from JavaScript is valid
+/// until the memory grows, so copy them out before the next call.
 #[no_mangle]
 pub extern "C" fn out_ptr() -> *const u8 {
-    // SAFETY: as in `put`.
-    unsafe { (*std::ptr::addr_of!(OUT)).as_ptr() }
+    OUT.with(|out| out.borrow().as_ptr())
 }
 
 /// How many bytes are kept.
 #[no_mangle]
 pub extern "C" fn out_len() -> usize {
-    // SAFETY: as in `put`.
-    unsafe { (*std::ptr::addr_of!(OUT)).len() }
+    OUT.with(|out| out.borrow().len())
 }
