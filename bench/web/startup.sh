@@ -26,7 +26,7 @@ module="$target/wasm32-unknown-unknown/release/fsot_web_host.wasm"
 {
   echo "fsot $("$bin" --version | cut -d' ' -f2-), $(date -u +%Y-%m-%dT%H:%MZ)"
   echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(nproc) cores"
-  echo "Node.js $(node --version), module $(stat -c %s "$module") bytes"
+  echo "Node.js $(node --version), module $(stat -c %s "$module") bytes ($(gzip -9 -c "$module" | wc -c) gzipped)"
 } >"$out/machine.txt"
 
 tsv="$out/runs.tsv"
