@@ -12,6 +12,7 @@
 # OUT_DIR/runs.tsv: build, iterations, seconds (Node.js: the call that makes the
 # mask, as the page waits for it; native: the whole process), objective x white
 # noise by FSOT_BINARY's `fsot score` (one set of slices for every mask).
+# OUT_DIR/same-texels.txt: whether each native mask's texels are the web mask's.
 # OUT_DIR/eval.{log,json}: the judge's tables; OUT_DIR/verdicts.md: each web mask
 # against the published masks (bench/eval/compare.py). Needs node and the target.
 set -euo pipefail
@@ -46,6 +47,18 @@ for n in $counts; do
   done
   masks+=(--mask "web-$n=$out/web-$n.ktx2"); methods+=",web-$n"
 done
+python3 - "$out" $counts >"$out/same-texels.txt" <<'PY'
+import struct, sys
+def texels(path):  # a KTX2 file's one level (its index entry at byte 80)
+    data = open(path, 'rb').read()
+    offset, length = struct.unpack_from('<QQ', data, 80)
+    return data[offset:offset + length]
+out = sys.argv[1]
+for n in sys.argv[2:]:
+    web = texels(f'{out}/web-{n}.ktx2')
+    for f in sorted(__import__('glob').glob(f'{out}/native-*-{n}.ktx2')):
+        print(f'{n} iterations: {f.split("/")[-1]} {"the same texels as" if texels(f) == web else "differs from"} web-{n}.ktx2 ({len(web)} bytes)')
+PY
 judged=$(mktemp -d)
 "$bin" eval --quick --methods "$methods" --peers "$peers" "${masks[@]}" \
   --out "$judged" --json "$out/eval.json" >"$out/eval.log" 2>&1
