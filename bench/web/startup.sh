@@ -46,6 +46,8 @@ for n in $counts; do
       "$(score "$f.ktx2")" >>"$tsv"
   done
   masks+=(--mask "web-$n=$out/web-$n.ktx2"); methods+=",web-$n"
+  echo "web-$n.ktx2: $(stat -c %s "$out/web-$n.ktx2") bytes ($(gzip -9 -c "$out/web-$n.ktx2" | wc -c) gzipped)" \
+    >>"$out/machine.txt"
 done
 python3 - "$out" $counts >"$out/same-texels.txt" <<'PY'
 import struct, sys
