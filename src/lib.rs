@@ -99,6 +99,15 @@
 //! - `internals`: makes the modules behind the items above public, for fsot's
 //!   own command line and tests. They carry no stability promise; without the
 //!   feature they are private to the crate.
+//!
+//! # On the web
+//!
+//! With default features off, the CPU path builds for wasm32-unknown-unknown and
+//! runs there on one thread. That target has no clock: a run takes a number of
+//! iterations (`Settings::iterations`), a time budget is refused with its reason,
+//! and reported times read 0. Nothing is written to files there: a mask goes to
+//! the page as bytes (`Mask::ktx2`) or as its samples. `examples/web-host` makes
+//! the 64x64x32 RG mask in the page.
 #![warn(missing_docs)]
 #![warn(unnameable_types)]
 
