@@ -10,6 +10,8 @@
 #![cfg(feature = "vulkan")]
 
 mod common;
+#[path = "common/wgsl.rs"]
+mod wgsl;
 
 use ash::vk;
 use common::host::Host;
@@ -101,11 +103,47 @@ void main() {
 }
 "#;
 
+/// The same shader in WGSL, with fsot's WGSL include: the masks at binding 1 (a
+/// texture read with textureLoad; the descriptor is the same combined image
+/// sampler, whose image a WGSL texture reads), the plan block at 2.
+const PROBE_WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read_write> values: array<vec4<f32>>;
+@group(0) @binding(1) var fsot_masks: texture_2d_array<f32>;
+@group(0) @binding(2) var<uniform> fsot_plan: FsotPlan;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let w = fsot_plan.tile.x;
+    let h = fsot_plan.tile.y;
+    let frames = 3u * fsot_plan.tile.z;
+    let reads = fsot_plan.count.x + 1u;
+    let i = id.x;
+    if i >= w * h * frames {
+        return;
+    }
+    var s = fsot_start(vec2<u32>(i % w, (i / w) % h), i / (w * h), 0u);
+    for (var k = 0u; k < reads; k++) {
+        values[i * reads + k] = fsot_get(&s);
+    }
+}
+"#;
+
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_says() {
+    include_reads_the_plan(&common::compile_glsl(PROBE));
+}
+
+#[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
+#[test]
+fn the_wgsl_include_reads_the_plan_as_the_glsl_one_does() {
+    include_reads_the_plan(&wgsl::compile_wgsl(PROBE_WGSL));
+}
+
+/// Writes a plan of two masks and three parts into the renderer's image and
+/// uniform buffer, runs the probe `spirv` on them, and checks every value it read
+/// against the CPU mirror.
+fn include_reads_the_plan(spirv: &[u8]) {
     let host = Host::new(true);
-    let spirv = common::compile_glsl(PROBE);
     let tile = |d| Tile::new(8, 4, 3, 1, d).unwrap();
     let plan = SamplerPlan::new(
         vec![Mask::white(tile(2), 1), Mask::white(tile(1), 2)],
@@ -173,7 +211,7 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
     let out = fsot::vk::Buffer::new(&ctx, (count * reads * 16) as u64, fsot::vk::Location::Device, "probe")
         .unwrap();
     let desc = ComputeDesc {
-        spirv: &spirv,
+        spirv,
         bindings: 3,
         push_bytes: 0,
         spec: &[],

@@ -1,10 +1,14 @@
 //! The public GLSL include (`glsl/include/fsot.glsl`): a renderer's shader fsot
 //! never saw compiles against it with shaderc, at the renderer's own set
 //! and binding and at the defaults, and its plan block's std140 layout (read from
-//! the SPIR-V with rspirv) is what `fsot::render::sampler` fills. The sampler's CPU
-//! formula is checked against the include's documented rule by hand.
+//! the SPIR-V with rspirv) is what `fsot::render::sampler` fills. The WGSL include
+//! (`wgsl/fsot.wgsl`) validates in a renderer's module with its own group and
+//! binding (naga), with the same block layout. The sampler's CPU formula is
+//! checked against the include's documented rule by hand.
 
 mod common;
+#[path = "common/wgsl.rs"]
+mod wgsl;
 
 use std::collections::HashMap;
 
@@ -119,6 +123,67 @@ fn a_renderers_shader_compiles_with_its_own_set_and_binding_and_the_plan_block_i
     let spv = compile("#define FSOT_MAX_PARTS 64");
     let (places, ..) = reflect(&spv);
     assert_eq!(places["fsot_masks"], (0, 0));
+}
+
+const WGSL_RENDERER: &str = r#"
+// A renderer's own bindings around fsot's, at its own group and binding.
+@group(0) @binding(0) var frame_out: texture_storage_2d<rgba32float, write>;
+@group(2) @binding(5) var fsot_masks: texture_2d_array<f32>;
+@group(2) @binding(6) var<uniform> fsot_plan: FsotPlan;
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    var s = fsot_start(id.xy, 0u, 0u);
+    let pick = fsot_get_1d(&s);
+    let lens = fsot_get_2d(&s);
+    let deep = fsot_get_4d(&s);
+    let more = fsot_get_3d(&s);
+    textureStore(frame_out, vec2<i32>(id.xy), vec4<f32>(pick, lens, deep.x + more.z));
+}
+"#;
+
+#[test]
+fn a_renderers_wgsl_module_validates_with_its_own_bindings_and_the_plan_block_is_the_rust_mirror() {
+    // Parsed, validated and written as SPIR-V (`compile_wgsl` fails the test
+    // with naga's message otherwise).
+    let spv = wgsl::compile_wgsl(WGSL_RENDERER);
+    let (places, layouts, strides) = reflect(&spv);
+    assert_eq!(places["fsot_masks"], (2, 5));
+    assert_eq!(places["fsot_plan"], (2, 6));
+    assert_eq!(places["frame_out"], (0, 0));
+    // The layout as naga lays out WGSL's uniform address space, and as written.
+    let module = wgsl::wgsl_module(WGSL_RENDERER);
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap();
+    let strukt = |name: &str| {
+        let (handle, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap();
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => (
+                members.iter().map(|m| m.offset).collect::<Vec<_>>(),
+                *span,
+                layouter[handle].size,
+                members.clone(),
+            ),
+            other => panic!("{name} is {other:?}"),
+        }
+    };
+    let (plan, plan_span, _, members) = strukt("FsotPlan");
+    assert_eq!(plan, [0, 16, 32]);
+    let parts = match module.types[members[2].ty].inner {
+        naga::TypeInner::Array { stride, size: naga::ArraySize::Constant(n), .. } => (stride, n.get()),
+        ref other => panic!("parts is {other:?}"),
+    };
+    assert_eq!(parts, (std::mem::size_of::<PartBlock>() as u32, MAX_PARTS as u32));
+    assert_eq!(
+        plan_span as usize,
+        std::mem::size_of::<PlanHead>() + MAX_PARTS * std::mem::size_of::<PartBlock>()
+    );
+    let (part, part_span, ..) = strukt("FsotPart");
+    assert_eq!(part, [0, std::mem::offset_of!(PartBlock, shift) as u32]);
+    assert_eq!(part_span as usize, std::mem::size_of::<PartBlock>());
+    // The SPIR-V naga writes carries the same offsets and stride.
+    assert_eq!(layouts["FsotPlan"], [0, 16, 32]);
+    assert_eq!(layouts["FsotPart"], [0, 16]);
+    assert_eq!(strides["FsotPart"] as usize, std::mem::size_of::<PartBlock>());
 }
 
 fn two_masks() -> SamplerPlan {
