@@ -186,6 +186,17 @@ fn a_renderers_wgsl_module_validates_with_its_own_bindings_and_the_plan_block_is
     assert_eq!(strides["FsotPart"] as usize, std::mem::size_of::<PartBlock>());
 }
 
+#[test]
+fn the_vulkan_guides_wgsl_shader_validates_with_the_include() {
+    let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/vulkan.md")).unwrap();
+    let blocks: Vec<&str> =
+        guide.split("```wgsl\n").skip(1).map(|b| b.split("```").next().unwrap()).collect();
+    assert_eq!(blocks.len(), 1, "the guide's WGSL blocks");
+    let spv = wgsl::compile_wgsl(blocks[0]);
+    let (places, ..) = reflect(&spv);
+    assert_eq!((places["fsot_masks"], places["fsot_plan"]), ((1, 0), (1, 1)));
+}
+
 fn two_masks() -> SamplerPlan {
     let tile = |d| Tile::new(4, 3, 2, 1, d).unwrap();
     let masks = vec![Mask::white(tile(1), 1), Mask::white(tile(2), 2)];
