@@ -5,7 +5,9 @@
 //! than a time budget: the mask does not depend on how fast the machine is.
 //!
 //! `run.mjs` loads the module in Node.js (a page does the same with
-//! `WebAssembly.instantiateStreaming`); the module imports nothing.
+//! `WebAssembly.instantiateStreaming`); the module imports nothing, so a page can
+//! also load it in a Web Worker and keep its main thread free while the mask is
+//! made (a few seconds at 64x64x32, BENCHMARKS.md).
 
 use std::cell::RefCell;
 
