@@ -85,8 +85,12 @@ fn a_mask_made_on_the_renderers_device_lands_in_its_image_as_the_cpu_path_makes_
     host.assert_silent();
 }
 
-/// The renderer's shader: for every pixel, frame (three loops of the tile) and
-/// part (one past the last), the include's value.
+/// The frame the probes start at: eight frames before the frame count wraps.
+const FIRST_FRAME: u32 = 0xFFFF_FFF8;
+
+/// The renderer's shader: for every pixel, frame (three loops of the tile, from
+/// `FIRST_FRAME` on, so the count wraps), sample of the pixel and part (one past
+/// the last), the include's value.
 const PROBE: &str = r#"#version 450
 #extension GL_GOOGLE_include_directive : require
 #define FSOT_SET 0
@@ -95,10 +99,12 @@ const PROBE: &str = r#"#version 450
 layout(set = 0, binding = 0, std430) buffer Out { vec4 values[]; };
 layout(local_size_x = 64) in;
 void main() {
-    uint w = fsot_tile.x, h = fsot_tile.y, frames = 3u * fsot_tile.z, reads = fsot_count.x + 1u;
+    uint w = fsot_tile.x, h = fsot_tile.y, frames = 3u * fsot_tile.z, spp = fsot_tile.w;
+    uint reads = fsot_count.x + 1u;
     uint i = gl_GlobalInvocationID.x;
-    if (i >= w * h * frames) return;
-    FsotSampler s = fsot_start(uvec2(i % w, (i / w) % h), i / (w * h), 0u);
+    if (i >= w * h * frames * spp) return;
+    uint at = i / spp;
+    FsotSampler s = fsot_start(uvec2(at % w, (at / w) % h), 0xFFFFFFF8u + at / (w * h), i % spp);
     for (uint k = 0u; k < reads; ++k) values[i * reads + k] = fsot_get(s);
 }
 "#;
@@ -115,12 +121,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = fsot_plan.tile.x;
     let h = fsot_plan.tile.y;
     let frames = 3u * fsot_plan.tile.z;
+    let spp = fsot_plan.tile.w;
     let reads = fsot_plan.count.x + 1u;
     let i = id.x;
-    if i >= w * h * frames {
+    if i >= w * h * frames * spp {
         return;
     }
-    var s = fsot_start(vec2<u32>(i % w, (i / w) % h), i / (w * h), 0u);
+    let at = i / spp;
+    var s = fsot_start(vec2<u32>(at % w, (at / w) % h), 0xFFFFFFF8u + at / (w * h), i % spp);
     for (var k = 0u; k < reads; k++) {
         values[i * reads + k] = fsot_get(&s);
     }
@@ -136,15 +144,19 @@ fn the_include_reads_a_plan_written_into_the_renderers_image_as_the_cpu_mirror_s
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]
 #[test]
 fn the_wgsl_include_reads_the_plan_as_the_glsl_one_does() {
-    include_reads_the_plan(&wgsl::compile_wgsl(PROBE_WGSL));
+    let wgsl = include_reads_the_plan(&wgsl::compile_wgsl(PROBE_WGSL));
+    let glsl = include_reads_the_plan(&common::compile_glsl(PROBE));
+    // Every value the same bit for bit, the white-noise fallback's too.
+    let bits = |v: &[[f32; 4]]| v.iter().flat_map(|t| t.map(f32::to_bits)).collect::<Vec<u32>>();
+    assert!(bits(&wgsl) == bits(&glsl), "the WGSL include reads other values than the GLSL one");
 }
 
-/// Writes a plan of two masks and three parts into the renderer's image and
-/// uniform buffer, runs the probe `spirv` on them, and checks every value it read
-/// against the CPU mirror.
-fn include_reads_the_plan(spirv: &[u8]) {
+/// Writes a plan of two masks (2 samples a pixel) and three parts into the
+/// renderer's image and uniform buffer, runs the probe `spirv` on them, checks
+/// every value it read against the CPU mirror, and returns them.
+fn include_reads_the_plan(spirv: &[u8]) -> Vec<[f32; 4]> {
     let host = Host::new(true);
-    let tile = |d| Tile::new(8, 4, 3, 1, d).unwrap();
+    let tile = |d| Tile::new(8, 4, 3, 2, d).unwrap();
     let plan = SamplerPlan::new(
         vec![Mask::white(tile(2), 1), Mask::white(tile(1), 2)],
         vec![
@@ -207,7 +219,7 @@ fn include_reads_the_plan(spirv: &[u8]) {
     // SAFETY: a default sampler.
     let sampler = unsafe { d.create_sampler(&vk::SamplerCreateInfo::default(), None) }.unwrap();
     let reads = plan.parts().len() + 1;
-    let count = 8 * 4 * 9;
+    let count = 8 * 4 * 9 * 2;
     let out = fsot::vk::Buffer::new(&ctx, (count * reads * 16) as u64, fsot::vk::Location::Device, "probe")
         .unwrap();
     let desc = ComputeDesc {
@@ -237,17 +249,18 @@ fn include_reads_the_plan(spirv: &[u8]) {
     let got: Vec<[f32; 4]> = out.download(count * reads).unwrap();
     let mut fallback = Vec::new();
     for i in 0..count {
-        let (x, y, f) = ((i % 8) as u32, ((i / 8) % 4) as u32, (i / 32) as u32);
+        let (at, sample) = (i / 2, (i % 2) as u32);
+        let (x, y, f) = ((at % 8) as u32, ((at / 8) % 4) as u32, FIRST_FRAME.wrapping_add((at / 32) as u32));
         for k in 0..reads {
             let v = got[i * reads + k];
-            match plan.value(k, x, y, f, 0, format) {
+            match plan.value(k, x, y, f, sample, format) {
                 Some(want) => {
                     // Every component, those past the mask's too (a channel
                     // the format lacks reads 0, alpha 1).
                     for j in 0..4 {
                         assert!(
                             (v[j] - want[j]).abs() < 1e-6,
-                            "pixel ({x}, {y}) frame {f} part {k}: {v:?} vs {want:?}"
+                            "pixel ({x}, {y}) frame {f} sample {sample} part {k}: {v:?} vs {want:?}"
                         );
                     }
                 }
@@ -269,6 +282,7 @@ fn include_reads_the_plan(spirv: &[u8]) {
     host.free_buffer(block, block_memory);
     host.free_image(image);
     host.assert_silent();
+    got
 }
 
 #[cfg_attr(fsot_skip_gpu, ignore = "FSOT_SKIP_GPU_TESTS=1: no Vulkan device here")]

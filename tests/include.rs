@@ -180,6 +180,21 @@ fn a_renderers_wgsl_module_validates_with_its_own_bindings_and_the_plan_block_is
     let (part, part_span, ..) = strukt("FsotPart");
     assert_eq!(part, [0, std::mem::offset_of!(PartBlock, shift) as u32]);
     assert_eq!(part_span as usize, std::mem::size_of::<PartBlock>());
+    // The constants: the parts the block holds and the R4 sequence, as the Rust
+    // mirror's.
+    let constant = |name: &str| {
+        let c = module.constants.iter().find(|(_, c)| c.name.as_deref() == Some(name)).unwrap().1;
+        let literal = |e: naga::Handle<naga::Expression>| match module.global_expressions[e] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => v,
+            ref other => panic!("{name}: {other:?}"),
+        };
+        match &module.global_expressions[c.init] {
+            naga::Expression::Compose { components, .. } => components.iter().map(|&e| literal(e)).collect(),
+            _ => vec![literal(c.init)],
+        }
+    };
+    assert_eq!(constant("FSOT_MAX_PARTS"), [MAX_PARTS as u32]);
+    assert_eq!(constant("FSOT_R4"), R4);
     // The SPIR-V naga writes carries the same offsets and stride.
     assert_eq!(layouts["FsotPlan"], [0, 16, 32]);
     assert_eq!(layouts["FsotPart"], [0, 16]);

@@ -1,7 +1,7 @@
 // fsot.wgsl: read fsot's masks in a renderer's WGSL shader (wgpu, Bevy, a
 // browser's WebGPU), as glsl/include/fsot.glsl does in GLSL.
 //
-// Put this file's text into the shader's module and declare the two bindings it
+// Join this file's text to the shader module's and declare the two bindings it
 // reads, at the group and binding of your choice (WGSL finds module-scope
 // declarations in any order):
 //
@@ -16,7 +16,9 @@
 // layers [base_m, base_m + T * spp), layer base_m + t * spp + s holding sample s
 // of frame t; a UNORM or float format with channels for the largest part (fsot's
 // `sampler` module writes it into a renderer's image; for a plan of one mask,
-// that mask's KTX2 file is this texture). Read with textureLoad: no sampler.
+// that mask's KTX2 file is this texture). Read with textureLoad: no sampler. On
+// core WebGPU: an 8-bit UNORM or 32-bit float format (16-bit UNORM is optional
+// there), at most 256 layers.
 // fsot_plan: the tile, the parts (per part: the pixel and frame offset, the base
 // layer, the toroidal shift), filled by fsot from plan.json
 // (`SamplerPlan::plan_block`; its layout is the GLSL include's std140 block).
