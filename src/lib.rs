@@ -106,8 +106,9 @@
 //! runs there on one thread. That target has no clock: a run takes a number of
 //! iterations (`Settings::iterations`), a time budget is refused with its reason,
 //! and reported times read 0. Nothing is written to files there: a mask goes to
-//! the page as bytes (`Mask::ktx2`) or as its samples. `examples/web-host` makes
-//! the 64x64x32 RG mask in the page.
+//! the page as bytes (`Mask::ktx2`) or as its samples, and a scene's plan as the
+//! includes read it (`SamplerPlan::make`: the stacked texels and the plan block).
+//! `examples/web-host` makes the 64x64x32 RG mask in the page.
 #![warn(missing_docs)]
 #![warn(unnameable_types)]
 

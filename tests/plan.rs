@@ -282,9 +282,30 @@ fn a_plan_makes_its_masks_and_a_plan_file_a_renderer_can_read() {
     // base layer is the fourth u32) says the same.
     let layers: Vec<u64> = groups.iter().map(|g| g["parts"][0]["layer"].as_u64().unwrap()).collect();
     assert_eq!(layers, [0, 4, 8]);
-    let block = fsot::SamplerPlan::read(dir.path()).unwrap().plan_block().unwrap();
+    let read = fsot::SamplerPlan::read(dir.path()).unwrap();
+    let block = read.plan_block().unwrap();
     let base = |k: usize| u32::from_le_bytes(block[44 + 32 * k..48 + 32 * k].try_into().unwrap()) as u64;
     assert_eq!((0..3).map(base).collect::<Vec<_>>(), layers);
+    // Made in memory instead (no file, no checkpoint), the plan is the folder's:
+    // the same block, and every texel the same float.
+    let mut made_events = Vec::new();
+    let made = fsot::SamplerPlan::make(&plan, options.clone(), &CancelFlag::new(), &mut |e| {
+        if let PlanEvent::Done { file, iterations, .. } = e {
+            made_events.push((file.to_string(), iterations))
+        }
+    })
+    .unwrap()
+    .unwrap();
+    assert_eq!(made_events, done);
+    assert_eq!(made.plan_block().unwrap(), block);
+    let exact = fsot::TexelFormat::R32G32B32A32Sfloat;
+    assert_eq!(made.texels(exact).unwrap(), read.texels(exact).unwrap());
+    let checkpoint = fsot::Checkpointing { path: dir.path().join("c"), every: 5, resume: false };
+    let checkpointed = options.checkpoint(Some(checkpoint));
+    let err = fsot::SamplerPlan::make(&plan, checkpointed, &CancelFlag::new(), &mut |_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no checkpoints"), "{err}");
 }
 
 #[test]

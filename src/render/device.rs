@@ -52,9 +52,10 @@ use crate::error::{Error, Result};
 use crate::io::ktx2::Format;
 use crate::optimize::backend::BackendChoice;
 use crate::optimize::run::{CancelFlag, Event, Outcome, Run, RunOptions};
-use crate::optimize::settings::{Settings, Until};
+use crate::optimize::settings::Settings;
 use crate::optimize::vulkan::VulkanOptions;
-use crate::render::sampler::SamplerPlan;
+use crate::optimize::clock::Stamp;
+use crate::render::sampler::{plan_masks, SamplerPlan};
 use crate::scene::plan::{Plan, PlanEvent};
 use crate::vk::buffer::fill_buffer;
 use crate::vk::image::{check_copy, fill};
@@ -219,7 +220,7 @@ pub unsafe fn make_plan_into_image(
     cancel: &CancelFlag,
     on: &mut dyn FnMut(PlanEvent),
 ) -> Result<Option<SamplerPlan>> {
-    let origin = std::time::Instant::now();
+    let origin = Stamp::now();
     plan.check()?;
     let first = &plan.masks[0];
     if plan.masks.iter().any(|m| m.spp != first.spp) {
@@ -227,36 +228,9 @@ pub unsafe fn make_plan_into_image(
     }
     let dims = plan.masks.iter().map(|m| m.dims).max().unwrap_or(1);
     check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
-    // Under the plan's budget each run ends at the end of its share of it.
-    let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
-    let mut ends = plan.run_ends(&optimized, crate::optimize::clock::Stamp::at(origin), false)?.into_iter();
-    let mut masks = Vec::with_capacity(plan.masks.len());
-    for (index, m) in plan.masks.iter().enumerate() {
-        let tile = plan.tile(m)?;
-        if m.white {
-            masks.push(Mask::white(tile, m.seed));
-            continue;
-        }
-        let mut settings = plan.settings(m);
-        if let Some(Some(end)) = ends.next() {
-            settings.until = Until::Seconds(end);
-        }
-        let options = RunOptions { budget_from: Some(origin), ..device_options(ctx, cancel) };
-        let mut run = match Run::start(tile, settings, None, options) {
-            Err(Error::Interrupted) => return Ok(None),
-            run => run?,
-        };
-        on(PlanEvent::Start { index, file: &m.file, iteration: 0, backend: run.note() });
-        let start = std::time::Instant::now();
-        if let Outcome::Cancelled { .. } =
-            run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))?
-        {
-            return Ok(None);
-        }
-        let (iterations, seconds) = (run.iteration(), start.elapsed().as_secs_f64());
-        masks.push(run.finish()?);
-        on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
-    }
+    let Some(masks) = plan_masks(plan, origin, &device_options(ctx, cancel), cancel, on)? else {
+        return Ok(None);
+    };
     let sampler = SamplerPlan::from_plan(plan, masks)?;
     // SAFETY: the caller's promise for `image`.
     unsafe { write_plan(ctx, &sampler, image)? };

@@ -1,4 +1,5 @@
-//! What a renderer binds to read fsot's masks through `glsl/include/fsot.glsl`:
+//! What a renderer binds to read fsot's masks through `glsl/include/fsot.glsl`
+//! (or `wgsl/fsot.wgsl`):
 //! every mask of a plan stacked in one 2-D array image, and the plan block (the
 //! tile and, per part in the order the renderer consumes them, the offset, the
 //! base layer and the toroidal shift). A single mask is a one-part plan.
@@ -14,6 +15,10 @@ use serde::Deserialize;
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 use crate::io::ktx2::Format;
+use crate::optimize::clock::{self, Stamp};
+use crate::optimize::run::{CancelFlag, Outcome, Run, RunOptions};
+use crate::optimize::settings::Until;
+use crate::scene::plan::{Plan, PlanEvent};
 
 /// Parts the include's plan block holds by default (`FSOT_MAX_PARTS`).
 pub const MAX_PARTS: usize = 16;
@@ -80,6 +85,56 @@ struct PartFile {
     dims: usize,
     offset: [u32; 3],
     shift: Vec<f32>,
+}
+
+/// The masks of `plan` made one after another on the backend `options` choose
+/// (white noise where the plan says so), each run under its share of the plan's
+/// budget counted from `origin`; checked first: one spp for every mask (one
+/// image), and a clock where the plan has a budget. None when `cancel` stopped a
+/// run.
+pub(crate) fn plan_masks(
+    plan: &Plan,
+    origin: Stamp,
+    options: &RunOptions,
+    cancel: &CancelFlag,
+    on: &mut dyn FnMut(PlanEvent),
+) -> Result<Option<Vec<Mask>>> {
+    plan.check()?;
+    if plan.budget.is_some() {
+        clock::needs_clock("a plan's time budget")?;
+    }
+    if plan.masks.iter().any(|m| m.spp != plan.masks[0].spp) {
+        return Err(Error::invalid("the masks of one image share their spp (one image per spp)"));
+    }
+    let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
+    let mut ends = plan.run_ends(&optimized, origin, false)?.into_iter();
+    let mut masks = Vec::with_capacity(plan.masks.len());
+    for (index, m) in plan.masks.iter().enumerate() {
+        let tile = plan.tile(m)?;
+        if m.white {
+            masks.push(Mask::white(tile, m.seed));
+            continue;
+        }
+        let mut settings = plan.settings(m);
+        if let Some(Some(end)) = ends.next() {
+            settings.until = Until::Seconds(end);
+        }
+        let options =
+            RunOptions { budget_from: origin.instant(), cancel_start: Some(cancel.clone()), ..options.clone() };
+        let mut run = match Run::start(tile, settings, None, options) {
+            Err(Error::Interrupted) => return Ok(None),
+            run => run?,
+        };
+        on(PlanEvent::Start { index, file: &m.file, iteration: 0, backend: run.note() });
+        let start = Stamp::now();
+        if let Outcome::Cancelled { .. } = run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))? {
+            return Ok(None);
+        }
+        let (iterations, seconds) = (run.iteration(), start.seconds());
+        masks.push(run.finish()?);
+        on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
+    }
+    Ok(Some(masks))
 }
 
 impl SamplerPlan {
@@ -155,7 +210,45 @@ impl SamplerPlan {
         })
     }
 
-    /// A plan made in memory (`fsot::make_plan_into_image`): `masks[i]` is
+    /// Makes every mask of a scene plan in memory, as `fsot optimize --scene`
+    /// would (the plateau rule stopping each, or under the plan's budget each in
+    /// its share of it, one after another; white noise for what is not visible),
+    /// on the backend `options` choose, and returns them as the include reads
+    /// them: `texels(format)` for the image, `plan_block()` for the block. No
+    /// file is written and no checkpoint taken, so it runs on the web too (where
+    /// the plan takes no budget: there is no clock). The budget counts from
+    /// `options.budget_from`, else from this call; `cancel` stops it (None).
+    ///
+    /// ```
+    /// use fsot::{CancelFlag, CostModel, Plan, RunOptions, SamplerPlan, Scene, TexelFormat};
+    ///
+    /// // A small tile, for the example.
+    /// let text = "[display]\nfps = 60\ntaa_alpha = 0.1\n[tile]\nsize = \"16x16x4\"\n[[group]]\nname = \"light\"\ndims = 2\n";
+    /// let scene = Scene::parse(text, "s").map_err(fsot::Error::invalid)?;
+    /// let plan = Plan::new(&scene, &CostModel::unmeasured())?;
+    /// let made = SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {})?.unwrap();
+    /// let texels = made.texels(TexelFormat::R8G8Unorm)?; // the 2-D array image, layer by layer
+    /// let block = made.plan_block()?; // the include's uniform block
+    /// assert_eq!(texels.len(), 16 * 16 * 4 * 2);
+    /// assert_eq!(block.len(), 32 + 32 * 16);
+    /// # Ok::<(), fsot::Error>(())
+    /// ```
+    pub fn make(
+        plan: &Plan,
+        options: RunOptions,
+        cancel: &CancelFlag,
+        on: &mut dyn FnMut(PlanEvent),
+    ) -> Result<Option<Self>> {
+        let origin = options.budget_from.map_or_else(Stamp::now, Stamp::at);
+        if options.checkpoint.is_some() {
+            return Err(Error::invalid(
+                "a plan made in memory takes no checkpoints (`Plan::execute` takes them into its folder)",
+            ));
+        }
+        plan_masks(plan, origin, &options, cancel, on)?.map(|masks| Self::from_plan(plan, masks)).transpose()
+    }
+
+    /// A plan made in memory (`SamplerPlan::make`, `fsot::make_plan_into_image`): `masks[i]` is
     /// the mask of `plan.masks[i]`; laid out as `read` lays out the folder
     /// `Plan::execute` writes.
     pub fn from_plan(plan: &crate::scene::plan::Plan, masks: Vec<Mask>) -> Result<Self> {
