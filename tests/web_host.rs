@@ -3,12 +3,18 @@
 //! and loaded in Node.js as a page would load it, imports nothing, hands over
 //! the same 8-bit KTX2 bytes and the same objective (to four digits) as this
 //! machine's build makes from the same settings, and is told plainly that a time
-//! budget needs a clock.
+//! budget needs a clock. A scene file's plan made there is this machine's: the
+//! same plan block and stacked texels.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use fsot::{KernelSpec, Mask, Settings, Start, TexelFormat, Tile};
+use std::sync::OnceLock;
+
+use fsot::{
+    CancelFlag, CostModel, KernelSpec, Mask, Plan, RunOptions, SamplerPlan, Scene, Settings, Start,
+    TexelFormat, Tile,
+};
 
 mod common;
 
@@ -45,8 +51,14 @@ fn missing() -> Option<String> {
     }
 }
 
-/// The web host's module, built for the web on the workspace's locked versions.
-fn module() -> PathBuf {
+/// The web host's module, built for the web on the workspace's locked versions
+/// (once per process).
+fn module() -> &'static Path {
+    static MODULE: OnceLock<PathBuf> = OnceLock::new();
+    MODULE.get_or_init(build)
+}
+
+fn build() -> PathBuf {
     let target = root().join("target/web-host");
     std::fs::copy(root().join("Cargo.lock"), root().join("examples/web-host/Cargo.lock")).unwrap();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -94,4 +106,38 @@ fn a_web_build_makes_this_machines_mask_in_node_and_refuses_a_time_budget() {
     let ratio = here.score(kernel).unwrap().ratio();
     assert!(said.contains(&format!("objective {ratio:.4} x white noise")), "{said}\nhere: {ratio:.4}");
     assert!(ratio < 0.8, "{ratio}");
+}
+
+#[test]
+fn a_scene_plan_made_in_a_web_build_is_this_machines() {
+    if let Some(reason) = missing() {
+        if common::skip(&reason) {
+            return;
+        }
+    }
+    let text = "[display]\nfps = 60\ntaa_alpha = 0.1\n[tile]\nsize = \"16x16x4\"\n\
+                [[group]]\nname = \"pick\"\ndims = 1\n[[group]]\nname = \"lens\"\ndims = 2\n";
+    let dir = tempfile::tempdir().unwrap();
+    let scene_file = dir.path().join("scene.toml");
+    std::fs::write(&scene_file, text).unwrap();
+    let out = dir.path().join("plan");
+    let said = run(Command::new("node")
+        .arg(root().join("examples/web-host/run.mjs"))
+        .arg(module())
+        .arg("--scene")
+        .arg(&scene_file)
+        .arg(&out));
+    assert!(said.contains("imports: none") && said.contains("a 544-byte block"), "{said}");
+
+    let plan = Plan::new(&Scene::parse(text, "scene").unwrap(), &CostModel::unmeasured()).unwrap();
+    assert_eq!(plan.masks.len(), 2, "a mask for each decision");
+    let here =
+        SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {}).unwrap().unwrap();
+    assert_eq!(std::fs::read(out.with_extension("block")).unwrap(), here.plan_block().unwrap());
+    let texels = std::fs::read(out.with_extension("texels")).unwrap();
+    assert_eq!(texels.len(), 16 * 16 * 4 * 2 * 2, "two masks of 16x16x4, two channels");
+    assert!(
+        texels == here.texels(TexelFormat::R8G8Unorm).unwrap(),
+        "the web's texels differ from this machine's"
+    );
 }

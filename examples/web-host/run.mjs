@@ -1,15 +1,41 @@
 // Loads the web host's module, makes a mask as a page would at start-up, and
-// prints what it made; with OUT, writes the mask's KTX2 bytes there.
+// prints what it made; with OUT, writes the mask's KTX2 bytes there. With
+// --scene, makes every mask of a scene file's plan instead and, with OUT, writes
+// the plan block to OUT.block and the stacked texels to OUT.texels.
 // Usage: node run.mjs MODULE.wasm [WxHxT] [DIMS] [ITERATIONS] [OUT]
+//        node run.mjs MODULE.wasm --scene SCENE.toml [OUT]
 import { readFileSync, writeFileSync } from 'node:fs';
 
-const [wasm, size = '64x64x32', dims = '2', iterations = '24', out] = process.argv.slice(2);
-const [w, h, t] = size.split('x').map(Number);
-const module = await WebAssembly.compile(readFileSync(wasm));
+const module = await WebAssembly.compile(readFileSync(process.argv[2]));
 const imports = WebAssembly.Module.imports(module);
 console.log(`imports: ${imports.length ? imports.map((i) => `${i.module}.${i.name}`).join(', ') : 'none'}`);
 const { exports } = await WebAssembly.instantiate(module, {});
 const kept = () => new Uint8Array(exports.memory.buffer, exports.out_ptr(), exports.out_len());
+
+if (process.argv[3] === '--scene') {
+  const [, , , , scene, out] = process.argv;
+  const text = readFileSync(scene);
+  const at = exports.input(text.length); // may grow the memory: view it after
+  new Uint8Array(exports.memory.buffer, at, text.length).set(text);
+  const began = performance.now();
+  const block = exports.make_plan();
+  const seconds = (performance.now() - began) / 1000;
+  if (block < 0) {
+    console.log(`error: ${new TextDecoder().decode(kept())}`);
+    process.exit(1);
+  }
+  const bytes = kept().slice();
+  console.log(`made the plan in ${seconds.toFixed(2)} s: a ${block}-byte block, ${bytes.length - block} bytes of texels`);
+  if (out) {
+    writeFileSync(`${out}.block`, bytes.subarray(0, block));
+    writeFileSync(`${out}.texels`, bytes.subarray(block));
+    console.log(`wrote ${out}.block and ${out}.texels`);
+  }
+  process.exit(0);
+}
+
+const [, , , size = '64x64x32', dims = '2', iterations = '24', out] = process.argv;
+const [w, h, t] = size.split('x').map(Number);
 
 const began = performance.now();
 const ratio = exports.make(w, h, t, Number(dims), Number(iterations), 1n);

@@ -1,6 +1,7 @@
 //! A web build's start-up: the 64x64x32 RG mask an engine would otherwise embed,
 //! made in the page by fsot's CPU path and handed to JavaScript as KTX2 bytes to
-//! upload as a texture. wasm32-unknown-unknown has one thread (fsot's parallel
+//! upload as a texture; or every mask of a scene file's plan, handed over as the
+//! includes (`glsl/include/fsot.glsl`, `wgsl/fsot.wgsl`) read them. wasm32-unknown-unknown has one thread (fsot's parallel
 //! loops run on it) and no clock, so the run takes a number of iterations rather
 //! than a time budget: the mask does not depend on how fast the machine is.
 //!
@@ -11,11 +12,17 @@
 
 use std::cell::RefCell;
 
-use fsot::{KernelSpec, Settings, Start, TexelFormat, Tile, Until};
+use fsot::{
+    CancelFlag, CostModel, KernelSpec, Plan, RunOptions, SamplerPlan, Scene, Settings, Start, TexelFormat,
+    Tile, Until,
+};
 
 thread_local! {
-    /// The last call's output: a mask's KTX2 bytes, or an error's text.
+    /// The last call's output: a mask's KTX2 bytes, a plan's block and texels,
+    /// or an error's text.
     static OUT: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
+    /// What JavaScript wrote for `make_plan`: a scene file's text.
+    static IN: RefCell<Vec<u8>> = const { RefCell::new(Vec::new()) };
 }
 
 fn put(bytes: Vec<u8>) {
@@ -36,8 +43,7 @@ pub extern "C" fn make(width: u32, height: u32, frames: u32, dims: u32, iteratio
         // way there for a short run.
         let settings = Settings::new(kernel, seed).iterations(iterations).start(Start::Animated);
         let mask = fsot::optimize(tile, settings, None)?;
-        let format = if dims == 1 { TexelFormat::R8Unorm } else { TexelFormat::R8G8Unorm };
-        Ok((mask.ktx2(Some(format))?, mask.score(kernel)?.ratio()))
+        Ok((mask.ktx2(Some(texel_format(dims as usize)))?, mask.score(kernel)?.ratio()))
     })();
     match made {
         Ok((bytes, ratio)) => {
@@ -66,6 +72,58 @@ pub extern "C" fn make_within_a_second() -> f64 {
         put(e.to_string().into_bytes());
         -1.0
     })
+}
+
+/// Room for `len` bytes of input (a scene file's text, for `make_plan`): where
+/// JavaScript writes them, valid until the next call.
+#[no_mangle]
+pub extern "C" fn input(len: usize) -> *mut u8 {
+    IN.with(|input| {
+        let mut input = input.borrow_mut();
+        input.clear();
+        input.resize(len, 0);
+        input.as_mut_ptr()
+    })
+}
+
+/// Makes every mask of the scene file written through `input` (its plan, as
+/// `fsot plan` shows it) and keeps the plan as the includes read it: the plan
+/// block, then the stacked texels (8-bit UNORM, channels for the largest part).
+/// Returns the block's length in bytes; on an error, keeps its text and returns -1.
+#[no_mangle]
+pub extern "C" fn make_plan() -> f64 {
+    let made = (|| -> fsot::Result<(Vec<u8>, usize)> {
+        let text = IN
+            .with(|input| String::from_utf8(input.borrow().clone()))
+            .map_err(|_| fsot::Error::invalid("the scene file is not UTF-8"))?;
+        let scene = Scene::parse(&text, "scene").map_err(fsot::Error::invalid)?;
+        let plan = Plan::new(&scene, &CostModel::unmeasured())?;
+        let made = SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {})?
+            .ok_or_else(|| fsot::Error::invalid("cancelled"))?;
+        let mut bytes = made.plan_block()?;
+        let block = bytes.len();
+        bytes.extend(made.texels(texel_format(made.max_dims()))?);
+        Ok((bytes, block))
+    })();
+    match made {
+        Ok((bytes, block)) => {
+            put(bytes);
+            block as f64
+        }
+        Err(e) => {
+            put(e.to_string().into_bytes());
+            -1.0
+        }
+    }
+}
+
+/// The 8-bit UNORM format with channels for `dims`.
+fn texel_format(dims: usize) -> TexelFormat {
+    match dims {
+        1 => TexelFormat::R8Unorm,
+        2 => TexelFormat::R8G8Unorm,
+        _ => TexelFormat::R8G8B8A8Unorm,
+    }
 }
 
 /// Where the kept bytes start in the module's memory. Valid until the next call
