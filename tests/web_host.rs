@@ -12,8 +12,8 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use fsot::{
-    CancelFlag, CostModel, KernelSpec, Mask, Plan, RunOptions, SamplerPlan, Scene, Settings, Start,
-    TexelFormat, Tile,
+    BackendChoice, CancelFlag, CostModel, KernelSpec, Mask, Plan, Run, RunOptions, SamplerPlan, Scene,
+    Settings, Start, TexelFormat, Tile,
 };
 
 mod common;
@@ -94,7 +94,11 @@ fn a_web_build_makes_this_machines_mask_in_node_and_refuses_a_time_budget() {
     let tile = Tile::new(16, 16, 4, 1, 2).unwrap();
     let kernel = KernelSpec::named("perceptual-taa").unwrap().on_display_named("standard_fhd").unwrap();
     let settings = Settings::new(kernel, 1).iterations(8).start(Start::Animated);
-    let here = fsot::optimize(tile, settings, None).unwrap();
+    // This machine's CPU path (a GPU here would make another, valid mask).
+    let cpu = RunOptions::default().backend(BackendChoice::Cpu);
+    let mut run = Run::start(tile, settings, None, cpu).unwrap();
+    run.run(&CancelFlag::new(), &mut |_| {}).unwrap();
+    let here = run.finish().unwrap();
     let web = Mask::open(&out).unwrap();
     assert_eq!((web.tile.width, web.tile.height, web.tile.frames, web.tile.dims), (16, 16, 4, 2));
     let bytes = std::fs::read(&out).unwrap();
@@ -131,8 +135,9 @@ fn a_scene_plan_made_in_a_web_build_is_this_machines() {
 
     let plan = Plan::new(&Scene::parse(text, "scene").unwrap(), &CostModel::unmeasured()).unwrap();
     assert_eq!(plan.masks.len(), 2, "a mask for each decision");
-    let here =
-        SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {}).unwrap().unwrap();
+    // This machine's CPU path (a GPU here would make other, valid masks).
+    let cpu = RunOptions::default().backend(BackendChoice::Cpu);
+    let here = SamplerPlan::make(&plan, cpu, &CancelFlag::new(), &mut |_| {}).unwrap().unwrap();
     assert_eq!(std::fs::read(out.with_extension("block")).unwrap(), here.plan_block().unwrap());
     let texels = std::fs::read(out.with_extension("texels")).unwrap();
     assert_eq!(texels.len(), 16 * 16 * 4 * 2 * 2, "two masks of 16x16x4, two channels");

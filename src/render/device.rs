@@ -223,9 +223,6 @@ pub unsafe fn make_plan_into_image(
     let origin = Stamp::now();
     plan.check()?;
     let first = &plan.masks[0];
-    if plan.masks.iter().any(|m| m.spp != first.spp) {
-        return Err(Error::invalid("the masks of one image share their spp (one image per spp)"));
-    }
     let dims = plan.masks.iter().map(|m| m.dims).max().unwrap_or(1);
     check_image(ctx, image, &plan.tile(first)?, plan.masks.len(), dims)?;
     let Some(masks) = plan_masks(plan, origin, &device_options(ctx, cancel), cancel, on)? else {

@@ -12,6 +12,7 @@ use std::path::Path;
 use bytemuck::{Pod, Zeroable};
 use serde::Deserialize;
 
+use crate::core::kernel::Spatial;
 use crate::core::mask::Mask;
 use crate::error::{Error, Result};
 use crate::io::ktx2::Format;
@@ -89,9 +90,8 @@ struct PartFile {
 
 /// The masks of `plan` made one after another on the backend `options` choose
 /// (white noise where the plan says so), each run under its share of the plan's
-/// budget counted from `origin`; checked first: one spp for every mask (one
-/// image), and a clock where the plan has a budget. None when `cancel` stopped a
-/// run.
+/// budget counted from `origin` (a clock checked for first). None when `cancel`
+/// stopped a run.
 pub(crate) fn plan_masks(
     plan: &Plan,
     origin: Stamp,
@@ -103,8 +103,12 @@ pub(crate) fn plan_masks(
     if plan.budget.is_some() {
         clock::needs_clock("a plan's time budget")?;
     }
-    if plan.masks.iter().any(|m| m.spp != plan.masks[0].spp) {
-        return Err(Error::invalid("the masks of one image share their spp (one image per spp)"));
+    // Each display's eye fitted now (once per process), not out of the first
+    // mask's share of the budget.
+    for m in &plan.masks {
+        if let Spatial::Display { ppd } = m.spec.spatial {
+            crate::core::csf::mixture(ppd);
+        }
     }
     let optimized: Vec<usize> = (0..plan.masks.len()).filter(|&i| !plan.masks[i].white).collect();
     let mut ends = plan.run_ends(&optimized, origin, false)?.into_iter();
@@ -126,11 +130,10 @@ pub(crate) fn plan_masks(
             run => run?,
         };
         on(PlanEvent::Start { index, file: &m.file, iteration: 0, backend: run.note() });
-        let start = Stamp::now();
         if let Outcome::Cancelled { .. } = run.run(cancel, &mut |event| on(PlanEvent::Run { index, event }))? {
             return Ok(None);
         }
-        let (iterations, seconds) = (run.iteration(), start.seconds());
+        let (iterations, seconds) = (run.iteration(), run.seconds());
         masks.push(run.finish()?);
         on(PlanEvent::Done { index, file: &m.file, iterations, seconds });
     }
@@ -210,14 +213,18 @@ impl SamplerPlan {
         })
     }
 
-    /// Makes every mask of a scene plan in memory, as `fsot optimize --scene`
-    /// would (the plateau rule stopping each, or under the plan's budget each in
-    /// its share of it, one after another; white noise for what is not visible),
-    /// on the backend `options` choose, and returns them as the include reads
-    /// them: `texels(format)` for the image, `plan_block()` for the block. No
-    /// file is written and no checkpoint taken, so it runs on the web too (where
-    /// the plan takes no budget: there is no clock). The budget counts from
-    /// `options.budget_from`, else from this call; `cancel` stops it (None).
+    /// Makes every mask of a scene plan in memory, on the backend `options`
+    /// choose (on Vulkan one device for them all), and returns them as the
+    /// includes read them: `texels(format)` for the image, `plan_block()` for the
+    /// block. Each mask is the one `fsot optimize --scene` makes (the plateau rule
+    /// stopping it, white noise for what is not visible): on the CPU the same
+    /// samples (tested); under the plan's budget the masks run one after another,
+    /// each in its share of it, where `--scene` on one device runs them side by
+    /// side to the budget's end. No file is written and no checkpoint taken, so
+    /// it runs on the web too (where the plan takes no budget: there is no
+    /// clock). The budget counts from `options.budget_from`, else from this call;
+    /// `cancel` stops it (None), the start of a mask's run included (it replaces
+    /// `options.cancel_start`).
     ///
     /// ```
     /// use fsot::{CancelFlag, CostModel, Plan, RunOptions, SamplerPlan, Scene, TexelFormat};
@@ -245,6 +252,7 @@ impl SamplerPlan {
                 "a plan made in memory takes no checkpoints (`Plan::execute` takes them into its folder)",
             ));
         }
+        let options = crate::optimize::run::shared_context(&options)?;
         plan_masks(plan, origin, &options, cancel, on)?.map(|masks| Self::from_plan(plan, masks)).transpose()
     }
 

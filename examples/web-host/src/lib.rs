@@ -74,8 +74,10 @@ pub extern "C" fn make_within_a_second() -> f64 {
     })
 }
 
-/// Room for `len` bytes of input (a scene file's text, for `make_plan`): where
-/// JavaScript writes them, valid until the next call.
+/// Room for `len` bytes of input (a scene file's text in UTF-8, for `make_plan`:
+/// its length in bytes, as `TextEncoder` gives them, not in characters): where
+/// JavaScript writes them, valid until the next call. The call may grow the
+/// module's memory: view the memory after it.
 #[no_mangle]
 pub extern "C" fn input(len: usize) -> *mut u8 {
     IN.with(|input| {
@@ -88,8 +90,10 @@ pub extern "C" fn input(len: usize) -> *mut u8 {
 
 /// Makes every mask of the scene file written through `input` (its plan, as
 /// `fsot plan` shows it) and keeps the plan as the includes read it: the plan
-/// block, then the stacked texels (8-bit UNORM, channels for the largest part).
-/// Returns the block's length in bytes; on an error, keeps its text and returns -1.
+/// block, then the stacked texels, layer by layer (masks x T x spp layers of
+/// W x H; 8-bit UNORM with 1 channel where every mask has 1 dimension, 2 where
+/// the largest has 2, else 4). Returns the block's length in bytes; on an
+/// error, keeps its text and returns -1.
 #[no_mangle]
 pub extern "C" fn make_plan() -> f64 {
     let made = (|| -> fsot::Result<(Vec<u8>, usize)> {
@@ -127,8 +131,8 @@ fn texel_format(dims: usize) -> TexelFormat {
 }
 
 /// Where the kept bytes start in the module's memory. Valid until the next call
-/// of `make` or `make_within_a_second`; a view of them from JavaScript is valid
-/// until the memory grows, so copy them out before the next call.
+/// of any export; a view of them from JavaScript is valid until the memory
+/// grows, so copy them out before the next call.
 #[no_mangle]
 pub extern "C" fn out_ptr() -> *const u8 {
     OUT.with(|out| out.borrow().as_ptr())
