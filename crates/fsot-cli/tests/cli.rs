@@ -710,6 +710,14 @@ fn scene_runs_plan_write_a_folder_and_refuse_bad_scenes_naming_the_line() {
     let plan = fsot(&["plan", "s.toml", "--backend", "cpu", "--budget", "1s"], dir.path());
     let text = String::from_utf8_lossy(&plan.stdout);
     assert!(text.contains("budget: 1 s") && text.contains("total: about 1.0 s"), "{text}");
+    assert!(!text.contains("too short"), "an 8x8x4 mask takes hundreds of iterations a second: {text}");
+    // A budget too short for one iteration of a mask is said, with the mask.
+    let big =
+        "[display]\ntaa_alpha = 0.1\n[tile]\nsize = \"128x128x64\"\n[[group]]\nname = \"lens\"\ndims = 2\n";
+    std::fs::write(dir.path().join("big.toml"), big).unwrap();
+    let plan = fsot(&["plan", "big.toml", "--backend", "cpu", "--budget", "1ms"], dir.path());
+    let text = String::from_utf8_lossy(&plan.stdout);
+    assert!(text.contains("too short here for one iteration of lens.exr"), "{text}");
     let o = fsot(
         &["optimize", "--scene", "s.toml", "--out", "b", "--backend", "cpu", "--budget", "1s"],
         dir.path(),

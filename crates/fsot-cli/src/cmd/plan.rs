@@ -78,6 +78,20 @@ pub(crate) fn describe(plan: &Plan) -> String {
     s += &format!("  total: about {:.1} s ({})\n", plan.estimated_seconds, plan.cost_model);
     if let Some(b) = plan.budget {
         s += &format!("  budget: {b} s from the start, each mask ending at its share (no checkpoints)\n");
+        // The estimates are this machine's (the command line calibrates).
+        let starved: Vec<&str> = plan
+            .masks
+            .iter()
+            .filter(|m| !m.white && m.estimated_iterations == 0)
+            .map(|m| m.file.as_str())
+            .collect();
+        if !starved.is_empty() {
+            s += &format!(
+                "  the budget is too short here for one iteration of {}: each such mask is its animated start \
+                 (one frame optimized, set in motion), which takes its own time past the budget\n",
+                starved.join(", ")
+            );
+        }
     }
     s
 }
