@@ -233,7 +233,8 @@ impl SamplerPlan {
     /// let text = "[display]\nfps = 60\ntaa_alpha = 0.1\n[tile]\nsize = \"16x16x4\"\n[[group]]\nname = \"light\"\ndims = 2\n";
     /// let scene = Scene::parse(text, "s").map_err(fsot::Error::invalid)?;
     /// let plan = Plan::new(&scene, &CostModel::unmeasured())?;
-    /// let made = SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {})?.unwrap();
+    /// let made = SamplerPlan::make(&plan, RunOptions::default(), &CancelFlag::new(), &mut |_| {})?
+    ///     .ok_or_else(|| fsot::Error::invalid("cancelled"))?; // None: the flag stopped it
     /// let texels = made.texels(TexelFormat::R8G8Unorm)?; // the 2-D array image, layer by layer
     /// let block = made.plan_block()?; // the include's uniform block
     /// assert_eq!(texels.len(), 16 * 16 * 4 * 2);
